@@ -1,0 +1,55 @@
+# plotbridge: the two commands are `make run` and `make test`.
+PYTHON ?= python3
+VENV := .venv
+PY := $(VENV)/bin/python
+HOST ?= 0.0.0.0
+PORT ?= 8000
+SERIAL ?=
+SIM_SPEED ?= 1
+ARGS ?=
+
+.PHONY: run test setup setup-test firmware sim lint flash install-service bench clean
+
+run: setup firmware sim
+	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) \
+	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED)) $(ARGS)
+
+test: setup-test firmware sim
+	$(MAKE) -C firmware test
+	$(VENV)/bin/pytest
+
+setup: .stamps/system-run $(VENV)/.stamp
+setup-test: .stamps/system-test $(VENV)/.stamp-dev
+
+.stamps/system-%: scripts/setup-system
+	scripts/setup-system $*
+	@mkdir -p .stamps && touch $@
+
+$(VENV)/.stamp: requirements.txt server/pyproject.toml
+	test -x $(PY) || $(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --disable-pip-version-check -r requirements.txt
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps -e server
+	touch $@
+
+$(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt
+	$(PY) -m pip install -q --disable-pip-version-check -r requirements-dev.txt
+	touch $@
+
+firmware:
+	$(MAKE) -C firmware all
+
+sim:
+	$(MAKE) -C firmware sim
+
+lint: setup-test
+	$(VENV)/bin/ruff check server tests bench
+
+flash: .stamps/system-run firmware
+	$(MAKE) -C firmware flash PORT=$(or $(SERIAL),/dev/ttyUSB0)
+
+bench: setup-test firmware sim
+	for b in bench/*.py; do $(PY) $$b || exit 1; done
+
+clean:
+	$(MAKE) -C firmware clean
+	rm -rf .stamps
