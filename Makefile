@@ -6,12 +6,13 @@ HOST ?= 0.0.0.0
 PORT ?= 8000
 SERIAL ?=
 SIM_SPEED ?= 1
+DATA_DIR ?= data
 ARGS ?=
 
 .PHONY: run test setup setup-test firmware sim lint flash install-service bench clean
 
 run: setup firmware sim
-	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) \
+	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
 	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED)) $(ARGS)
 
 test: setup-test firmware sim
@@ -46,6 +47,9 @@ lint: setup-test
 
 flash: .stamps/system-run firmware
 	$(MAKE) -C firmware flash PORT=$(or $(SERIAL),/dev/ttyUSB0)
+
+install-service: setup firmware sim
+	scripts/install-service $(CURDIR)
 
 bench: setup-test firmware sim
 	for b in bench/*.py; do $(PY) $$b || exit 1; done
