@@ -1,0 +1,106 @@
+"""Pydantic models at the API edge (request bodies and answers)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+PAPERS = ("A6", "A5", "A4", "A3", "letter")
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class LoginBody(Strict):
+    token: str
+
+
+class PenBody(Strict):
+    down: bool
+
+
+class JogBody(Strict):
+    dx: float = Field(0.0, ge=-10000, le=10000)
+    dy: float = Field(0.0, ge=-10000, le=10000)
+    feed: float = Field(3000.0, gt=0, le=100000)
+
+
+class MotorsBody(Strict):
+    enabled: bool
+
+
+class MoveBody(Strict):
+    position: int = Field(ge=0)
+
+
+class CommandBody(Strict):
+    line: str = Field(min_length=1, max_length=120)
+
+
+class SettingsBody(Strict):
+    settings: dict[int, float]
+
+
+class Placement(Strict):
+    paper: str | None = Field(None, pattern=r"^(A[3-6]|letter)(-landscape)?$")
+    margin: float = Field(10.0, ge=0, le=200)
+    fit: bool = False
+    rotate: Literal[0, 90, 180, 270] = 0
+    scale: float = Field(1.0, gt=0, le=100)
+    dx: float = Field(0.0, ge=-10000, le=10000)
+    dy: float = Field(0.0, ge=-10000, le=10000)
+
+
+class PatchJobBody(Strict):
+    name: str | None = Field(None, min_length=1, max_length=200)
+    placement: Placement | None = None
+
+
+class Bounds(BaseModel):
+    min_x: float
+    min_y: float
+    max_x: float
+    max_y: float
+
+
+class Position(BaseModel):
+    x: float
+    y: float
+
+
+class Machine(BaseModel):
+    connected: bool
+    state: str
+    position: Position
+    pen: Literal["up", "down"]
+    firmware: str | None
+    alarm: int | None = None
+    feed: float | None = None
+    pins: str | None = None
+
+
+JobState = Literal[
+    "queued", "running", "paused", "done", "failed", "cancelled", "stopped", "interrupted"
+]
+
+
+class Job(BaseModel):
+    id: str
+    name: str
+    state: JobState
+    format: str
+    created_at: float
+    lines_total: int
+    lines_done: int
+    progress: float
+    estimate_s: float
+    eta_s: float | None
+    bounds: Bounds | None
+    error: str | None
+    stats: dict[str, float] = {}
+    placement: dict = {}
+    resume_line: int | None = None
+    started_at: float | None = None
+    finished_at: float | None = None

@@ -1,0 +1,74 @@
+"""WebSocket hub: fan-out with a bounded send queue per client.
+
+A message is serialized once and put on every client's queue without waiting;
+a client whose queue is full has fallen behind and is dropped, so a slow or dead
+client never delays the others, the link or an emergency stop.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+from typing import Any
+
+from starlette.websockets import WebSocket
+
+log = logging.getLogger("plotbridge.ws")
+
+QUEUE_SIZE = 256
+
+
+class Client:
+    def __init__(self, ws: WebSocket) -> None:
+        self.ws = ws
+        self.queue: asyncio.Queue[str | None] = asyncio.Queue(QUEUE_SIZE)
+        self.dropped = False
+        self.task: asyncio.Task[None] | None = None
+
+    def offer(self, text: str) -> bool:
+        try:
+            self.queue.put_nowait(text)
+            return True
+        except asyncio.QueueFull:
+            return False
+
+    async def pump(self) -> None:
+        """Send queued messages until closed (None) or the socket fails."""
+        while True:
+            text = await self.queue.get()
+            if text is None:
+                return
+            await self.ws.send_text(text)
+
+
+class Hub:
+    def __init__(self) -> None:
+        self.clients: set[Client] = set()
+
+    def add(self, ws: WebSocket) -> Client:
+        client = Client(ws)
+        self.clients.add(client)
+        return client
+
+    def remove(self, client: Client) -> None:
+        self.clients.discard(client)
+
+    def broadcast(self, message: dict[str, Any]) -> None:
+        if not self.clients:
+            return
+        text = json.dumps(message, separators=(",", ":"))
+        for client in list(self.clients):
+            if not client.offer(text):
+                self._drop(client)
+
+    def send(self, client: Client, message: dict[str, Any]) -> None:
+        if not client.offer(json.dumps(message, separators=(",", ":"))):
+            self._drop(client)
+
+    def _drop(self, client: Client) -> None:
+        log.warning("websocket client fell behind; dropped")
+        client.dropped = True
+        self.clients.discard(client)
+        if client.task is not None:
+            client.task.cancel()
