@@ -1,0 +1,85 @@
+"""Is the upload text, in which encoding, and which format is it?"""
+
+from __future__ import annotations
+
+import codecs
+import re
+from collections.abc import Iterator
+from pathlib import Path
+
+from .models import ImportFailed
+
+GCODE_EXT = {".gcode", ".nc", ".gc", ".ngc", ".tap", ".g"}
+SVG_EXT = {".svg"}
+COORD_EXT = {".txt", ".coords", ".xy", ".csv"}
+_CHUNK = 1 << 20
+_SNIFF = 1 << 16
+_GCODE_LINE = re.compile(r"^\s*(?:N\d+\s*)?[GM]\d", re.I | re.M)
+_NUMBER_LINE = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
+# Control characters that do not occur in text files (tab, LF, CR, FF, ^Z allowed).
+_BINARY = bytes(c for c in range(32) if c not in (9, 10, 12, 13, 26))
+
+
+def check_text(path: Path) -> str:
+    """The encoding to read `path` with ("utf-8" or "latin-1"); refuses binary and empty
+    files."""
+    decoder = codecs.getincrementaldecoder("utf-8")()
+    utf8 = True
+    blank = True
+    table = bytes.maketrans(b"", b"")
+    with path.open("rb") as f:
+        offset = 0
+        while chunk := f.read(_CHUNK):
+            if chunk.translate(table, _BINARY) != chunk:
+                bad = next(i for i, b in enumerate(chunk) if b in _BINARY)
+                raise ImportFailed.one(415, f"not a text file: control byte "
+                                            f"0x{chunk[bad]:02x} at offset {offset + bad}")
+            if blank and chunk.strip():
+                blank = False
+            if utf8:
+                try:
+                    decoder.decode(chunk)
+                except UnicodeDecodeError:
+                    utf8 = False
+            offset += len(chunk)
+    if blank:
+        raise ImportFailed.one(422, "the file is empty")
+    if utf8:
+        try:
+            decoder.decode(b"", final=True)
+        except UnicodeDecodeError:
+            utf8 = False
+    return "utf-8" if utf8 else "latin-1"
+
+
+def detect_format(path: Path, filename: str, encoding: str) -> str:
+    """"gcode", "svg" or "coords": the content decides where it is clear, the name
+    otherwise."""
+    with path.open("r", encoding=encoding, errors="replace", newline=None) as f:
+        head = f.read(_SNIFF)
+    head = head.lstrip("\ufeff")
+    stripped = head.lstrip()
+    if stripped.startswith("<"):
+        if re.search(r"<svg[\s>]", head):
+            return "svg"
+        raise ImportFailed.one(415, "XML/HTML file that is not SVG: not an accepted format")
+    ext = Path(filename).suffix.lower()
+    lines = [ln for ln in head.splitlines()[:-1] or head.splitlines() if ln.strip()]
+    if lines and all(_NUMBER_LINE.match(ln) for ln in lines[:200]):
+        return "coords"
+    if ext in GCODE_EXT or _GCODE_LINE.search(head):
+        return "gcode"
+    if ext in COORD_EXT:
+        return "coords"
+    if ext in SVG_EXT:
+        raise ImportFailed.one(422, "the .svg file holds no <svg> element")
+    raise ImportFailed.one(
+        415, f"unknown format for '{filename}': expected G-code (.gcode .nc .gc .ngc .tap), "
+             "SVG, or a coordinates list (one number per line)")
+
+
+def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
+    """(1-based line number, text) without line endings, streamed."""
+    with path.open("r", encoding=encoding, newline=None) as f:
+        for n, line in enumerate(f, 1):
+            yield n, line.rstrip("\n")

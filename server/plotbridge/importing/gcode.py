@@ -1,0 +1,264 @@
+"""G-code reading: dialects of pen lifting, units, relative moves, arcs, validation.
+
+`read_ops` turns numbered source lines into ops (see ops.py) in absolute millimetres,
+reporting every line it cannot accept to an ErrorLog instead of stopping at the first.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Iterable, Iterator
+
+from .models import ErrorLog, ImportOptions
+from .ops import ARC, DWELL, MOVE, PEN
+
+MAX_LINE = 256
+PEN_DIALECTS = ("auto", "m3", "z", "m300", "servo-z")
+_BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
+_WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
+_COMMENT = re.compile(r"\([^)]*\)|;.*")
+# G words accepted without effect on a plotter (plane XY, feed per minute, work
+# coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
+_NOOP_G = {17.0, 94.0, 54.0, 61.0, 64.0, 40.0, 49.0, 80.0, 91.1}
+# M words accepted without effect: program end, motors on/off, coolant.
+_NOOP_M = {2.0, 30.0, 17.0, 18.0, 84.0, 7.0, 8.0, 9.0}
+_AXIS_WORDS = frozenset("XYZIJRFSPN")
+ARC_RADIUS_ABS = 0.005
+ARC_RADIUS_REL = 0.001
+
+
+def _num(v: float) -> str:
+    return f"{v:g}"
+
+
+def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
+    """The words of a line, upper case and without spaces, comments, N number or
+    checksum; None when the line cannot be accepted (already reported)."""
+    text = raw.strip()
+    if not text:
+        return ""
+    if "*" in text:
+        body, _, check = text.rpartition("*")
+        if not check.strip().isdigit():
+            errors.add(line_no, f"malformed checksum '*{check.strip()}'")
+            return None
+        computed = 0
+        for ch in body.encode("latin-1", "replace"):
+            computed ^= ch
+        if computed != int(check):
+            errors.add(line_no,
+                       f"checksum mismatch: line says {check.strip()}, computed {computed}")
+            return None
+        text = body
+    if "(" in text or ";" in text:
+        if text.count("(") != text.count(")"):
+            errors.add(line_no, "unbalanced parenthesis in comment")
+            return None
+        text = _COMMENT.sub("", text)
+    text = text.replace(" ", "").replace("\t", "").upper()
+    if text == "%":
+        return ""
+    if text.startswith("N"):
+        k = 1
+        while k < len(text) and text[k].isdigit():
+            k += 1
+        text = text[k:]
+    return text
+
+
+class GcodeReader:
+    """State machine over G-code lines; iterate `ops(lines)`."""
+
+    def __init__(self, options: ImportOptions, errors: ErrorLog) -> None:
+        self.errors = errors
+        dialect = options.pen_dialect
+        if dialect not in PEN_DIALECTS:
+            raise ValueError(f"pen_dialect must be one of {', '.join(PEN_DIALECTS)}")
+        if dialect == "auto" and options.servo_down_angle is not None:
+            dialect = "servo-z"
+        self.dialect = dialect
+        self.z_threshold = options.z_threshold
+        self.servo_down = options.servo_down_angle
+        self.motion = 0
+        self.inches = False
+        self.relative = False
+        self.feed: float | None = None
+        self.x = self.y = 0.0
+        self.z: float | None = None
+        self.pen: bool | None = None
+
+    def ops(self, lines: Iterable[tuple[int, str]]) -> Iterator[tuple]:
+        if self.dialect == "servo-z" and self.servo_down is None:
+            self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
+            return
+        for line_no, raw in lines:
+            if len(raw) > MAX_LINE:
+                self.errors.add(line_no, f"line longer than {MAX_LINE} characters")
+                continue
+            text = strip_line(raw, line_no, self.errors)
+            if not text:
+                continue
+            if _BLOCK.fullmatch(text) is None:
+                self.errors.add(line_no, f"cannot parse '{raw.strip()[:60]}'")
+                continue
+            yield from self._block(line_no, _WORD.findall(text))
+
+    def _pen(self, line_no: int, down: bool) -> Iterator[tuple]:
+        if self.pen is not down:
+            self.pen = down
+            yield (PEN, line_no, down)
+
+    def _block(self, line_no: int, words: list[tuple[str, str]]) -> Iterator[tuple]:
+        errors = self.errors
+        gs: list[float] = []
+        ms: list[float] = []
+        vals: dict[str, float] = {}
+        for letter, num in words:
+            v = float(num)
+            if letter == "G":
+                gs.append(v)
+            elif letter == "M":
+                ms.append(v)
+            elif letter in _AXIS_WORDS:
+                if letter in vals:
+                    errors.add(line_no, f"word {letter} repeated")
+                    return
+                vals[letter] = v
+            else:
+                errors.add(line_no, f"unsupported word {letter}{num}")
+                return
+        motion = None
+        dwell = False
+        for g in gs:
+            if g in (0.0, 1.0, 2.0, 3.0):
+                motion = int(g)
+            elif g == 4.0:
+                dwell = True
+            elif g == 20.0:
+                self.inches = True
+            elif g == 21.0:
+                self.inches = False
+            elif g == 90.0:
+                self.relative = False
+            elif g == 91.0:
+                self.relative = True
+            elif g not in _NOOP_G:
+                errors.add(line_no, f"unsupported command G{_num(g)}")
+                return
+        unit = 25.4 if self.inches else 1.0
+        if "F" in vals:
+            if vals["F"] <= 0:
+                errors.add(line_no, "feed rate F must be positive")
+                return
+            self.feed = vals["F"] * unit
+        for m in ms:
+            if m in (3.0, 4.0, 5.0):
+                if self.dialect in ("auto", "m3"):
+                    yield from self._pen(line_no, m != 5.0)
+            elif m == 300.0:
+                s = vals.get("S")
+                if s == 30.0:
+                    yield from self._pen(line_no, True)
+                elif s == 50.0:
+                    yield from self._pen(line_no, False)
+                else:
+                    errors.add(line_no, "M300 needs S30 (pen down) or S50 (pen up)")
+                    return
+            elif m not in _NOOP_M:
+                errors.add(line_no, f"unsupported command M{_num(m)}")
+                return
+        if dwell:
+            p = vals.get("P")
+            if p is None or p < 0:
+                errors.add(line_no, "G4 needs a dwell time P in seconds (P >= 0)")
+                return
+            yield (DWELL, line_no, p)
+            return
+        if "Z" in vals:
+            z = vals["Z"] * unit
+            if self.relative and self.dialect != "servo-z":
+                z += self.z or 0.0
+            self.z = z
+            if self.dialect == "servo-z":
+                assert self.servo_down is not None
+                yield from self._pen(line_no, abs(vals["Z"] - self.servo_down) < 0.5)
+            elif self.dialect in ("auto", "z"):
+                yield from self._pen(line_no, z <= self.z_threshold)
+        if motion is not None:
+            self.motion = motion
+        has_xy = "X" in vals or "Y" in vals
+        has_arc = "I" in vals or "J" in vals or "R" in vals
+        if not has_xy and not (has_arc and self.motion in (2, 3)):
+            if motion in (2, 3):
+                errors.add(line_no, f"G{motion} needs I/J or R")
+            return
+        x, y = self.x, self.y
+        if self.relative:
+            tx, ty = x + vals.get("X", 0.0) * unit, y + vals.get("Y", 0.0) * unit
+        else:
+            tx = vals["X"] * unit if "X" in vals else x
+            ty = vals["Y"] * unit if "Y" in vals else y
+        mode = self.motion
+        if mode != 0 and self.feed is None:
+            errors.add(line_no, f"G{mode} with no feed rate: no F on this line or before it")
+            self.x, self.y = tx, ty
+            return
+        if mode in (0, 1):
+            self.x, self.y = tx, ty
+            yield (MOVE, line_no, tx, ty, None if mode == 0 else self.feed)
+            return
+        cw = mode == 2
+        if "R" in vals:
+            centre = self._centre_from_radius(line_no, x, y, tx, ty, vals["R"] * unit, cw)
+            if centre is None:
+                self.x, self.y = tx, ty
+                return
+            i, j = centre
+        elif "I" in vals or "J" in vals:
+            i, j = vals.get("I", 0.0) * unit, vals.get("J", 0.0) * unit
+            r0 = math.hypot(i, j)
+            r1 = math.hypot(tx - x - i, ty - y - j)
+            delta = abs(r1 - r0)
+            if delta > ARC_RADIUS_ABS and (delta > 0.5 or delta > ARC_RADIUS_REL * r0):
+                errors.add(line_no, f"arc radius inconsistent: {r0:.4f} mm at the start, "
+                                    f"{r1:.4f} mm at the end")
+                self.x, self.y = tx, ty
+                return
+            if r0 == 0:
+                errors.add(line_no, "arc with zero radius")
+                return
+        else:
+            errors.add(line_no, f"G{mode} needs I/J or R")
+            return
+        self.x, self.y = tx, ty
+        yield (ARC, line_no, tx, ty, i, j, self.feed, cw)
+
+    def _centre_from_radius(self, line_no: int, x: float, y: float, tx: float, ty: float,
+                            r: float, cw: bool) -> tuple[float, float] | None:
+        dx, dy = tx - x, ty - y
+        d = math.hypot(dx, dy)
+        if d == 0:
+            self.errors.add(line_no, "arc in radius form (R) needs an end point "
+                                     "other than the start")
+            return None
+        h2 = r * r - d * d / 4
+        if h2 < -1e-6 * r * r - ARC_RADIUS_ABS:
+            self.errors.add(line_no, f"arc radius R{abs(r):g} is too small for the "
+                                     f"distance {d:.4f}")
+            return None
+        h = math.sqrt(max(h2, 0.0))
+        # The centre is on the right of the chord for a clockwise arc of under 180°
+        # (R > 0) and on the left for one of over 180° (R < 0); mirrored for G3.
+        side = -1.0 if cw else 1.0
+        if r < 0:
+            side = -side
+        mx, my = x + dx / 2, y + dy / 2
+        cx = mx - side * h * dy / d
+        cy = my + side * h * dx / d
+        return cx - x, cy - y
+
+
+def read_ops(lines: Iterable[tuple[int, str]], options: ImportOptions,
+             errors: ErrorLog) -> Iterator[tuple]:
+    return GcodeReader(options, errors).ops(lines)

@@ -1,0 +1,114 @@
+"""The importer's public data types (see docs/INTERNALS.md, "Importer API")."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+MAX_ERRORS = 100
+
+
+@dataclass
+class MachineProfile:
+    """What the estimate and the work-area check need to know about the machine."""
+
+    width: float = 300.0
+    height: float = 220.0
+    max_rate: tuple[float, float] = (6000.0, 6000.0)
+    accel: tuple[float, float] = (1000.0, 1000.0)
+    junction_deviation: float = 0.02
+    arc_tolerance: float = 0.002
+    pen_settle_s: float = 0.15
+    steps_per_mm: tuple[float, float] = (80.0, 80.0)
+    corexy: bool = False
+    planner_blocks: int = 16
+
+    @classmethod
+    def from_settings(cls, settings: dict[int, float]) -> MachineProfile:
+        d = cls()
+
+        def get(n: int, default: float) -> float:
+            return float(settings.get(n, default))
+
+        return cls(
+            width=get(130, d.width),
+            height=get(131, d.height),
+            max_rate=(get(110, d.max_rate[0]), get(111, d.max_rate[1])),
+            accel=(get(120, d.accel[0]), get(121, d.accel[1])),
+            junction_deviation=get(11, d.junction_deviation),
+            arc_tolerance=get(12, d.arc_tolerance),
+            pen_settle_s=get(62, d.pen_settle_s * 1000.0) / 1000.0,
+            steps_per_mm=(get(100, d.steps_per_mm[0]), get(101, d.steps_per_mm[1])),
+            corexy=bool(get(63, 0)),
+        )
+
+
+@dataclass
+class ImportOptions:
+    name: str | None = None
+    paper: str | None = None
+    margin: float = 10.0
+    fit: bool = False
+    rotate: int = 0
+    scale: float = 1.0
+    dx: float = 0.0
+    dy: float = 0.0
+    optimize: bool | None = None
+    tolerance: float = 0.02
+    layers: list[str] | None = None
+    pen_dialect: str = "auto"
+    z_threshold: float = 0.0
+    servo_down_angle: float | None = None
+    feed: float = 3000.0  # mm/min for drawing moves of SVG, coordinates and patterns
+
+
+@dataclass
+class ImportResult:
+    format: str
+    program_path: Path
+    preview_path: Path
+    lines_total: int
+    estimate_s: float
+    bounds: dict[str, float]
+    stats: dict[str, float]
+    timeline: list[tuple[int, float]] = field(default_factory=list)
+
+
+class ImportFailed(Exception):
+    """The input was refused: `status` is 413, 415 or 422; `errors` name what and where."""
+
+    def __init__(self, status: int, errors: list[dict]):
+        self.status = status
+        self.errors = errors[:MAX_ERRORS]
+        first = self.errors[0]["message"] if self.errors else "import failed"
+        more = f" (+{len(errors) - 1} more)" if len(errors) > 1 else ""
+        super().__init__(f"{status}: {first}{more}")
+
+    @classmethod
+    def one(cls, status: int, message: str, line: int | None = None) -> ImportFailed:
+        return cls(status, [{"line": line, "message": message}])
+
+
+class ErrorLog:
+    """Collects errors with line numbers, keeping the first MAX_ERRORS and counting the rest."""
+
+    def __init__(self) -> None:
+        self.errors: list[dict] = []
+        self.count = 0
+
+    def add(self, line: int | None, message: str) -> None:
+        self.count += 1
+        if len(self.errors) < MAX_ERRORS:
+            self.errors.append({"line": line, "message": message})
+
+    def __bool__(self) -> bool:
+        return self.count > 0
+
+    def raise_if_any(self) -> None:
+        if not self.count:
+            return
+        errors = list(self.errors)
+        if self.count > len(errors):
+            errors[-1] = {"line": None,
+                          "message": f"{self.count - len(errors) + 1} more errors not shown"}
+        raise ImportFailed(422, errors)

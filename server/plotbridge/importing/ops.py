@@ -1,0 +1,112 @@
+"""The intermediate program every format is turned into before it is written.
+
+An op is a tuple whose first item is its kind and whose second is the source line
+(None when the source has no lines):
+
+- ``(PEN, line, down)``
+- ``(MOVE, line, x, y, feed)``: feed in mm/min, ``None`` for a rapid (G0)
+- ``(ARC, line, x, y, i, j, feed, cw)``: centre offset (i, j) from the start point
+- ``(DWELL, line, seconds)``
+
+Coordinates are absolute millimetres.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator
+
+PEN, MOVE, ARC, DWELL = 0, 1, 2, 3
+
+Stroke = list[tuple[float, float]]
+
+
+def arc_sweep(sx: float, sy: float, x: float, y: float, i: float, j: float,
+              cw: bool) -> tuple[float, float, float, float]:
+    """Centre, radius and signed sweep angle (radians) of an arc; a full circle when the
+    end equals the start."""
+    cx, cy = sx + i, sy + j
+    r = math.hypot(i, j)
+    a0 = math.atan2(sy - cy, sx - cx)
+    a1 = math.atan2(y - cy, x - cx)
+    sweep = a1 - a0
+    if cw:
+        if sweep >= -1e-12:
+            sweep -= 2 * math.pi
+    elif sweep <= 1e-12:
+        sweep += 2 * math.pi
+    return cx, cy, r, sweep
+
+
+def arc_points(sx: float, sy: float, x: float, y: float, i: float, j: float, cw: bool,
+               tolerance: float) -> Iterator[tuple[float, float]]:
+    """Points along an arc (excluding the start, including the end) with chords that stay
+    within `tolerance` of it."""
+    cx, cy, r, sweep = arc_sweep(sx, sy, x, y, i, j, cw)
+    a0 = math.atan2(sy - cy, sx - cx)
+    tol = min(tolerance, r)
+    step = 2 * math.acos(1 - tol / r) if r > 0 else math.pi
+    n = max(1, math.ceil(abs(sweep) / max(step, 1e-6)))
+    for k in range(1, n):
+        a = a0 + sweep * k / n
+        yield cx + r * math.cos(a), cy + r * math.sin(a)
+    yield x, y
+
+
+def arc_extent(sx: float, sy: float, x: float, y: float, i: float, j: float,
+               cw: bool) -> tuple[float, float, float, float]:
+    """Bounding box (min_x, min_y, max_x, max_y) of an arc."""
+    cx, cy, r, sweep = arc_sweep(sx, sy, x, y, i, j, cw)
+    xs, ys = [sx, x], [sy, y]
+    a0 = math.atan2(sy - cy, sx - cx)
+    lo, hi = (a0, a0 + sweep) if sweep > 0 else (a0 + sweep, a0)
+    for k in range(math.ceil(lo / (math.pi / 2)), math.floor(hi / (math.pi / 2)) + 1):
+        a = k * math.pi / 2
+        xs.append(cx + r * math.cos(a))
+        ys.append(cy + r * math.sin(a))
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+def strokes_to_ops(strokes: Iterable[Stroke], feed: float) -> Iterator[tuple]:
+    """Pen-up travel to each stroke's start, then pen down along it."""
+    for stroke in strokes:
+        x0, y0 = stroke[0]
+        yield (PEN, None, False)
+        yield (MOVE, None, x0, y0, None)
+        yield (PEN, None, True)
+        for x, y in stroke[1:]:
+            yield (MOVE, None, x, y, feed)
+    yield (PEN, None, False)
+
+
+def ops_to_strokes(ops: Iterable[tuple], tolerance: float) -> tuple[list[Stroke], float]:
+    """Pen-down polylines (arcs flattened) and the feed they were drawn at (the most
+    recent drawing feed; used when the strokes are written again)."""
+    strokes: list[Stroke] = []
+    cur: Stroke | None = None
+    x = y = 0.0
+    down = False
+    feed = 0.0
+    for op in ops:
+        kind = op[0]
+        if kind == PEN:
+            down = op[2]
+            cur = None
+            continue
+        if kind == DWELL:
+            continue
+        if kind == MOVE:
+            pts: Iterable[tuple[float, float]] = ((op[2], op[3]),)
+            if op[4] is not None and down:
+                feed = op[4]
+        else:
+            pts = arc_points(x, y, op[2], op[3], op[4], op[5], op[7], tolerance)
+            if down:
+                feed = op[6]
+        if down:
+            if cur is None:
+                cur = [(x, y)]
+                strokes.append(cur)
+            cur.extend(pts)
+        x, y = op[2], op[3]
+    return strokes, feed

@@ -1,0 +1,177 @@
+"""import_file / import_pattern: from an upload to program.gcode + preview.json."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+
+from .detect import check_text, detect_format, numbered_lines
+from .gcode import read_ops
+from .models import ErrorLog, ImportFailed, ImportOptions, ImportResult, MachineProfile
+from .ops import ARC, MOVE, PEN, Stroke, arc_extent, ops_to_strokes, strokes_to_ops
+from .placement import Bounds, Transform, needs_bounds, placement
+from .program import ProgramWriter
+
+PROGRAM = "program.gcode"
+PREVIEW = "preview.json"
+
+
+def drawn_bounds(ops: Iterable[tuple]) -> Bounds | None:
+    """Extent of the pen-down moves of a stream of ops (None when nothing is drawn)."""
+    b = [math.inf, math.inf, -math.inf, -math.inf]
+    x = y = 0.0
+    down = False
+    for op in ops:
+        kind = op[0]
+        if kind == PEN:
+            down = op[2]
+        elif kind == MOVE or kind == ARC:
+            if down:
+                if kind == MOVE:
+                    xs, ys = (x, op[2]), (y, op[3])
+                    ext = (min(xs), min(ys), max(xs), max(ys))
+                else:
+                    ext = arc_extent(x, y, op[2], op[3], op[4], op[5], op[7])
+                b = [min(b[0], ext[0]), min(b[1], ext[1]), max(b[2], ext[2]), max(b[3], ext[3])]
+            x, y = op[2], op[3]
+    return None if b[0] > b[2] else (b[0], b[1], b[2], b[3])
+
+
+def strokes_bounds(strokes: list[Stroke]) -> Bounds | None:
+    pts = [p for s in strokes for p in s]
+    if not pts:
+        return None
+    xs, ys = zip(*pts, strict=True)
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+def travel_of(strokes: list[Stroke], start: tuple[float, float] = (0.0, 0.0)) -> float:
+    """Pen-up travel from `start` through the strokes in order."""
+    total = 0.0
+    x, y = start
+    for s in strokes:
+        total += math.hypot(s[0][0] - x, s[0][1] - y)
+        x, y = s[-1]
+    return total
+
+
+def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir: Path,
+                  transform: Transform, profile: MachineProfile, errors: ErrorLog,
+                  travel_before: float | None = None) -> ImportResult:
+    """Writes program.gcode and preview.json atomically from the ops; raises ImportFailed
+    (leaving nothing behind) when the ops or the errors found while writing say so."""
+    dest_dir.mkdir(parents=True, exist_ok=True)
+    program = dest_dir / PROGRAM
+    preview = dest_dir / PREVIEW
+    tmp_program = dest_dir / f".{PROGRAM}.part"
+    tmp_preview = dest_dir / f".{PREVIEW}.part"
+    try:
+        with tmp_program.open("w", encoding="ascii", newline="\n") as out:
+            writer = ProgramWriter(out, transform, profile, errors)
+            writer.write_ops(ops_factory())
+            writer.finish()
+        errors.raise_if_any()
+        if writer.pen_down_mm == 0 and writer.preview.points == 0:
+            raise ImportFailed.one(422, "nothing to draw: the input has no pen-down moves")
+        bounds = writer.bounds_dict()
+        writer.preview.write(tmp_preview, bounds)
+        os.replace(tmp_program, program)
+        os.replace(tmp_preview, preview)
+    except BaseException:
+        for p in (tmp_program, tmp_preview):
+            p.unlink(missing_ok=True)
+        raise
+    planner = writer.planner
+    after = writer.travel_mm
+    return ImportResult(
+        format=fmt,
+        program_path=program,
+        preview_path=preview,
+        lines_total=writer.line,
+        estimate_s=round(planner.time, 3),
+        bounds=bounds,
+        stats={
+            "pen_down_mm": round(writer.pen_down_mm, 3),
+            "travel_before_mm": round(after if travel_before is None else travel_before, 3),
+            "travel_after_mm": round(after, 3),
+            "pen_lifts": writer.pen_lifts,
+        },
+        timeline=planner.timeline.finish(writer.line, round(planner.time, 3)),
+    )
+
+
+def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: ImportOptions,
+                   profile: MachineProfile, errors: ErrorLog, feed: float | None = None,
+                   optimize: bool = True) -> ImportResult:
+    """Places, optionally optimizes, and writes a drawing given as pen-down polylines."""
+    from .optimize import optimize_strokes
+
+    errors.raise_if_any()
+    bounds = strokes_bounds(strokes)
+    if bounds is None:
+        raise ImportFailed.one(422, "nothing to draw")
+    transform = placement(bounds, options, profile)
+    placed = [[transform.apply(x, y) for x, y in s] for s in strokes]
+    before = travel_of(placed)
+    if optimize:
+        deadline = time.monotonic() + 2.0
+        placed = optimize_strokes(placed, options.tolerance, deadline)
+    draw_feed = feed or options.feed
+    return write_program(lambda: strokes_to_ops(placed, draw_feed), fmt, dest_dir, Transform(),
+                         profile, errors, travel_before=before)
+
+
+def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOptions,
+                 profile: MachineProfile) -> ImportResult:
+    errors = ErrorLog()
+    try:
+        def ops() -> Iterator[tuple]:
+            return read_ops(numbered_lines(source, encoding), options, errors)
+        ops()  # validates the dialect options before reading
+    except ValueError as e:
+        raise ImportFailed.one(422, str(e)) from None
+    if options.optimize:
+        strokes, feed = ops_to_strokes(ops(), min(options.tolerance, 0.01) or 0.01)
+        return import_strokes(strokes, "gcode", dest_dir, options, profile, errors,
+                              feed=feed or None)
+    bounds = None
+    if needs_bounds(options):
+        bounds = drawn_bounds(ops())
+        errors.raise_if_any()
+        if bounds is None:
+            raise ImportFailed.one(422, "nothing to draw: the input has no pen-down moves")
+    transform = placement(bounds, options, profile)
+    return write_program(ops, "gcode", dest_dir, transform, profile, errors)
+
+
+def import_file(source: Path, filename: str, dest_dir: Path, options: ImportOptions,
+                profile: MachineProfile) -> ImportResult:
+    """Turns an uploaded file into dest_dir/program.gcode and dest_dir/preview.json."""
+    source = Path(source)
+    dest_dir = Path(dest_dir)
+    encoding = check_text(source)
+    fmt = detect_format(source, filename, encoding)
+    if fmt == "gcode":
+        return import_gcode(source, encoding, dest_dir, options, profile)
+    optimize = options.optimize is not False
+    errors = ErrorLog()
+    if fmt == "svg":
+        from .svg import read_svg
+        strokes = read_svg(source, options, errors)
+    else:
+        from .coords import read_coords
+        strokes = read_coords(numbered_lines(source, encoding), errors)
+    return import_strokes(strokes, fmt, dest_dir, options, profile, errors, optimize=optimize)
+
+
+def import_pattern(name: str, dest_dir: Path, options: ImportOptions,
+                   profile: MachineProfile) -> ImportResult:
+    """Writes one of the built-in test patterns (see PATTERNS)."""
+    from .patterns import pattern_strokes
+
+    strokes = pattern_strokes(name)
+    return import_strokes(strokes, "pattern", Path(dest_dir), options, profile, ErrorLog(),
+                          optimize=options.optimize is not False)

@@ -1,0 +1,168 @@
+"""Plot time estimate: a simulation of the firmware's motion planner.
+
+The model is GRBL's: every move is a block with a trapezoidal speed profile; the
+speed through the corner between two blocks is limited by the junction deviation;
+each axis is held to its own maximum rate and acceleration; arcs are cut into
+chords by the arc tolerance. The planner only sees the blocks in its buffer
+(`profile.planner_blocks`): while block k executes, the buffer holds k .. k+N-1 and
+the last of them must be able to stop, so long chains of short moves run slower
+than an unlimited look-ahead would allow. New blocks enter as old ones finish,
+because the sender keeps the buffer full. M3/M5 wait for motion to stop, then hold
+for the pen settle time; G4 likewise for its dwell.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .models import MachineProfile
+from .ops import arc_sweep
+
+_STRAIGHT = 1e30
+
+
+class Timeline:
+    """(line, seconds elapsed when it ends) samples, thinned to at most `limit`."""
+
+    def __init__(self, limit: int = 2000) -> None:
+        self.limit = limit
+        self.samples: list[tuple[int, float]] = []
+        self.stride = 1
+        self._next = 0
+
+    def record(self, line: int, t: float) -> None:
+        if line < self._next:
+            return
+        self.samples.append((line, t))
+        self._next = line + self.stride
+        if len(self.samples) >= self.limit:
+            self.samples = self.samples[1::2]
+            self.stride *= 2
+
+    def finish(self, line: int, t: float) -> list[tuple[int, float]]:
+        if not self.samples or self.samples[-1][0] != line:
+            if len(self.samples) >= self.limit:
+                self.samples.pop()
+            self.samples.append((line, t))
+        return self.samples
+
+
+def _axis_limit(limits: tuple[float, float], ux: float, uy: float) -> float:
+    v = _STRAIGHT
+    if ux:
+        v = abs(limits[0] / ux)
+    if uy:
+        v = min(v, abs(limits[1] / uy))
+    return v
+
+
+def trapezoid_time(v0: float, v1: float, vn: float, a: float, length: float) -> float:
+    """Seconds to cover `length` mm starting at v0, ending at v1 (mm/s), cruising at no
+    more than vn with acceleration a. Assumes v0, v1 <= vn and that v1 is reachable."""
+    da = (vn * vn - v0 * v0) / (2 * a)
+    dd = (vn * vn - v1 * v1) / (2 * a)
+    if da + dd <= length:
+        return (vn - v0) / a + (vn - v1) / a + (length - da - dd) / vn
+    vp = math.sqrt(max((2 * a * length + v0 * v0 + v1 * v1) / 2, 0.0))
+    return max(vp - v0, 0.0) / a + max(vp - v1, 0.0) / a
+
+
+class Planner:
+    """Feed it moves in order; `time` is the estimate so far once `flush` is called."""
+
+    def __init__(self, profile: MachineProfile, start: tuple[float, float] = (0.0, 0.0)):
+        self.p = profile
+        self.rapid = (profile.max_rate[0] / 60.0, profile.max_rate[1] / 60.0)
+        self.accel = profile.accel
+        self.depth = max(2, profile.planner_blocks)
+        self.x, self.y = start
+        self.time = 0.0
+        self.timeline = Timeline()
+        # pending blocks: [length, accel, nominal², max entry², line]
+        self.pending: list[list] = []
+        self.v2 = 0.0           # squared speed at the end of the last finished block
+        self.prev_u: tuple[float, float] | None = None
+        self.prev_nom2 = 0.0
+
+    def move(self, line: int, x: float, y: float, feed: float | None) -> None:
+        """A straight move to (x, y); feed in mm/min, None for a rapid."""
+        dx, dy = x - self.x, y - self.y
+        length = math.hypot(dx, dy)
+        if length < 1e-9:
+            return
+        self.x, self.y = x, y
+        ux, uy = dx / length, dy / length
+        vmax = _axis_limit(self.rapid, ux, uy)
+        vn = vmax if feed is None else min(feed / 60.0, vmax)
+        acc = _axis_limit(self.accel, ux, uy)
+        nom2 = vn * vn
+        prev = self.prev_u
+        if prev is None:
+            entry2 = 0.0
+        else:
+            cos_t = -(prev[0] * ux + prev[1] * uy)
+            if cos_t > 0.999999:
+                entry2 = 0.0
+            else:
+                if cos_t < -0.999999:
+                    j2 = _STRAIGHT
+                else:
+                    jx, jy = ux - prev[0], uy - prev[1]
+                    jl = math.hypot(jx, jy)
+                    ja = _axis_limit(self.accel, jx / jl, jy / jl)
+                    s = math.sqrt(0.5 * (1.0 - cos_t))
+                    j2 = ja * self.p.junction_deviation * s / (1.0 - s)
+                entry2 = min(j2, nom2, self.prev_nom2)
+        self.prev_u = (ux, uy)
+        self.prev_nom2 = nom2
+        self.pending.append([length, acc, nom2, entry2, line])
+        if len(self.pending) >= self.depth:
+            self._finish_first()
+
+    def arc(self, line: int, x: float, y: float, i: float, j: float, feed: float,
+            cw: bool) -> None:
+        """An arc cut into chords the way the firmware does it."""
+        cx, cy, r, sweep = arc_sweep(self.x, self.y, x, y, i, j, cw)
+        tol = self.p.arc_tolerance
+        chord = 2 * math.sqrt(max(tol * (2 * r - tol), 1e-12))
+        n = int(abs(sweep) * r / chord)
+        a0 = math.atan2(self.y - cy, self.x - cx)
+        for k in range(1, n):
+            a = a0 + sweep * k / n
+            self.move(line, cx + r * math.cos(a), cy + r * math.sin(a), feed)
+        self.move(line, x, y, feed)
+
+    def stop(self, line: int, seconds: float) -> None:
+        """Wait for motion to end, then hold still for `seconds`."""
+        self.flush()
+        self.time += seconds
+        self.timeline.record(line, self.time)
+
+    def flush(self) -> None:
+        while self.pending:
+            self._finish_first()
+        self.prev_u = None
+        self.v2 = 0.0
+
+    def _finish_first(self) -> None:
+        pending = self.pending
+        length, acc, nom2, _, line = pending[0]
+        # Highest exit speed the rest of the buffer allows: every later block must be
+        # able to slow down to its own entry limit, and the last one to a stop.
+        exit2 = _STRAIGHT
+        s = 0.0
+        for blk in pending[1:]:
+            if s >= exit2:
+                break
+            limit = blk[3] + s
+            if limit < exit2:
+                exit2 = limit
+            s += 2 * blk[1] * blk[0]
+        else:
+            exit2 = min(exit2, s) if len(pending) > 1 else 0.0
+        v2 = self.v2
+        exit2 = min(exit2, v2 + 2 * acc * length, nom2)
+        self.time += trapezoid_time(math.sqrt(v2), math.sqrt(exit2), math.sqrt(nom2), acc, length)
+        self.v2 = exit2
+        del pending[0]
+        self.timeline.record(line, self.time)

@@ -1,0 +1,200 @@
+"""Writing the normalized program (docs/INTERNALS.md) and reading it back for a resume."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from pathlib import Path
+
+from .models import ErrorLog, MachineProfile
+from .ops import ARC, DWELL, MOVE, PEN, arc_extent, arc_points
+from .placement import Transform
+from .planner import Planner
+from .preview import PreviewBuilder
+
+HEADER = ("G21", "G90", "M5")
+EPS = 1e-6
+PREVIEW_ARC_TOL = 0.05
+
+
+def _feed(f: float) -> str:
+    return f"{round(f, 1):g}"
+
+
+class ProgramWriter:
+    """Writes ops (source coordinates, mapped through `transform`) as the normalized
+    program while checking the work area, simulating the planner, building the preview
+    and counting stats. Line numbers in errors are the source's."""
+
+    def __init__(self, out, transform: Transform, profile: MachineProfile,
+                 errors: ErrorLog, start: tuple[float, float] = (0.0, 0.0)) -> None:
+        self.out = out
+        self.t = transform
+        self.profile = profile
+        self.errors = errors
+        self.planner = Planner(profile, start)
+        self.preview = PreviewBuilder()
+        self.line = 0
+        self.x, self.y = start
+        self.down = False
+        self.pen_down_mm = 0.0
+        self.travel_mm = 0.0
+        self.pen_lifts = 0
+        self.bounds = [math.inf, math.inf, -math.inf, -math.inf]
+        self._area = (-EPS, -EPS, profile.width + EPS, profile.height + EPS)
+        self._buf: list[str] = []
+        self.last = ""
+        for text in HEADER:
+            self._write(text)
+        self.planner.stop(2, 0.0)
+        self.planner.stop(3, profile.pen_settle_s)
+
+    def _write(self, text: str) -> None:
+        self.last = text
+        self.line += 1
+        self._buf.append(text)
+        if len(self._buf) >= 4096:
+            self.flush()
+
+    def flush(self) -> None:
+        if self._buf:
+            self.out.write("\n".join(self._buf))
+            self.out.write("\n")
+            self._buf = []
+
+    def _check(self, src_line: int | None, x: float, y: float) -> None:
+        a = self._area
+        if not (a[0] <= x <= a[2] and a[1] <= y <= a[3]):
+            p = self.profile
+            self.errors.add(src_line, f"move to X{x:.3f} Y{y:.3f} is outside the work area "
+                                      f"(0..{p.width:g} x 0..{p.height:g} mm)")
+
+    def _grow(self, x0: float, y0: float, x1: float, y1: float) -> None:
+        b = self.bounds
+        if x0 < b[0]:
+            b[0] = x0
+        if y0 < b[1]:
+            b[1] = y0
+        if x1 > b[2]:
+            b[2] = x1
+        if y1 > b[3]:
+            b[3] = y1
+
+    def write_ops(self, ops: Iterable[tuple]) -> None:
+        t = self.t
+        ident = t.identity
+        for op in ops:
+            kind = op[0]
+            if kind == MOVE:
+                x, y = (op[2], op[3]) if ident else t.apply(op[2], op[3])
+                self.move(op[1], x, y, op[4])
+            elif kind == PEN:
+                self.pen(op[1], op[2])
+            elif kind == ARC:
+                x, y = t.apply(op[2], op[3])
+                i, j = t.linear(op[4], op[5])
+                self.arc(op[1], x, y, i, j, op[6], op[7])
+            elif kind == DWELL:
+                self._write(f"G4 P{op[2]:.3f}")
+                self.planner.stop(self.line, op[2])
+
+    def pen(self, src_line: int | None, down: bool) -> None:
+        if down == self.down:
+            return
+        self.down = down
+        self._write("M3" if down else "M5")
+        if down:
+            self.preview.end_stroke()
+        else:
+            self.pen_lifts += 1
+        self.planner.stop(self.line, self.profile.pen_settle_s)
+
+    def move(self, src_line: int | None, x: float, y: float, feed: float | None) -> None:
+        x, y = round(x, 3), round(y, 3)
+        x0, y0 = self.x, self.y
+        if x == x0 and y == y0:
+            return
+        self._check(src_line, x, y)
+        if feed is None:
+            self._write(f"G0 X{x:.3f} Y{y:.3f}")
+        else:
+            self._write(f"G1 X{x:.3f} Y{y:.3f} F{_feed(feed)}")
+        self.planner.move(self.line, x, y, feed)
+        d = math.hypot(x - x0, y - y0)
+        if self.down:
+            self.pen_down_mm += d
+            self.preview.draw(x0, y0, x, y)
+            if x0 < x:
+                self._grow(x0, min(y0, y), x, max(y0, y))
+            else:
+                self._grow(x, min(y0, y), x0, max(y0, y))
+        else:
+            self.travel_mm += d
+            self.preview.move(x0, y0, x, y)
+        self.x, self.y = x, y
+
+    def arc(self, src_line: int | None, x: float, y: float, i: float, j: float,
+            feed: float, cw: bool) -> None:
+        x0, y0 = self.x, self.y
+        cx, cy = x0 + i, y0 + j      # centre from the unrounded start
+        x, y = round(x, 3), round(y, 3)
+        i, j = round(cx - x0, 3), round(cy - y0, 3)
+        ext = arc_extent(x0, y0, x, y, i, j, cw)
+        self._check(src_line, ext[0], ext[1])
+        self._check(src_line, ext[2], ext[3])
+        self._write(f"{'G2' if cw else 'G3'} X{x:.3f} Y{y:.3f} I{i:.3f} J{j:.3f} F{_feed(feed)}")
+        self.planner.arc(self.line, x, y, i, j, feed, cw)
+        px, py = x0, y0
+        length = 0.0
+        for qx, qy in arc_points(x0, y0, x, y, i, j, cw, PREVIEW_ARC_TOL):
+            length += math.hypot(qx - px, qy - py)
+            if self.down:
+                self.preview.draw(px, py, qx, qy)
+            px, py = qx, qy
+        if self.down:
+            self.pen_down_mm += length
+            self._grow(*ext)
+        else:
+            self.travel_mm += length
+            self.preview.move(x0, y0, x, y)
+        self.x, self.y = x, y
+
+    def finish(self) -> None:
+        if self.down or self.last != "M5":
+            self.down = True
+            self.pen(None, False)
+        self.planner.flush()
+        self.flush()
+
+    def bounds_dict(self) -> dict[str, float]:
+        b = self.bounds
+        if b[0] > b[2]:
+            return {"min_x": 0.0, "min_y": 0.0, "max_x": 0.0, "max_y": 0.0}
+        return {"min_x": round(b[0], 3), "min_y": round(b[1], 3),
+                "max_x": round(b[2], 3), "max_y": round(b[3], 3)}
+
+
+def resume_preamble(program_path: Path, line: int) -> list[str]:
+    """G-code that puts the machine in the state in which program line `line` (1-based)
+    starts: pen up, millimetres, absolute, at the position the line starts from, then
+    the pen as it was. Every G1/G2/G3 of the program carries its own F."""
+    x = y = 0.0
+    down = False
+    with program_path.open("r", encoding="ascii") as f:
+        for n, text in enumerate(f, 1):
+            if n >= line:
+                break
+            if text.startswith(("G0 ", "G1 ", "G2 ", "G3 ")):
+                for word in text.split()[1:3]:
+                    if word[0] == "X":
+                        x = float(word[1:])
+                    elif word[0] == "Y":
+                        y = float(word[1:])
+            elif text.startswith("M3"):
+                down = True
+            elif text.startswith("M5"):
+                down = False
+    out = ["M5", "G21", "G90", f"G0 X{x:.3f} Y{y:.3f}"]
+    if down:
+        out.append("M3")
+    return out

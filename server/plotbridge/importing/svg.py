@@ -1,0 +1,124 @@
+"""SVG: every visible shape as pen-down polylines in millimetres, plotter-oriented.
+
+The XML is first parsed with defusedxml, which refuses DTDs and entities (no
+billion laughs, no external files); svgelements then resolves transforms, viewBox,
+physical units and styles. SVG's Y axis points down the page, the plotter's away
+from the operator: the page is flipped so the drawing reads the same on paper.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import svgelements as se
+from defusedxml import ElementTree as SafeET
+from defusedxml.common import DefusedXmlException
+
+from .models import ErrorLog, ImportFailed, ImportOptions
+from .ops import Stroke
+
+PX_MM = 25.4 / 96.0
+INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
+MAX_SEGMENT_POINTS = 1 << 14
+
+
+def _flatten(seg, tol_px: float) -> np.ndarray:
+    """Points along a curve segment (t in (0, 1]) with chords within tol_px of it."""
+    n = 8
+    while True:
+        ts = np.linspace(0.0, 1.0, n + 1)
+        pts = np.asarray(seg.npoint(ts), dtype=float)
+        mids = np.asarray(seg.npoint((ts[:-1] + ts[1:]) / 2), dtype=float)
+        dev = np.hypot(*(mids - (pts[:-1] + pts[1:]) / 2).T)
+        if dev.max(initial=0.0) <= tol_px or n >= MAX_SEGMENT_POINTS:
+            return pts[1:]
+        n *= 4
+
+
+def path_strokes(path: se.Path, tol_px: float) -> list[np.ndarray]:
+    strokes: list[np.ndarray] = []
+    cur: list[np.ndarray] = []
+
+    def close() -> None:
+        if cur and sum(len(c) for c in cur) > 1:
+            strokes.append(np.concatenate(cur))
+
+    for seg in path.segments():
+        if isinstance(seg, se.Move):
+            close()
+            cur = [np.array([[seg.end.x, seg.end.y]])]
+        elif isinstance(seg, (se.Line, se.Close)):
+            if seg.end is None or seg.start is None:
+                continue
+            if not cur:
+                cur = [np.array([[seg.start.x, seg.start.y]])]
+            cur.append(np.array([[seg.end.x, seg.end.y]]))
+        else:
+            if not cur:
+                cur = [np.array([[seg.start.x, seg.start.y]])]
+            cur.append(_flatten(seg, tol_px))
+    close()
+    return strokes
+
+
+def _selected(chain: list[str], element: se.Shape, layers: list[str]) -> bool:
+    if any(name in layers for name in chain):
+        return True
+    stroke = element.stroke
+    if stroke is None or stroke.value is None:
+        return False
+    for layer in layers:
+        try:
+            if se.Color(layer) == stroke:
+                return True
+        except ValueError:
+            continue
+    return False
+
+
+def read_svg(source: Path, options: ImportOptions, errors: ErrorLog) -> list[Stroke]:
+    data = source.read_bytes()
+    try:
+        SafeET.fromstring(data, forbid_dtd=True)
+    except DefusedXmlException as e:
+        raise ImportFailed.one(422, f"SVG refused: {e.__class__.__name__} "
+                                    "(DTDs and entities are not accepted)") from None
+    except SafeET.ParseError as e:
+        line = e.position[0] if getattr(e, "position", None) else None
+        raise ImportFailed.one(422, f"SVG is not well-formed XML: {e}", line) from None
+    try:
+        import io
+        doc = se.SVG.parse(io.BytesIO(data), reify=True, ppi=96.0)
+    except Exception as e:  # svgelements raises many kinds on odd documents
+        raise ImportFailed.one(422, f"SVG could not be read: {e}") from None
+    height_mm = float(doc.height or 0.0) * PX_MM
+    tol_px = max(min(options.tolerance, 0.02) / 4, 0.002) / PX_MM
+    layers = options.layers
+    out: list[Stroke] = []
+    found_layers: set[str] = set()
+
+    def walk(node, chain: list[str]) -> None:
+        for child in node:
+            if isinstance(child, se.Group):
+                names = [n for n in (child.id, child.values.get(INKSCAPE_LABEL)) if n]
+                found_layers.update(names)
+                walk(child, chain + names)
+            elif isinstance(child, se.Shape):
+                if child.values.get("visibility") in ("hidden", "collapse"):
+                    continue
+                if layers and not _selected(chain, child, layers):
+                    continue
+                for s in path_strokes(se.Path(child), tol_px):
+                    mm = s * PX_MM
+                    mm[:, 1] = height_mm - mm[:, 1]
+                    out.append([(float(x), float(y)) for x, y in mm])
+
+    walk(doc, [])
+    if not out:
+        if layers:
+            errors.add(None, f"no shapes in layers {', '.join(layers)}; the document has "
+                             f"groups: {', '.join(sorted(found_layers)) or 'none'}")
+        else:
+            errors.add(None, "the SVG has no visible shapes to draw")
+    return out
