@@ -1,0 +1,497 @@
+// Everything the page does to the server. Each action updates the one state object;
+// the views render from it.
+
+import { api, ApiError, uploadJob } from "./api.js";
+import { LOG_LIMIT } from "./views/console.js";
+import { buildGeometry } from "./preview-data.js";
+import { previewJob } from "./store.js";
+
+const asList = (data, key) => (Array.isArray(data) ? data : (data && data[key]) || []);
+const sameId = (a, b) => String(a) === String(b);
+
+/** The API's placement fields from the form's state. */
+export function placementFields(p) {
+  const out = { margin: p.margin, fit: p.fit, rotate: p.rotate, scale: p.scale };
+  if (p.paper) out.paper = p.landscape ? `${p.paper}-landscape` : p.paper;
+  return out;
+}
+
+/** The form's state from a job's placement. */
+export function placementFromJob(placement, fallback) {
+  if (!placement) return fallback;
+  let paper = placement.paper || "";
+  let landscape = false;
+  if (paper.endsWith("-landscape")) {
+    paper = paper.slice(0, -"-landscape".length);
+    landscape = true;
+  }
+  return {
+    paper, landscape,
+    margin: placement.margin ?? fallback.margin,
+    fit: placement.fit ?? fallback.fit,
+    rotate: placement.rotate ?? fallback.rotate,
+    scale: placement.scale ?? fallback.scale,
+  };
+}
+
+/** Errors of a refused upload as a list to show, by line. */
+export function uploadErrors(err) {
+  const d = err.detail;
+  if (d && Array.isArray(d.errors)) {
+    return d.errors.map((e, i) => ({ key: i, line: e.line, message: String(e.message ?? "") }));
+  }
+  return [];
+}
+
+function uploadMessage(err) {
+  if (err.status === 413) return "Refused: too large";
+  if (err.status === 415) return "Refused: not a format plotbridge accepts";
+  if (err.status === 422) {
+    const n = uploadErrors(err).length;
+    return n > 1 ? `Refused: ${n} errors` : "Refused";
+  }
+  return `Failed: ${err.message}`;
+}
+
+export function createActions(store, socket, estop) {
+  const s = store.state;
+  let uploadSeq = 0;
+  let machineSeq = 0;
+  let placementTimer = null;
+
+  const fail = (field) => (err) => {
+    if (err instanceof ApiError && err.status === 401) return;
+    store.update((st) => {
+      st[field] = err.message;
+    });
+  };
+  const clear = (field) => store.update((st) => {
+    st[field] = "";
+  });
+
+  function setMachine(m) {
+    store.update((st) => {
+      st.machine = { ...m, seq: ++machineSeq };
+    });
+  }
+
+  function upsertJob(job) {
+    store.update((st) => {
+      const i = st.jobs.findIndex((j) => sameId(j.id, job.id));
+      if (i >= 0) st.jobs[i] = { ...st.jobs[i], ...job };
+      else st.jobs.push(job);
+    });
+    ensurePreview();
+  }
+
+  async function loadJobs() {
+    const jobs = asList(await api.get("/api/jobs"), "jobs");
+    store.update((st) => {
+      st.jobs = jobs;
+    });
+    ensurePreview();
+  }
+
+  /** A preview's version: re-fetch when a re-import changed the job. */
+  const previewVersion = (job) => JSON.stringify([job.lines_total, job.bounds, job.placement]);
+
+  async function ensurePreview() {
+    const job = previewJob(s);
+    if (!job) return;
+    const version = previewVersion(job);
+    const have = s.previews[job.id];
+    if (have && have.version === version) return;
+    s.previews[job.id] = { version, loading: true };
+    try {
+      const data = await api.get(`/api/jobs/${encodeURIComponent(job.id)}/preview`);
+      store.update((st) => {
+        st.previews[job.id] = { version, geom: buildGeometry(data) };
+      });
+    } catch (err) {
+      store.update((st) => {
+        st.previews[job.id] = { version, error: err.message };
+      });
+    }
+  }
+
+  async function loadSettings() {
+    store.update((st) => {
+      st.settings.busy = true;
+      st.settings.error = "";
+    });
+    try {
+      const data = await api.get("/api/machine/settings");
+      store.update((st) => {
+        st.settings.list = asList(data, "settings");
+        st.settings.edits = {};
+        st.settings.rowErrors = {};
+        st.settings.message = "";
+      });
+    } catch (err) {
+      store.update((st) => {
+        st.settings.error = `Could not read the settings: ${err.message}`;
+      });
+    } finally {
+      store.update((st) => {
+        st.settings.busy = false;
+      });
+    }
+  }
+
+  async function machineCall(path, body) {
+    clear("controlError");
+    try {
+      await api.post(path, body);
+      return true;
+    } catch (err) {
+      fail("controlError")(err);
+      store.update((st) => {
+        st.notice = { text: err.message, error: true };
+      });
+      return false;
+    }
+  }
+
+  async function afterClear(ok) {
+    if (ok) estop.dismiss();
+  }
+
+  const actions = {
+    setMachine,
+    upsertJob,
+    loadJobs,
+    loadSettings,
+
+    async loadAll() {
+      const results = await Promise.allSettled([
+        api.get("/api/machine").then(setMachine),
+        loadJobs(),
+        api.get("/api/server").then((d) => store.update((st) => { st.server = d; })),
+        api.get("/api/patterns").then((d) => store.update((st) => { st.patterns = asList(d, "patterns"); })),
+        loadSettings(),
+      ]);
+      return results;
+    },
+
+    async login(token) {
+      store.update((st) => {
+        st.login = { busy: true, error: "" };
+      });
+      try {
+        await api.post("/api/login", { token });
+        store.update((st) => {
+          st.login = { busy: false, error: "" };
+        });
+        actions.enterApp();
+      } catch (err) {
+        store.update((st) => {
+          st.login = { busy: false, error: err.status === 401 ? "Wrong token." : err.message };
+        });
+      }
+    },
+
+    async logout() {
+      try {
+        await api.post("/api/logout");
+      } finally {
+        actions.leaveApp();
+      }
+    },
+
+    enterApp() {
+      store.update((st) => {
+        st.view = "app";
+      });
+      socket.start();
+      actions.loadAll();
+    },
+
+    leaveApp() {
+      socket.stop();
+      store.update((st) => {
+        st.view = "login";
+        st.estop = null;
+      });
+    },
+
+    // ---- WebSocket ----
+
+    onSocketMessage(msg) {
+      const body = (key) => (msg[key] && typeof msg[key] === "object" ? msg[key] : msg);
+      if (msg.type === "machine") setMachine(body("machine"));
+      else if (msg.type === "job") upsertJob(body("job"));
+      else if (msg.type === "jobs" && Array.isArray(msg.jobs)) {
+        store.update((st) => {
+          st.jobs = msg.jobs;
+        });
+        ensurePreview();
+      } else if (msg.type === "job_deleted") {
+        store.update((st) => {
+          st.jobs = st.jobs.filter((j) => !sameId(j.id, msg.id));
+        });
+      } else if (msg.type === "queue" && Array.isArray(msg.order)) {
+        store.update((st) => {
+          const rank = new Map(msg.order.map((id, i) => [String(id), i]));
+          const at = (j) => rank.get(String(j.id)) ?? -1;
+          st.jobs = [...st.jobs].sort((a, b) => at(a) - at(b));
+        });
+      }
+      else if (msg.type === "log") actions.appendLog(msg.direction || "rx", msg.line ?? "");
+      else if (msg.type === "ack" && msg.command === "estop") estop.onSocketAck();
+      else if (msg.type === "error") {
+        store.update((st) => {
+          const detail = msg.detail ?? msg.message ?? "error from the server";
+          const text = typeof detail === "string" ? detail : new ApiError(0, detail).message;
+          st.notice = { text: `${msg.command ?? "command"}: ${text}`, error: true };
+        });
+      }
+    },
+
+    onSocketStatus(status) {
+      if (status.code === 4401) {
+        actions.leaveApp();
+        return;
+      }
+      const wasOpen = s.socket.status === "open";
+      store.update((st) => {
+        st.socket = status;
+      });
+      // Resynchronize after a reconnect: messages may have been missed.
+      if (status.status === "open" && !wasOpen) {
+        api.get("/api/machine").then(setMachine).catch(() => {});
+        loadJobs().catch(() => {});
+      }
+    },
+
+    appendLog(direction, line) {
+      store.update((st) => {
+        st.log.push({ seq: ++st.logSeq, direction, line: String(line) });
+        if (st.log.length > LOG_LIMIT) st.log.splice(0, st.log.length - LOG_LIMIT);
+      });
+    },
+
+    // ---- jobs ----
+
+    uploadFile(file) {
+      const id = `u${++uploadSeq}`;
+      const record = { id, name: file.name, loaded: 0, total: file.size, status: "uploading", message: "", errors: [] };
+      store.update((st) => {
+        st.uploads.unshift(record);
+      });
+      const form = new FormData();
+      form.append("file", file, file.name);
+      form.append("name", file.name);
+      for (const [k, v] of Object.entries(placementFields(s.placement))) form.append(k, String(v));
+      const progress = (loaded, total) => store.update(() => {
+        Object.assign(record, { loaded, total, status: loaded >= total ? "processing" : "uploading" });
+      });
+      uploadJob(form, progress).then(
+        (job) => {
+          store.update((st) => {
+            Object.assign(record, { status: "done", message: "added to the queue" });
+            st.selectedJobId = job.id;
+          });
+          upsertJob(job);
+          setTimeout(() => actions.dismissUpload(id), 4000);
+        },
+        (err) => store.update(() => {
+          Object.assign(record, { status: "failed", message: uploadMessage(err), errors: uploadErrors(err) });
+        }),
+      );
+    },
+
+    async addPattern(name) {
+      const id = `u${++uploadSeq}`;
+      const record = { id, name, loaded: 0, total: 0, status: "processing", message: "", errors: [] };
+      store.update((st) => {
+        st.uploads.unshift(record);
+      });
+      const form = new FormData();
+      form.append("pattern", name);
+      form.append("name", name);
+      for (const [k, v] of Object.entries(placementFields(s.placement))) form.append(k, String(v));
+      try {
+        const job = await uploadJob(form, () => {});
+        store.update((st) => {
+          Object.assign(record, { status: "done", message: "added to the queue" });
+          st.selectedJobId = job.id;
+        });
+        upsertJob(job);
+        setTimeout(() => actions.dismissUpload(id), 4000);
+      } catch (err) {
+        store.update(() => {
+          Object.assign(record, { status: "failed", message: uploadMessage(err), errors: uploadErrors(err) });
+        });
+      }
+    },
+
+    dismissUpload(id) {
+      store.update((st) => {
+        st.uploads = st.uploads.filter((u) => u.id !== id);
+      });
+    },
+
+    selectJob(id) {
+      const job = s.jobs.find((j) => sameId(j.id, id));
+      if (!job) return;
+      store.update((st) => {
+        st.selectedJobId = job.id;
+        st.placement = placementFromJob(job.placement, st.placement);
+        st.placementError = "";
+      });
+      ensurePreview();
+    },
+
+    placementChanged(placement) {
+      store.update((st) => {
+        st.placement = placement;
+      });
+      clearTimeout(placementTimer);
+      placementTimer = setTimeout(actions.applyPlacement, 300);
+    },
+
+    /** Re-import the shown queued job with the form's placement, then reload its preview. */
+    async applyPlacement() {
+      const job = previewJob(s);
+      if (!job || job.state !== "queued") return;
+      try {
+        const updated = await api.patch(`/api/jobs/${encodeURIComponent(job.id)}`, {
+          placement: placementFields(s.placement),
+        });
+        clear("placementError");
+        if (updated && updated.id !== undefined) upsertJob(updated);
+        else await loadJobs();
+      } catch (err) {
+        const errors = uploadErrors(err);
+        store.update((st) => {
+          st.placementError = errors.length ? errors.map((e) => e.message).join("; ") : err.message;
+        });
+      }
+    },
+
+    async jobVerb(id, verb) {
+      const job = s.jobs.find((j) => sameId(j.id, id));
+      if (!job) return;
+      if (verb === "select") return actions.selectJob(id);
+      const path = `/api/jobs/${encodeURIComponent(job.id)}`;
+      try {
+        if (verb === "delete") {
+          await api.del(path);
+          store.update((st) => {
+            st.jobs = st.jobs.filter((j) => j !== job);
+            delete st.previews[job.id];
+          });
+          return;
+        }
+        if (verb === "up" || verb === "down") {
+          const waiting = s.jobs.filter((j) => j.state === "queued");
+          const position = waiting.indexOf(job) + (verb === "up" ? -1 : 1);
+          await api.post(`${path}/move`, { position });
+          await loadJobs();
+          return;
+        }
+        const updated = await api.post(`${path}/${verb}`);
+        if (updated && updated.id !== undefined) upsertJob(updated);
+        if (verb === "start") {
+          store.update((st) => {
+            st.selectedJobId = job.id;
+            st.estop = null;
+          });
+        }
+      } catch (err) {
+        store.update((st) => {
+          st.notice = { text: `${verb} “${job.name}”: ${err.message}`, error: true };
+        });
+      }
+    },
+
+    // ---- machine ----
+
+    async home() {
+      afterClear(await machineCall("/api/machine/home"));
+    },
+    async unlock() {
+      afterClear(await machineCall("/api/machine/unlock"));
+    },
+    pen: (down) => machineCall("/api/machine/pen", { down }),
+    motors: (enabled) => machineCall("/api/machine/motors", { enabled }),
+    jog: (ux, uy) => machineCall("/api/machine/jog", { dx: ux * s.jog.step, dy: uy * s.jog.step, feed: s.jog.feed }),
+    setJog(patch) {
+      store.update((st) => {
+        Object.assign(st.jog, patch);
+      });
+    },
+    dismissEstop: () => estop.dismiss(),
+
+    bannerAction(action, id) {
+      if (action === "reconnect") socket.reconnectNow();
+      else if (action === "home") actions.home();
+      else if (action === "unlock") actions.unlock();
+      else if (action === "resume") {
+        const job = s.jobs.find((j) => j.state === "paused");
+        if (job) actions.jobVerb(job.id, "resume");
+        else if (!socket.send({ type: "resume" })) machineCall("/api/machine/command", { line: "~" });
+      } else if (action === "resume-job") actions.jobVerb(id, "resume");
+    },
+
+    // ---- settings ----
+
+    editSetting(id, value) {
+      store.update((st) => {
+        const original = (st.settings.list || []).find((x) => String(x.id) === id);
+        if (original && String(original.value) === value) delete st.settings.edits[id];
+        else st.settings.edits[id] = value;
+      });
+    },
+
+    async saveSettings() {
+      const edits = s.settings.edits;
+      const body = {};
+      const rowErrors = {};
+      for (const [id, value] of Object.entries(edits)) {
+        const n = Number(value);
+        if (value.trim() === "" || !Number.isFinite(n)) rowErrors[id] = "not a number";
+        else body[id] = n;
+      }
+      if (Object.keys(rowErrors).length) {
+        store.update((st) => {
+          st.settings.rowErrors = rowErrors;
+          st.settings.error = `Not a number: ${Object.keys(rowErrors).map((id) => `$${id}`).join(", ")}`;
+        });
+        return;
+      }
+      store.update((st) => {
+        st.settings.busy = true;
+        st.settings.error = "";
+        st.settings.rowErrors = {};
+      });
+      try {
+        await api.put("/api/machine/settings", { settings: body });
+        await loadSettings();
+        store.update((st) => {
+          st.settings.message = `Saved ${Object.keys(body).length} setting(s) to the board.`;
+        });
+      } catch (err) {
+        store.update((st) => {
+          st.settings.busy = false;
+          st.settings.error = err.status === 409 ? "Settings cannot be changed while a job runs." : `Save failed: ${err.message}`;
+        });
+      }
+    },
+
+    // ---- console ----
+
+    async sendCommand(line) {
+      clear("commandError");
+      if (socket.send({ type: "command", line })) return; // the log shows tx and the answer
+      actions.appendLog("tx", line);
+      try {
+        const data = await api.post("/api/machine/command", { line });
+        for (const r of asList(data, "responses")) actions.appendLog("rx", r);
+      } catch (err) {
+        fail("commandError")(err);
+      }
+    },
+  };
+  return actions;
+}

@@ -1,0 +1,182 @@
+// Entry point: wires the state, the socket, the stop button, the views and the preview.
+
+import { createActions } from "./actions.js";
+import { api, setUnauthorizedHandler } from "./api.js";
+import { $, setDisabled, setHidden, setText } from "./dom.js";
+import { createEstop } from "./estop.js";
+import { PreviewCanvas } from "./preview.js";
+import { paperRect, pointsDone, refineWithPen } from "./preview-data.js";
+import { createSocket } from "./socket.js";
+import { createStore, initialState, previewJob } from "./store.js";
+import { bindConsole, renderConsole } from "./views/console.js";
+import { bindControl, renderControl } from "./views/control.js";
+import { bindJobs, renderJobs } from "./views/jobs.js";
+import { bindMachine, renderMachine } from "./views/machine.js";
+import { bindSettings, renderSettings } from "./views/settings.js";
+
+const TABS = ["plot", "control", "settings", "console"];
+const DRAWN_STATES = new Set(["running", "paused", "stopped", "interrupted", "failed", "cancelled"]);
+const LIVE_STATES = new Set(["running", "paused"]);
+
+let preview = null;
+let noticeTimer = null;
+let shownNotice = null;
+
+function workArea(state) {
+  const list = state.settings.list || [];
+  const get = (id) => Number((list.find((s) => String(s.id) === id) || {}).value);
+  const w = get("130"), h = get("131");
+  return w > 0 && h > 0 ? [w, h] : [300, 220];
+}
+
+function renderPreview(state) {
+  if (!preview) return;
+  preview.setWorkArea(...workArea(state));
+  const job = previewJob(state);
+  const entry = job && state.previews[job.id];
+  const geom = entry && entry.geom ? entry.geom : null;
+  preview.setGeometry(geom);
+  preview.setPaper(job ? paperRect(job.placement) : null);
+  const m = state.machine;
+  const pen = m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
+  preview.setPen(pen);
+  let done = 0;
+  let tail = null;
+  if (geom && job) {
+    if (job.state === "done") done = geom.strokes.count;
+    else if (DRAWN_STATES.has(job.state)) {
+      done = pointsDone(geom, job.lines_done || 0, job.lines_total || 0);
+      if (LIVE_STATES.has(job.state) && pen) {
+        const found = refineWithPen(geom, done, pen);
+        if (found !== null) {
+          done = found;
+          tail = pen.down ? pen : null;
+        }
+      }
+    }
+  }
+  preview.setDone(done, tail);
+}
+
+function renderNotice(state) {
+  const node = $("#notice");
+  const n = state.notice;
+  setHidden(node, !n);
+  if (!n) return;
+  setText(node, n.text);
+  node.classList.toggle("error", Boolean(n.error));
+  if (shownNotice !== n) {
+    shownNotice = n;
+    clearTimeout(noticeTimer);
+    noticeTimer = setTimeout(() => store.update((st) => {
+      if (st.notice === n) st.notice = null;
+    }), 6000);
+  }
+}
+
+function render(state) {
+  const inApp = state.view === "app";
+  setHidden($("#login-view"), inApp);
+  setHidden($("#app"), !inApp);
+  if (!inApp) {
+    setText($("#login-error"), state.login.error);
+    setDisabled($("#login-submit"), state.login.busy);
+    return;
+  }
+  for (const tab of TABS) setHidden($(`#tab-${tab}`), state.tab !== tab);
+  for (const button of document.querySelectorAll(".tab")) {
+    const current = button.dataset.tab === state.tab;
+    button.classList.toggle("current", current);
+    if (current) button.setAttribute("aria-current", "page");
+    else button.removeAttribute("aria-current");
+  }
+  renderMachine(state);
+  renderNotice(state);
+  if (state.tab === "plot") {
+    renderJobs(state);
+    renderPreview(state);
+  } else if (state.tab === "control") renderControl(state);
+  else if (state.tab === "settings") renderSettings(state);
+  else renderConsole(state);
+}
+
+const store = createStore(initialState(), render);
+const socket = createSocket({
+  onMessage: (msg) => actions.onSocketMessage(msg),
+  onStatus: (status) => actions.onSocketStatus(status),
+});
+const estop = createEstop({ socket, store });
+const actions = createActions(store, socket, estop);
+setUnauthorizedHandler(() => {
+  if (store.state.view === "app") actions.leaveApp();
+});
+
+function tabFromHash() {
+  const tab = location.hash.slice(1);
+  store.update((st) => {
+    st.tab = TABS.includes(tab) ? tab : "plot";
+  });
+}
+
+function bind() {
+  // The stop button acts on pointerdown too: no waiting for the click to complete.
+  const stop = $("#estop");
+  let firedByPointer = false;
+  stop.addEventListener("pointerdown", (e) => {
+    if (e.button !== 0) return;
+    firedByPointer = true;
+    estop.trigger();
+  });
+  stop.addEventListener("click", () => {
+    if (!firedByPointer) estop.trigger(); // keyboard (Enter/Space) or assistive tech
+    firedByPointer = false;
+  });
+  document.addEventListener("keydown", (e) => {
+    if (e.key === "Escape" && store.state.view === "app") {
+      e.preventDefault();
+      estop.trigger();
+    }
+  });
+
+  $("#login-form").addEventListener("submit", (e) => {
+    e.preventDefault();
+    actions.login($("#login-token").value.trim());
+  });
+  $("#logout").addEventListener("click", () => actions.logout());
+  for (const button of document.querySelectorAll(".tab")) {
+    button.addEventListener("click", () => {
+      history.replaceState(null, "", `#${button.dataset.tab}`);
+      tabFromHash();
+    });
+  }
+  window.addEventListener("hashchange", tabFromHash);
+
+  $("#zoom-in").addEventListener("click", () => preview.zoomCenter(1.5));
+  $("#zoom-out").addEventListener("click", () => preview.zoomCenter(1 / 1.5));
+  $("#zoom-fit").addEventListener("click", () => preview.fitView());
+
+  bindMachine(actions);
+  bindJobs(actions);
+  bindControl(actions);
+  bindSettings(actions);
+  bindConsole(actions);
+}
+
+async function start() {
+  bind();
+  preview = new PreviewCanvas($("#preview"));
+  tabFromHash();
+  // for debugging in the browser console, and for the browser tests' measurements
+  window.plotbridge = { store, actions, preview };
+  try {
+    await api.get("/api/machine");
+    actions.enterApp();
+  } catch (err) {
+    if (err.status !== 401) actions.enterApp(); // logged in; the banners tell what is wrong
+    else store.update((st) => {
+      st.view = "login";
+    });
+  }
+}
+
+start();

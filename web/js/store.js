@@ -1,0 +1,71 @@
+// The one state object of the page, and the render loop that follows it.
+// Actions mutate state through update(); renderers read it; a frame renders once.
+
+export const MOVING_STATES = new Set(["Run", "Jog", "Home"]);
+export const ACTIVE_JOB_STATES = new Set(["running", "paused"]);
+
+export function initialState() {
+  return {
+    view: "login",            // "login" | "app"
+    tab: "plot",              // "plot" | "control" | "settings" | "console"
+    login: { busy: false, error: "" },
+    socket: { status: "closed", retryAt: 0 },   // "open" | "connecting" | "closed"
+    machine: null,            // the machine object from the server
+    server: null,             // GET /api/server
+    jobs: [],                 // queue order
+    selectedJobId: null,
+    previews: {},             // job id -> { version, data } (the /preview body)
+    patterns: [],
+    uploads: [],              // { id, name, loaded, total, status, message, errors }
+    placement: { paper: "", landscape: false, margin: 10, fit: false, rotate: 0, scale: 1 },
+    jog: { step: 10, feed: 3000 },
+    settings: { list: null, edits: {}, busy: false, message: "", error: "" },
+    log: [],                  // { seq, direction, line }
+    logSeq: 0,
+    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via }
+    notice: null,             // { text, error }
+  };
+}
+
+export function createStore(state, render) {
+  let scheduled = false;
+  const flush = () => {
+    scheduled = false;
+    render(state);
+  };
+  return {
+    state,
+    /** Mutate state in `fn`, render in the next frame. */
+    update(fn) {
+      if (fn) fn(state);
+      if (!scheduled) {
+        scheduled = true;
+        requestAnimationFrame(flush);
+      }
+    },
+    /** Render now (the stop button does not wait for a frame). */
+    renderNow() {
+      render(state);
+    },
+  };
+}
+
+/** The job whose preview is shown: the selected one, else the running one, else the first. */
+export function previewJob(state) {
+  const byId = state.jobs.find((j) => j.id === state.selectedJobId);
+  return byId ?? state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state)) ?? state.jobs[0] ?? null;
+}
+
+export function jobActive(state) {
+  return state.jobs.some((j) => ACTIVE_JOB_STATES.has(j.state));
+}
+
+/** Whether the stop is confirmed: acknowledged, and the board reports a non-moving state. */
+export function estopConfirmed(state) {
+  const e = state.estop;
+  if (!e || !e.acked) return false;
+  const m = state.machine;
+  if (!m || MOVING_STATES.has(m.state)) return false;
+  // If it was moving, wait for a machine report newer than the click.
+  return !e.wasMoving || m.seq > e.seqAtClick;
+}

@@ -1,0 +1,207 @@
+// Adding jobs (file, drop, pattern), upload progress and errors, placement, the queue.
+
+import { $, el, setDisabled, setHidden, setText, syncList } from "../dom.js";
+import { bytes, duration, percent } from "../format.js";
+import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
+
+// The server resumes stopped and interrupted jobs from their resume line.
+const RESUMABLE = new Set(["paused", "interrupted", "stopped"]);
+const DELETABLE = new Set(["queued", "done", "failed", "cancelled", "stopped", "interrupted"]);
+const STARTABLE = new Set(["queued", "done", "failed", "cancelled"]);
+
+/** Which buttons a job row offers, in the order shown. Pure. */
+export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
+  const b = [];
+  if (STARTABLE.has(job.state)) b.push({ verb: "start", label: "Start", disabled: anyActive });
+  if (job.state === "running") b.push({ verb: "pause", label: "Pause" });
+  if (RESUMABLE.has(job.state)) b.push({ verb: "resume", label: "Resume", disabled: anyActive && job.state !== "paused" });
+  if (ACTIVE_JOB_STATES.has(job.state) || job.state === "interrupted") b.push({ verb: "cancel", label: "Cancel" });
+  if (waitingIndex >= 0) {
+    b.push({ verb: "up", label: "↑", aria: "Move up", disabled: waitingIndex === 0 });
+    b.push({ verb: "down", label: "↓", aria: "Move down", disabled: waitingIndex === waitingCount - 1 });
+  }
+  if (DELETABLE.has(job.state)) b.push({ verb: "delete", label: "Delete" });
+  return b;
+}
+
+export function bindJobs(actions) {
+  const input = $("#file-input");
+  input.addEventListener("change", () => {
+    for (const file of input.files) actions.uploadFile(file);
+    input.value = "";
+  });
+  const zone = $("#dropzone");
+  for (const type of ["dragenter", "dragover"]) {
+    document.addEventListener(type, (e) => {
+      if (e.dataTransfer && [...e.dataTransfer.types].includes("Files")) {
+        e.preventDefault();
+        zone.classList.add("over");
+      }
+    });
+  }
+  for (const type of ["dragleave", "drop"]) {
+    document.addEventListener(type, () => zone.classList.remove("over"));
+  }
+  document.addEventListener("drop", (e) => {
+    if (!e.dataTransfer || !e.dataTransfer.files.length) return;
+    e.preventDefault();
+    for (const file of e.dataTransfer.files) actions.uploadFile(file);
+  });
+  $("#pattern-add").addEventListener("click", () => {
+    const name = $("#pattern-select").value;
+    if (name) actions.addPattern(name);
+  });
+  const form = $("#placement");
+  form.addEventListener("submit", (e) => e.preventDefault());
+  form.addEventListener("change", () => actions.placementChanged(readPlacement(form)));
+  form.addEventListener("input", (e) => {
+    if (e.target.type === "number") actions.placementChanged(readPlacement(form));
+  });
+  $("#queue").addEventListener("click", (e) => {
+    const button = e.target.closest("button[data-verb]");
+    const row = e.target.closest("li[data-key]");
+    if (button) actions.jobVerb(row.dataset.key, button.dataset.verb);
+    else if (row) actions.selectJob(row.dataset.key);
+  });
+  $("#uploads").addEventListener("click", (e) => {
+    const button = e.target.closest("button[data-dismiss]");
+    if (button) actions.dismissUpload(button.dataset.dismiss);
+  });
+}
+
+function readPlacement(form) {
+  const f = form.elements;
+  const num = (v, fallback) => (Number.isFinite(parseFloat(v)) ? parseFloat(v) : fallback);
+  return {
+    paper: f.paper.value,
+    landscape: f.landscape.checked,
+    margin: num(f.margin.value, 10),
+    fit: f.fit.checked,
+    rotate: parseInt(f.rotate.value, 10) || 0,
+    scale: num(f.scale.value, 1),
+  };
+}
+
+function renderPlacement(state) {
+  const form = $("#placement");
+  const f = form.elements;
+  const p = state.placement;
+  const put = (input, value, prop = "value") => {
+    if (document.activeElement !== input && input[prop] !== value) input[prop] = value;
+  };
+  put(f.paper, p.paper);
+  put(f.landscape, p.landscape, "checked");
+  put(f.margin, String(p.margin));
+  put(f.fit, p.fit, "checked");
+  put(f.rotate, String(p.rotate));
+  put(f.scale, String(p.scale));
+  setDisabled(f.landscape, !p.paper);
+  setDisabled(f.margin, !p.paper);
+  const job = previewJob(state);
+  setText($("#place-target"), job && job.state === "queued"
+    ? `Applies to new uploads and to the queued job “${job.name}”.`
+    : "Applies to new uploads.");
+}
+
+function renderUploads(state) {
+  syncList($("#uploads"), state.uploads, (u) => u.id,
+    () => el("li", { className: "upload" },
+      el("div", { className: "upload-head" }, el("span", { className: "name" }), el("span", { className: "status" }),
+        el("button", { type: "button", className: "link small", "aria-label": "Dismiss" }, "✕")),
+      el("progress", { max: 1, value: 0 }),
+      el("ul", { className: "errors" })),
+    (node, u) => {
+      setText(node.querySelector(".name"), u.name);
+      const status = u.status === "uploading"
+        ? `${bytes(u.loaded)} of ${bytes(u.total)}`
+        : u.status === "processing" ? "importing…" : u.message;
+      setText(node.querySelector(".status"), status);
+      node.classList.toggle("failed", u.status === "failed");
+      node.querySelector("button").dataset.dismiss = u.id;
+      const bar = node.querySelector("progress");
+      setHidden(bar, u.status !== "uploading" && u.status !== "processing");
+      if (u.status === "uploading" && u.total) bar.value = u.loaded / u.total;
+      else if (u.status === "processing") bar.removeAttribute("value");
+      syncList(node.querySelector(".errors"), u.errors || [], (e) => e.key,
+        () => el("li", {}, el("span", { className: "line" }), el("span", { className: "msg" })),
+        (li, e) => {
+          setText(li.querySelector(".line"), e.line ? `line ${e.line}` : "");
+          setText(li.querySelector(".msg"), e.message);
+        });
+    });
+}
+
+function renderQueue(state) {
+  const waiting = state.jobs.filter((j) => j.state === "queued");
+  const anyActive = state.jobs.some((j) => ACTIVE_JOB_STATES.has(j.state));
+  const shown = previewJob(state);
+  setHidden($("#queue-empty"), state.jobs.length > 0);
+  syncList($("#queue"), state.jobs, (j) => j.id,
+    () => el("li", { className: "job", tabIndex: -1 },
+      el("div", { className: "job-head" },
+        el("button", { type: "button", className: "link name", "data-verb": "select" }),
+        el("span", { className: "badge" })),
+      el("div", { className: "job-meta" }),
+      el("div", { className: "job-progress" }, el("progress", { max: 1 }), el("span", { className: "pct" })),
+      el("p", { className: "error job-error" }),
+      el("div", { className: "row wrap actions" })),
+    (node, job) => {
+      node.classList.toggle("selected", shown === job);
+      const name = node.querySelector(".name");
+      setText(name, job.name);
+      name.setAttribute("aria-pressed", String(shown === job));
+      const badge = node.querySelector(".badge");
+      setText(badge, job.state);
+      badge.dataset.state = job.state;
+      const lines = job.lines_total ? `${job.lines_total} lines` : "";
+      const from = job.resume_line && RESUMABLE.has(job.state) && job.state !== "paused" ? `resumes at line ${job.resume_line}` : "";
+      setText(node.querySelector(".job-meta"), [job.format, lines, `est. ${duration(job.estimate_s)}`, from].filter(Boolean).join(" · "));
+      const showProgress = ["running", "paused", "interrupted", "stopped"].includes(job.state);
+      const prog = node.querySelector(".job-progress");
+      setHidden(prog, !showProgress);
+      if (showProgress) {
+        prog.querySelector("progress").value = job.progress || 0;
+        const eta = job.state === "running" ? ` · ${duration(job.eta_s)} left` : "";
+        setText(prog.querySelector(".pct"), `${percent(job.progress)} (${job.lines_done ?? 0}/${job.lines_total ?? "?"})${eta}`);
+      }
+      const err = node.querySelector(".job-error");
+      setText(err, job.error ? (typeof job.error === "string" ? job.error : JSON.stringify(job.error)) : "");
+      setHidden(err, !job.error);
+      const idx = waiting.indexOf(job);
+      const buttons = jobButtons(job, idx, waiting.length, anyActive);
+      const row = node.querySelector(".actions");
+      syncList(row, buttons, (b) => b.verb,
+        (b) => el("button", { type: "button", "data-verb": b.verb, "aria-label": b.aria }, b.label),
+        (btn, b) => setDisabled(btn, Boolean(b.disabled)));
+    });
+}
+
+function renderPatterns(state) {
+  const select = $("#pattern-select");
+  syncList(select, state.patterns, (p) => p.name,
+    (p) => el("option", { value: p.name }),
+    (opt, p) => {
+      setText(opt, p.name);
+      opt.title = p.description || "";
+    });
+  setDisabled($("#pattern-add"), state.patterns.length === 0);
+}
+
+export function renderJobs(state) {
+  renderPatterns(state);
+  renderUploads(state);
+  renderPlacement(state);
+  renderQueue(state);
+  const job = previewJob(state);
+  setText($("#preview-title"), job ? job.name : "Preview");
+  const info = [];
+  if (job && job.bounds) {
+    const b = job.bounds;
+    info.push(`drawing ${(b.max_x - b.min_x).toFixed(1)} × ${(b.max_y - b.min_y).toFixed(1)} mm at X ${b.min_x.toFixed(1)}, Y ${b.min_y.toFixed(1)}`);
+  }
+  const preview = job && state.previews[job.id];
+  if (preview && preview.error) info.push(`preview unavailable: ${preview.error}`);
+  else if (preview && preview.geom) info.push(`${preview.geom.strokes.count.toLocaleString()} points`);
+  setText($("#place-error"), state.placementError || "");
+  setText($("#preview-info"), info.join(" · "));
+}

@@ -1,0 +1,130 @@
+// Header summary, the machine panel, the banners and the emergency-stop panel.
+
+import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
+import { ALARMS, mm } from "../format.js";
+import { estopConfirmed } from "../store.js";
+
+export function machineLabel(m) {
+  if (!m) return "…";
+  if (!m.connected) return "Disconnected";
+  return m.state || "Unknown";
+}
+
+function positionText(m) {
+  const p = m && m.position;
+  return p ? `X ${mm(p.x)}  Y ${mm(p.y)}` : "";
+}
+
+/** Banners for the current state, each with the action that clears it. Pure. */
+export function bannersFor(state) {
+  const out = [];
+  if (state.socket.status !== "open") {
+    out.push({
+      key: "socket", level: "warn",
+      text: state.socket.status === "connecting"
+        ? "Connecting to the server for live updates…"
+        : "Lost the live connection to the server. Reconnecting automatically.",
+      actions: [{ label: "Reconnect now", action: "reconnect" }],
+    });
+  }
+  const m = state.machine;
+  if (m && !m.connected) {
+    out.push({
+      key: "link", level: "error",
+      text: "The plotter is not connected (serial link lost). Check its USB cable and power; the server reconnects by itself.",
+      actions: [],
+    });
+  } else if (m && m.state === "Alarm" && !state.estop) {
+    const why = ALARMS[m.alarm] ? `: ${ALARMS[m.alarm]}` : "";
+    out.push({
+      key: "alarm", level: "error",
+      text: `Alarm${m.alarm ? ` ${m.alarm}` : ""}${why}. Home the machine, or unlock it to continue without homing.`,
+      actions: [{ label: "Home", action: "home" }, { label: "Unlock", action: "unlock" }],
+    });
+  } else if (m && m.state === "Hold") {
+    out.push({
+      key: "hold", level: "warn", text: "Paused (feed hold).",
+      actions: [{ label: "Resume", action: "resume" }],
+    });
+  }
+  for (const job of state.jobs) {
+    if (job.state === "interrupted") {
+      out.push({
+        key: `int-${job.id}`, level: "warn",
+        text: `“${job.name}” was interrupted${job.resume_line ? ` at line ${job.resume_line}` : ""} (link lost or server restarted).`,
+        actions: [{ label: "Resume", action: "resume-job", id: job.id }],
+      });
+    }
+  }
+  return out;
+}
+
+export function bindMachine(actions) {
+  $("#banners").addEventListener("click", (e) => {
+    const button = e.target.closest("button[data-action]");
+    if (button) actions.bannerAction(button.dataset.action, button.dataset.id);
+  });
+  $("#estop-home").addEventListener("click", () => actions.home());
+  $("#estop-unlock").addEventListener("click", () => actions.unlock());
+  $("#estop-close").addEventListener("click", () => actions.dismissEstop());
+}
+
+export function renderMachine(state) {
+  const m = state.machine;
+  const label = machineLabel(m);
+  const badge = $("#sum-state");
+  setText(badge, label);
+  setAttr(badge, "data-state", label);
+  setText($("#sum-pos"), positionText(m));
+  setText($("#sum-pen"), m ? `pen ${m.pen}` : "");
+
+  setText($("#m-conn"), !m ? "…" : m.connected ? "connected" : "not connected");
+  setText($("#m-state"), label + (m && m.alarm ? ` (alarm ${m.alarm})` : ""));
+  setText($("#m-pos"), positionText(m) || "–");
+  setText($("#m-pen"), m ? m.pen : "–");
+  setText($("#m-fw"), (m && m.firmware) || "–");
+
+  syncList($("#banners"), bannersFor(state), (b) => b.key,
+    () => el("div", { className: "banner", role: "status" }, el("span", { className: "text" }), el("span", { className: "row" })),
+    (node, b) => {
+      node.className = `banner ${b.level}`;
+      setText(node.querySelector(".text"), b.text);
+      const row = node.querySelector(".row");
+      const want = b.actions.map((a) => `${a.action}:${a.id ?? ""}:${a.label}`).join("|");
+      if (row.dataset.want !== want) {
+        row.dataset.want = want;
+        row.replaceChildren(...b.actions.map((a) =>
+          el("button", { type: "button", "data-action": a.action, "data-id": a.id }, a.label)));
+      }
+    });
+
+  renderEstop(state);
+}
+
+function renderEstop(state) {
+  const e = state.estop;
+  const panel = $("#estop-panel");
+  setHidden(panel, !e);
+  $("#estop").classList.toggle("fired", Boolean(e));
+  if (!e) return;
+  const confirmed = estopConfirmed(state);
+  const phase = e.phase === "failed" ? "failed" : confirmed ? "stopped" : "stopping";
+  setAttr(panel, "data-phase", phase);
+  const m = state.machine;
+  if (phase === "failed") {
+    setText($("#estop-title"), "Stop could not be sent");
+    setText($("#estop-text"), "The server did not answer. Use the stop button on the machine or cut its power.");
+  } else if (phase === "stopping") {
+    setText($("#estop-title"), "Stopping…");
+    setText($("#estop-text"), "Emergency stop sent; waiting for the machine to confirm.");
+  } else {
+    setText($("#estop-title"), "Machine stopped");
+    setText($("#estop-text"), m && m.state === "Alarm"
+      ? "Motion was cut, so the position may be lost. Home the machine (recommended), or unlock it to continue from here. The job was stopped; start it again from the queue."
+      : "Everything queued was dropped. You can start a job again, or home the machine first.");
+  }
+  setText($("#estop-error"), e.error || "");
+  const busy = phase === "stopping";
+  setDisabled($("#estop-home"), busy);
+  setDisabled($("#estop-unlock"), busy);
+}
