@@ -1,0 +1,667 @@
+"""The serial link to a GRBL 1.1 board: one asyncio task owns the port.
+
+`Link.run()` connects, identifies the board, reads its settings, polls its
+status and reconnects with backoff forever. Everything else (commands,
+streams, realtime bytes) goes through the port that task opened. Board lines
+are handled synchronously as bytes arrive, so acknowledgements, alarms and
+status reports never wait behind an await.
+
+Only GRBL 1.1 behaviour is relied on, so stock GRBL boards work as well as
+our firmware. See docs/INTERNALS.md for the seam to the job side.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import logging
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import serial
+import serial_asyncio
+
+from .grbl import (
+    FEED_HOLD,
+    SOFT_RESET,
+    STATUS_QUERY,
+    CharCounter,
+    LineSplitter,
+    Status,
+    alarm_message,
+    classify,
+    cost,
+    error_message,
+    line_problem,
+    version_from_feedback,
+)
+
+log = logging.getLogger("plotbridge.link")
+
+REALTIME_BYTES = frozenset(b"?!~\x18") | frozenset(range(0x80, 0x100))
+MOVING_STATES = frozenset({"Run", "Jog", "Home"})
+
+
+class LinkDown(Exception):
+    """The board is not connected (or the connection was lost while waiting)."""
+
+
+class CommandError(Exception):
+    """The board refused a command (`error:N`), or it could not be sent or answered."""
+
+    def __init__(self, code: int | None, message: str) -> None:
+        super().__init__(f"error:{code}: {message}" if code is not None else message)
+        self.code = code
+        self.message = message
+
+
+class StreamAborted(Exception):
+    """A stream ended early. `reason`: estop, error, alarm, disconnected or cancelled."""
+
+    def __init__(self, reason: str, last_acked: int | None, error_line: int | None = None,
+                 message: str = "") -> None:
+        super().__init__(f"stream {reason}" + (f": {message}" if message else ""))
+        self.reason = reason
+        self.last_acked = last_acked
+        self.error_line = error_line
+        self.message = message
+
+
+@dataclass
+class MachineStatus:
+    connected: bool = False
+    state: str = "Disconnected"
+    sub_state: int | None = None
+    x: float = 0.0
+    y: float = 0.0
+    pen: str = "up"
+    firmware: str | None = None
+    alarm: int | None = None
+    planner_free: int | None = None
+    rx_free: int | None = None
+    feed: float | None = None
+    pins: str = ""
+    line: int | None = None
+    updated_at: float = 0.0
+
+    def machine(self) -> dict[str, Any]:
+        """The DESIGN.md machine object."""
+        return {"connected": self.connected, "state": self.state,
+                "position": {"x": self.x, "y": self.y}, "pen": self.pen,
+                "firmware": self.firmware}
+
+
+@dataclass(frozen=True)
+class LinkEvent:
+    """`kind` (alias `type`): status | log | alarm | connected | disconnected.
+
+    status events carry `status`; log events `direction` ("rx"/"tx") and `line`;
+    alarm events `code` and `message`; disconnected events a `message`.
+    Lines streamed by stream() and their oks are not logged (they would flood).
+    """
+
+    kind: str
+    status: MachineStatus | None = None
+    direction: str | None = None
+    line: str | None = None
+    code: int | None = None
+    message: str | None = None
+
+    @property
+    def type(self) -> str:
+        return self.kind
+
+
+@dataclass
+class _Command:
+    line: str
+    future: asyncio.Future[list[str]]
+    responses: list[str] = field(default_factory=list)
+
+
+@dataclass
+class _Stream:
+    on_ack: Callable[[int], None]
+    last_acked: int | None = None
+    in_flight: int = 0
+    done: bool = False
+    abort: StreamAborted | None = None
+
+    def fail(self, reason: str, error_line: int | None = None, message: str = "") -> None:
+        if self.abort is None and not self.done:
+            self.abort = StreamAborted(reason, self.last_acked, error_line, message)
+
+
+@dataclass
+class _StreamLine:
+    number: int
+    stream: _Stream
+
+
+class _PortProtocol(asyncio.Protocol):
+    def __init__(self, link: Link) -> None:
+        self.link = link
+        self.transport: asyncio.BaseTransport | None = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        self.transport = transport
+
+    def data_received(self, data: bytes) -> None:
+        if self.link._transport is self.transport:
+            self.link._on_data(data)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        if self.link._transport is self.transport:
+            self.link._lose(f"port closed ({exc})" if exc else "port closed")
+
+
+class Link:
+    # Timings; class attributes so tests can shorten them.
+    banner_wait = 0.5          # s to wait for a banner before asking with '?'
+    handshake_timeout = 5.0    # s for the board to answer at all
+    silence_timeout = 0.8      # s without a byte from the board while polling: link lost
+    reset_settle = 2.5         # s commands wait for the banner after a soft reset
+    backoff_min = 0.5
+    backoff_max = 5.0
+
+    def __init__(self, device: str, baud: int = 115200, poll_hz: float = 8) -> None:
+        self.device = device
+        self.baud = baud
+        self.poll_hz = poll_hz
+        self.status = MachineStatus()
+        self.settings: dict[int, float] = {}
+        self._subscribers: list[Callable[[LinkEvent], None]] = []
+        self._transport: Any = None
+        self._ready = False
+        self._counter = CharCounter()
+        self._splitter = LineSplitter()
+        self._send_lock = asyncio.Lock()
+        self._wake = asyncio.Event()
+        self._alive = asyncio.Event()
+        self._settled = asyncio.Event()
+        self._settled.set()
+        self._stream: _Stream | None = None
+        self._lost: asyncio.Future[str] | None = None
+        self._last_rx = 0.0
+        self._wco: tuple[float, ...] = (0.0, 0.0, 0.0)
+        self._settings_stale = False
+        self._tasks: set[asyncio.Task[Any]] = set()
+
+    # --- public API -------------------------------------------------------
+
+    @property
+    def connected(self) -> bool:
+        return self._ready
+
+    def subscribe(self, callback: Callable[[LinkEvent], None]) -> Callable[[], None]:
+        """Call `callback` synchronously for every event; it must not block."""
+        self._subscribers.append(callback)
+
+        def unsubscribe() -> None:
+            with contextlib.suppress(ValueError):
+                self._subscribers.remove(callback)
+
+        return unsubscribe
+
+    async def run(self) -> None:
+        delay = self.backoff_min
+        failures = 0
+        while True:
+            try:
+                reason = await self._session()
+                log.warning("link to %s lost: %s", self.device, reason)
+                delay, failures = self.backoff_min, 0
+            except (OSError, serial.SerialException, LinkDown, TimeoutError) as exc:
+                failures += 1
+                level = logging.WARNING if failures == 1 else logging.DEBUG
+                log.log(level, "cannot connect to %s: %s (retrying)", self.device, exc)
+            except Exception:
+                failures += 1
+                log.exception("link to %s failed unexpectedly (retrying)", self.device)
+            finally:
+                self._end_session("link stopped")
+            await asyncio.sleep(delay)
+            delay = min(delay * 2, self.backoff_max) if failures else delay
+
+    def realtime(self, byte: bytes) -> None:
+        """Write one realtime byte to the port now, ahead of anything queued."""
+        if len(byte) != 1 or byte[0] not in REALTIME_BYTES:
+            raise ValueError(f"not a GRBL realtime byte: {byte!r}")
+        if self._transport is None:
+            raise LinkDown("not connected")
+        if byte == SOFT_RESET:
+            self._soft_reset("estop")
+        else:
+            self._write(byte, urgent=True)
+            if byte != STATUS_QUERY:
+                self._emit(LinkEvent("log", direction="tx", line=_show(byte)))
+
+    def estop(self) -> None:
+        """Soft reset (0x18) now; an active stream() ends with reason "estop"."""
+        if self._transport is None:
+            log.error("emergency stop requested with no link to the board")
+            if self._stream:
+                self._stream.fail("estop", message="emergency stop (board not connected)")
+                self._wake.set()
+            return
+        self._soft_reset("estop")
+        log.warning("emergency stop: soft reset sent")
+
+    def cancel_stream(self) -> None:
+        """Stop sending; the active stream() raises StreamAborted("cancelled")."""
+        if self._stream:
+            self._stream.fail("cancelled")
+            self._wake.set()
+
+    async def command(self, line: str, timeout: float = 10) -> list[str]:  # noqa: ASYNC109
+        """Send one line and wait for its ok; returns the lines the board sent for it.
+
+        Raises CommandError on error:N (or an alarm/reset before the answer),
+        LinkDown when not connected, TimeoutError without an answer in time.
+        """
+        async with self._send_lock:
+            await self._wait_settled()
+            if not self._ready:
+                raise LinkDown("not connected")
+            return await self._exchange(line, timeout)
+
+    async def stream(self, lines: Iterator[tuple[int, str]],
+                     on_ack: Callable[[int], None]) -> None:
+        """Stream (line number, text) pairs with character counting.
+
+        Keeps as many lines in the board's receive buffer as fit in its 128
+        bytes, so the planner never starves; calls on_ack(number) per ok, in
+        order. Returns when every line is acknowledged; raises StreamAborted.
+        """
+        async with self._send_lock:
+            await self._wait_settled()
+            if not self._ready:
+                raise LinkDown("not connected")
+            st = _Stream(on_ack)
+            self._stream = st
+            try:
+                await self._send_lines(st, lines)
+                while st.abort is None and st.in_flight:
+                    self._wake.clear()
+                    await self._wake.wait()
+                if st.abort is not None:
+                    st.abort.last_acked = st.last_acked
+                    raise st.abort
+            finally:
+                st.done = True
+                self._stream = None
+
+    # --- sending ----------------------------------------------------------
+
+    async def _send_lines(self, st: _Stream, lines: Iterator[tuple[int, str]]) -> None:
+        for number, raw in lines:
+            text = raw.strip()
+            problem = line_problem(text)
+            if problem:
+                st.fail("error", number, problem)
+            size = cost(text)
+            while st.abort is None and not self._counter.fits(size):
+                self._wake.clear()
+                await self._wake.wait()
+            if st.abort is not None:
+                return
+            self._counter.push(size, _StreamLine(number, st))
+            st.in_flight += 1
+            try:
+                self._write(text.encode("ascii") + b"\n")
+            except LinkDown as exc:
+                st.fail("disconnected", message=str(exc))
+
+    async def _exchange(self, line: str, limit_s: float) -> list[str]:
+        text = line.strip()
+        problem = line_problem(text)
+        if problem:
+            raise CommandError(None, problem)
+        size = cost(text)
+        # Lines of an aborted stream may still be in the board's buffer.
+        async with asyncio.timeout(limit_s):
+            while not self._counter.fits(size):
+                if not self._ready and self._transport is None:
+                    raise LinkDown("not connected")
+                self._wake.clear()
+                await self._wake.wait()
+        cmd = _Command(text, asyncio.get_running_loop().create_future())
+        self._counter.push(size, cmd)
+        self._write(text.encode("ascii") + b"\n")
+        self._emit(LinkEvent("log", direction="tx", line=text))
+        # Shielded: on timeout the entry stays queued to absorb its late answer.
+        return await asyncio.wait_for(asyncio.shield(cmd.future), limit_s)
+
+    def _write(self, data: bytes, urgent: bool = False) -> None:
+        """Write to the port without awaiting.
+
+        pyserial-asyncio's transport only writes from the next loop iteration,
+        so bytes go straight to the (non-blocking) device; only a remainder the
+        OS did not take is left to the transport. Urgent bytes go to the device
+        even when such a remainder is waiting, i.e. ahead of it.
+        """
+        transport = self._transport
+        if transport is None or transport.is_closing():
+            raise LinkDown("not connected")
+        if not urgent and transport.get_write_buffer_size():
+            transport.write(data)
+            return
+        try:
+            written = transport.serial.write(data)
+        except (serial.SerialException, OSError) as exc:
+            self._lose(f"write failed ({exc})")
+            raise LinkDown(str(exc)) from exc
+        if written is not None and written < len(data):
+            transport.write(data[written:])
+
+    def _soft_reset(self, reason: str) -> None:
+        """0x18 first, bookkeeping after: nothing outstanding will be answered."""
+        transport = self._transport
+        with contextlib.suppress(Exception):
+            # Lines not yet transmitted would reach the freshly reset board.
+            transport.serial.reset_output_buffer()
+            if transport.get_write_buffer_size():
+                transport._write_buffer.clear()
+        try:
+            self._write(SOFT_RESET, urgent=True)
+        except LinkDown:
+            log.error("soft reset could not be written: link down")
+        self._settled.clear()
+        if self._stream is not None:
+            # A stream cancelled before the reset stays "cancelled".
+            self._stream.fail(reason, message="soft reset")
+        self._flush_outstanding(reason="soft reset before the answer")
+        self._emit(LinkEvent("log", direction="tx", line="0x18 (soft reset)"))
+
+    async def _wait_settled(self) -> None:
+        """After a soft reset, wait for the board's banner: answers still in
+        flight from before the reset must not be taken for new ones."""
+        if not self._settled.is_set():
+            try:
+                async with asyncio.timeout(self.reset_settle):
+                    await self._settled.wait()
+            except TimeoutError:
+                log.warning("no banner after soft reset; continuing")
+                self._settled.set()
+
+    def _flush_outstanding(self, reason: str, down: bool = False) -> None:
+        for tag in self._counter.clear():
+            if isinstance(tag, _Command) and not tag.future.done():
+                tag.future.set_exception(LinkDown(reason) if down else CommandError(None, reason))
+            elif isinstance(tag, _StreamLine):
+                tag.stream.in_flight -= 1
+        self._wake.set()
+
+    # --- receiving --------------------------------------------------------
+
+    def _on_data(self, data: bytes) -> None:
+        self._last_rx = time.monotonic()
+        lines, problems = self._splitter.feed(data)
+        for problem in problems:
+            log.warning("from the board: %s", problem)
+        for line in lines:
+            try:
+                self._on_line(line)
+            except Exception:
+                log.exception("could not handle board line %r", line)
+
+    def _on_line(self, line: str) -> None:
+        kind, payload = classify(line)
+        if kind == "status":
+            self._alive.set()
+            self._apply_status(payload)
+            return
+        front = self._front()
+        quiet = kind == "ok" and isinstance(front, _StreamLine)
+        if not quiet:
+            self._emit(LinkEvent("log", direction="rx", line=line))
+        if kind in ("ok", "error"):
+            self._on_ack(kind == "ok", payload, line)
+        elif kind == "alarm":
+            self._on_alarm(payload)
+        elif kind == "banner":
+            self._on_banner(payload)
+        else:
+            if kind == "feedback" and (version := version_from_feedback(payload)):
+                self.status.firmware = version
+            elif kind == "msg" and payload.strip().lower() == "reset to continue":
+                # Stock GRBL after a limit alarm ignores everything until reset.
+                self._soft_reset("alarm")
+            if isinstance(front, _Command):
+                front.responses.append(line)
+
+    def _front(self) -> Any:
+        tags = self._counter.tags()
+        return tags[0] if tags else None
+
+    def _on_ack(self, ok: bool, code: int | None, line: str) -> None:
+        try:
+            tag = self._counter.ack()
+        except LookupError:
+            log.warning("board sent %r with nothing outstanding; ignored", line)
+            return
+        self._wake.set()
+        if isinstance(tag, _Command):
+            if tag.future.done():
+                return
+            if ok:
+                tag.future.set_result(tag.responses)
+            else:
+                tag.future.set_exception(CommandError(code, error_message(code)))
+        elif isinstance(tag, _StreamLine):
+            st = tag.stream
+            st.in_flight -= 1
+            if st.done:
+                return
+            if ok:
+                st.last_acked = tag.number
+                try:
+                    st.on_ack(tag.number)
+                except Exception:
+                    log.exception("on_ack callback failed")
+            else:
+                log.warning("board refused line %d: error:%s %s", tag.number, code,
+                            error_message(code))
+                st.fail("error", tag.number, f"error:{code}: {error_message(code)}")
+
+    def _on_alarm(self, code: int | None) -> None:
+        message = f"ALARM:{code}: {alarm_message(code)}"
+        log.warning("board alarm: %s", message)
+        self.status.alarm = code
+        self.status.state = "Alarm"
+        if self._stream is not None:
+            self._stream.fail("alarm", message=message)
+        # GRBL empties its buffers on an alarm: nothing outstanding will be answered.
+        self._flush_outstanding(reason=message)
+        self._emit(LinkEvent("alarm", code=code, message=message))
+        self._emit_status()
+
+    def _on_banner(self, version: str) -> None:
+        self.status.firmware = version
+        self._alive.set()
+        expected = not self._settled.is_set()
+        self._settled.set()
+        if self._ready and not expected:
+            log.warning("the board reset by itself (banner %s)", version)
+            if self._stream is not None:
+                self._stream.fail("disconnected", message="the board reset")
+            self._flush_outstanding(reason="the board reset before answering")
+            self._settings_stale = True
+
+    def _apply_status(self, report: Status) -> None:
+        s = self.status
+        if report.wco is not None:
+            self._wco = report.wco
+        if report.mpos is not None:
+            pos = report.mpos
+        elif report.wpos is not None:
+            pos = tuple(w + o for w, o in zip(report.wpos, self._wco, strict=False))
+        else:
+            pos = (s.x, s.y)
+        scale = 25.4 if self.settings.get(13) == 1 else 1.0
+        s.x, s.y = pos[0] * scale, pos[1] * scale
+        s.state = report.state
+        s.sub_state = report.sub_state
+        s.pen = "down" if ("S" in report.accessories or "C" in report.accessories) else "up"
+        s.planner_free = report.planner_free
+        s.rx_free = report.rx_free
+        s.feed = report.feed
+        s.pins = report.pins
+        s.line = report.line
+        s.updated_at = time.time()
+        if report.state != "Alarm":
+            s.alarm = None
+        self._emit_status()
+
+    # --- the session ------------------------------------------------------
+
+    async def _open_port(self) -> Any:
+        """Open the device; returns the transport (tests replace this)."""
+        kwargs: dict[str, Any] = {"baudrate": self.baud, "timeout": 0, "write_timeout": 0}
+        if self.device.startswith("/"):
+            kwargs["exclusive"] = True
+        port = await asyncio.to_thread(serial.serial_for_url, self.device, **kwargs)
+        loop = asyncio.get_running_loop()
+        transport, _ = await serial_asyncio.connection_for_serial(
+            loop, lambda: _PortProtocol(self), port)
+        return transport
+
+    async def _session(self) -> str:
+        """One connection: open, identify, read settings, poll until lost."""
+        loop = asyncio.get_running_loop()
+        self._splitter = LineSplitter()
+        self._alive.clear()
+        self._settled.set()
+        self._lost = loop.create_future()
+        self._transport = await self._open_port()
+        self._last_rx = time.monotonic()
+        await self._handshake()
+        self._ready = True
+        self.status.connected = True
+        log.info("connected to %s: GRBL %s, state %s", self.device,
+                 self.status.firmware or "?", self.status.state)
+        self._emit(LinkEvent("connected"))
+        self._emit_status()
+        return await self._poll_until_lost()
+
+    async def _handshake(self) -> None:
+        assert self._lost is not None
+        # A board reset by opening the port (DTR) announces itself; on a pty or
+        # a board that was already running nothing comes, so ask. Never reset.
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._alive.wait(), self.banner_wait)
+        deadline = time.monotonic() + self.handshake_timeout
+        while not self._alive.is_set():
+            if self._lost.done():
+                raise LinkDown(self._lost.result())
+            if time.monotonic() > deadline:
+                raise LinkDown("no answer from a GRBL board")
+            self._write(STATUS_QUERY, urgent=True)
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._alive.wait(), 0.5)
+        if self.status.firmware is None:
+            try:
+                await self._exchange_or_lost("$I", 2.0)
+            except (CommandError, TimeoutError) as exc:
+                log.info("board did not answer $I: %s", exc)
+        await self._read_settings()
+
+    async def _exchange_or_lost(self, line: str, limit_s: float) -> list[str]:
+        assert self._lost is not None
+        task = asyncio.ensure_future(self._exchange(line, limit_s))
+        done, _ = await asyncio.wait({task, self._lost}, return_when=asyncio.FIRST_COMPLETED)
+        if task not in done:
+            task.cancel()
+            task.add_done_callback(lambda t: t.cancelled() or t.exception())
+            raise LinkDown(self._lost.result())
+        return task.result()
+
+    async def _read_settings(self) -> None:
+        try:
+            lines = await self._exchange_or_lost("$$", 3.0)
+        except (CommandError, TimeoutError) as exc:
+            log.warning("could not read settings ($$): %s; will retry when idle", exc)
+            self._settings_stale = True
+            return
+        settings: dict[int, float] = {}
+        for line in lines:
+            kind, payload = classify(line)
+            if kind == "setting":
+                settings[payload[0]] = payload[1]
+        self.settings = settings
+        self._settings_stale = False
+
+    async def _refresh_settings(self) -> None:
+        async with self._send_lock:
+            if self._ready:
+                await self._read_settings()
+
+    async def _poll_until_lost(self) -> str:
+        assert self._lost is not None
+        interval = 1.0 / self.poll_hz
+        while not self._lost.done():
+            with contextlib.suppress(LinkDown):
+                self._write(STATUS_QUERY, urgent=True)
+            if (self._settings_stale and not self._send_lock.locked()
+                    and self.status.state in ("Idle", "Alarm")):
+                self._settings_stale = False
+                self._spawn(self._refresh_settings())
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(asyncio.shield(self._lost), interval)
+            silence = time.monotonic() - self._last_rx
+            if silence > self.silence_timeout and not self._slow_command_pending():
+                self._lose(f"no answer from the board for {silence:.1f} s")
+        return self._lost.result()
+
+    def _slow_command_pending(self) -> bool:
+        """Homing and EEPROM commands may keep a stock board from reporting."""
+        front = self._front()
+        return isinstance(front, _Command) and front.line.startswith("$")
+
+    def _lose(self, reason: str) -> None:
+        if self._lost is not None and not self._lost.done():
+            self._lost.set_result(reason)
+
+    def _end_session(self, reason: str) -> None:
+        transport, self._transport = self._transport, None
+        was_ready, self._ready = self._ready, False
+        if transport is not None:
+            with contextlib.suppress(Exception):
+                transport.abort()
+        if self._stream is not None:
+            self._stream.fail("disconnected", message=reason)
+        self._flush_outstanding(reason=reason, down=True)
+        self._settled.set()
+        firmware = self.status.firmware
+        self.status = MachineStatus(firmware=firmware, updated_at=time.time())
+        if was_ready:
+            self._emit(LinkEvent("disconnected", message=reason))
+            self._emit_status()
+
+    def _spawn(self, coro: Any) -> None:
+        task = asyncio.ensure_future(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    # --- events -----------------------------------------------------------
+
+    def _emit_status(self) -> None:
+        self._emit(LinkEvent("status", status=dataclasses.replace(self.status)))
+
+    def _emit(self, event: LinkEvent) -> None:
+        for callback in list(self._subscribers):
+            try:
+                callback(event)
+            except Exception:
+                log.exception("link subscriber failed on %s event", event.kind)
+
+
+def _show(byte: bytes) -> str:
+    if byte == FEED_HOLD:
+        return "! (feed hold)"
+    if byte == b"~":
+        return "~ (cycle start)"
+    return f"0x{byte[0]:02x}"

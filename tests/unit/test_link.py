@@ -1,0 +1,534 @@
+"""The serial link (plotbridge.link) against a scripted GRBL board.
+
+The fake board below stands in for the port: it records every write in
+order, keeps a 128-byte receive buffer that fails the test if it overflows,
+and answers lines the way GRBL 1.1 does (or as a test scripts it).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+from collections.abc import Callable
+
+import pytest
+from plotbridge.link import (
+    CommandError,
+    Link,
+    LinkDown,
+    LinkEvent,
+    StreamAborted,
+    _PortProtocol,
+)
+
+SETTINGS = ["$0=4", "$10=3", "$110=6000.000", "$130=300.000", "$131=220.000"]
+
+
+class FakeSerial:
+    def __init__(self, board: FakeBoard) -> None:
+        self.board = board
+
+    def write(self, data: bytes) -> int:
+        self.board.receive(bytes(data))
+        return len(data)
+
+    def reset_output_buffer(self) -> None:
+        self.board.writes.append(b"<flush>")
+
+
+class FakeTransport:
+    def __init__(self, board: FakeBoard) -> None:
+        self.serial = FakeSerial(board)
+        self.closing = False
+
+    def is_closing(self) -> bool:
+        return self.closing
+
+    def get_write_buffer_size(self) -> int:
+        return 0
+
+    def write(self, data: bytes) -> None:  # only used for partial writes
+        raise AssertionError("the fake serial always takes everything")
+
+    def abort(self) -> None:
+        self.closing = True
+
+
+class FakeBoard:
+    """A scripted GRBL 1.1 board.
+
+    `auto`: lines are executed (answered) as soon as they arrive; otherwise
+    they wait in the receive buffer until `execute()` is called, like a board
+    whose planner is full.
+    """
+
+    def __init__(self, *, banner_on_connect: bool = False, auto: bool = True) -> None:
+        self.banner_on_connect = banner_on_connect
+        self.auto = auto
+        self.writes: list[bytes] = []
+        self.lines: list[str] = []
+        self.rx = bytearray()
+        self.max_rx = 0
+        self.state = "Idle"
+        self.pos = (0.0, 0.0)
+        self.accessories = ""
+        self.muted = False
+        self.unplugged = False
+        self.connects = 0
+        self.script: dict[str, list[str]] = {}      # line -> answer lines
+        self.on_line: Callable[[str], list[str] | None] | None = None
+        self.protocol: _PortProtocol | None = None
+
+    # the port side
+    def attach(self, protocol: _PortProtocol) -> None:
+        self.protocol = protocol
+        self.rx.clear()
+        self.connects += 1
+        if self.banner_on_connect:
+            self.send("", "Grbl 1.1h ['$' for help]")
+
+    def send(self, *lines: str, raw: bytes = b"") -> None:
+        data = raw + b"".join(line.encode() + b"\r\n" for line in lines)
+        proto = self.protocol
+        if proto is not None and not self.muted:
+            asyncio.get_running_loop().call_soon(proto.data_received, data)
+
+    def unplug(self) -> None:
+        self.unplugged = True
+        proto, self.protocol = self.protocol, None
+        if proto is not None:
+            asyncio.get_running_loop().call_soon(proto.connection_lost, OSError(5, "EIO"))
+
+    def receive(self, data: bytes) -> None:
+        self.writes.append(data)
+        if self.muted:
+            return
+        for byte in data:
+            if byte == ord("?"):
+                self.send(self.status_line())
+            elif byte == 0x18:
+                self.rx.clear()
+                if self.state in ("Run", "Jog"):
+                    self.send("ALARM:3")
+                    self.state = "Alarm"
+                self.send("", "Grbl 1.1h ['$' for help]")
+            elif byte in b"!~":
+                self.state = "Hold" if byte == ord("!") else "Run"
+            else:
+                self.rx.append(byte)
+                self.max_rx = max(self.max_rx, len(self.rx))
+                assert len(self.rx) <= 128, "receive buffer overflow"
+        if self.auto:
+            self.execute()
+
+    def status_line(self) -> str:
+        acc = f"|A:{self.accessories}" if self.accessories else ""
+        return (f"<{self.state}|MPos:{self.pos[0]:.3f},{self.pos[1]:.3f},0.000"
+                f"|Bf:15,{128 - len(self.rx)}|FS:0,0{acc}>")
+
+    def execute(self, count: int | None = None) -> int:
+        """Take up to `count` complete lines out of the receive buffer and answer them."""
+        done = 0
+        while b"\n" in self.rx and (count is None or done < count):
+            end = self.rx.index(b"\n")
+            line = self.rx[:end].decode()
+            del self.rx[:end + 1]
+            self.lines.append(line)
+            self.send(*self.answer(line))
+            done += 1
+        return done
+
+    def answer(self, line: str) -> list[str]:
+        if self.on_line is not None and (custom := self.on_line(line)) is not None:
+            return custom
+        if line in self.script:
+            return self.script[line]
+        if line == "$$":
+            return [*SETTINGS, "ok"]
+        if line == "$I":
+            return ["[VER:1.1h.20190825:]", "[OPT:V,15,128]", "ok"]
+        return ["ok"]
+
+
+class FakeLink(Link):
+    banner_wait = 0.02
+    handshake_timeout = 0.5
+    silence_timeout = 0.3
+    reset_settle = 0.3
+    backoff_min = 0.02
+    backoff_max = 0.1
+
+    def __init__(self, board: FakeBoard) -> None:
+        super().__init__("fake", poll_hz=40)
+        self.board = board
+        self.events: list[LinkEvent] = []
+        self.subscribe(self.events.append)
+
+    async def _open_port(self) -> FakeTransport:
+        if self.board.unplugged:
+            raise OSError(2, "No such file or directory")
+        transport = FakeTransport(self.board)
+        protocol = _PortProtocol(self)
+        protocol.connection_made(transport)
+        self.board.attach(protocol)
+        return transport
+
+
+async def until(predicate: Callable[[], bool], limit: float = 2.0) -> None:
+    deadline = time.monotonic() + limit
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError("condition not met in time")
+        await asyncio.sleep(0.005)
+
+
+@contextlib.asynccontextmanager
+async def running(board: FakeBoard):
+    link = FakeLink(board)
+    auto, board.auto = board.auto, True    # answer the handshake at once
+    task = asyncio.create_task(link.run())
+    try:
+        await until(lambda: link.connected)
+        board.auto = auto
+        yield link
+    finally:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+
+def program(count: int, start: int = 1) -> list[tuple[int, str]]:
+    # Lines of varying length, so the buffer fills unevenly.
+    return [(n, f"G1 X{n * 0.5:.3f} Y{(n * 7) % 200:.3f} F3000" + " " * (n % 9))
+            for n in range(start, start + count)]
+
+
+async def feed_slowly(board: FakeBoard, stop: asyncio.Event, per_tick: int = 1) -> None:
+    """Execute lines a few at a time, like a planner draining."""
+    while not stop.is_set():
+        board.execute(per_tick)
+        await asyncio.sleep(0.001)
+
+
+# --- connecting ---------------------------------------------------------------
+
+
+async def test_connect_probes_reads_settings_and_never_resets():
+    board = FakeBoard()
+    async with running(board) as link:
+        assert link.settings == {0: 4.0, 10: 3.0, 110: 6000.0, 130: 300.0, 131: 220.0}
+        assert link.status.firmware == "1.1h.20190825"
+        assert link.status.connected and link.status.state == "Idle"
+        assert board.lines[:2] == ["$I", "$$"]
+        assert b"\x18" not in b"".join(board.writes)
+        assert any(e.kind == "connected" for e in link.events)
+
+
+async def test_connect_with_banner_skips_build_info():
+    board = FakeBoard(banner_on_connect=True)
+    async with running(board) as link:
+        assert link.status.firmware == "1.1h"
+        assert board.lines == ["$$"]
+
+
+async def test_no_grbl_board_is_retried_not_fatal():
+    board = FakeBoard()
+    board.muted = True
+    link = FakeLink(board)
+    task = asyncio.create_task(link.run())
+    try:
+        await asyncio.sleep(0.8)
+        assert not link.connected and not task.done()
+        board.muted = False
+        await until(lambda: link.connected, 3.0)
+    finally:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+
+async def test_status_polled_and_published():
+    board = FakeBoard()
+    async with running(board) as link:
+        board.state, board.pos, board.accessories = "Run", (12.0, 3.5), "S"
+        await until(lambda: link.status.state == "Run")
+        assert (link.status.x, link.status.y, link.status.pen) == (12.0, 3.5, "down")
+        assert link.status.planner_free == 15
+        statuses = [e for e in link.events if e.kind == "status"]
+        assert statuses and statuses[-1].status.state == "Run"
+        assert statuses[-1].type == "status"
+
+
+# --- commands -----------------------------------------------------------------
+
+
+async def test_command_collects_responses():
+    board = FakeBoard()
+    board.script["$G"] = ["[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]", "ok"]
+    async with running(board) as link:
+        assert await link.command("$G") == ["[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]"]
+        assert await link.command("G0 X10") == []
+        tx = [e.line for e in link.events if e.kind == "log" and e.direction == "tx"]
+        assert "G0 X10" in tx
+
+
+async def test_command_error_raises_with_code_and_message():
+    board = FakeBoard()
+    board.script["G5"] = ["error:20"]
+    async with running(board) as link:
+        with pytest.raises(CommandError) as info:
+            await link.command("G5")
+        assert info.value.code == 20 and "unsupported" in info.value.message
+        assert await link.command("G0 X1") == []   # the next ack is matched correctly
+
+
+async def test_command_rejects_unsendable_line_without_sending():
+    board = FakeBoard()
+    async with running(board) as link:
+        sent = len(board.writes)
+        with pytest.raises(CommandError, match="cannot be sent"):
+            await link.command("G0 X1 ~")
+        assert all(b"G0 X1" not in w for w in board.writes[sent:])
+
+
+async def test_command_without_link_raises_link_down():
+    link = FakeLink(FakeBoard())
+    with pytest.raises(LinkDown):
+        await link.command("$X")
+    with pytest.raises(LinkDown):
+        link.realtime(b"!")
+
+
+# --- streaming ----------------------------------------------------------------
+
+
+async def test_stream_keeps_buffer_full_never_over_128_acks_in_order():
+    board = FakeBoard(auto=False)
+    async with running(board) as link:
+        acked: list[int] = []
+        fills: list[int] = []
+        stop = asyncio.Event()
+
+        async def drain() -> None:
+            while not stop.is_set():
+                fills.append(len(board.rx))
+                board.execute(1)
+                await asyncio.sleep(0.001)
+
+        drainer = asyncio.create_task(drain())
+        await link.stream(iter(program(300)), acked.append)
+        stop.set()
+        await drainer
+        assert acked == list(range(1, 301))
+        assert board.max_rx <= 128
+        # Character counting keeps the buffer topped up: never just one line in it.
+        busy = [f for f in fills[5:-20]]
+        assert min(busy) > 128 - 2 * 40, f"buffer ran low: {min(busy)}"
+        assert link._counter.outstanding == 0
+
+
+async def test_stream_lines_sent_ahead_of_acks():
+    board = FakeBoard(auto=False)
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(20)), lambda n: None))
+        await until(lambda: len(board.rx) > 90)
+        # Several lines are in the buffer while none is acknowledged yet.
+        assert board.rx.count(b"\n") >= 3
+        board.auto = True
+        board.execute()
+        await asyncio.wait_for(task, 2)
+
+
+async def test_error_mid_stream_aborts_with_line_number():
+    board = FakeBoard()
+    board.on_line = lambda line: ["error:33"] if line.startswith("G1 X5.000 ") else None
+    async with running(board) as link:
+        acked: list[int] = []
+        with pytest.raises(StreamAborted) as info:
+            await link.stream(iter(program(40)), acked.append)
+        exc = info.value
+        assert exc.reason == "error" and exc.error_line == 10
+        assert "error:33" in exc.message and "invalid" in exc.message
+        assert acked[:9] == list(range(1, 10)) and 10 not in acked
+        assert exc.last_acked == 9
+        # The link stays usable and in step afterwards.
+        board.on_line = None
+        await until(lambda: link._counter.outstanding == 0)
+        assert await link.command("G0 X0") == []
+
+
+async def test_alarm_mid_stream_aborts_and_shows_alarm():
+    board = FakeBoard(auto=False)
+
+    def limit(line: str) -> list[str] | None:
+        if line.startswith("G1 X10.000 "):
+            board.rx.clear()           # GRBL empties its buffers on an alarm
+            board.state = "Alarm"
+            return ["ALARM:2"]
+        return None
+
+    board.on_line = limit
+    async with running(board) as link:
+        stop = asyncio.Event()
+        drainer = asyncio.create_task(feed_slowly(board, stop))
+        with pytest.raises(StreamAborted) as info:
+            await link.stream(iter(program(100)), lambda n: None)
+        stop.set()
+        await drainer
+        assert info.value.reason == "alarm" and "ALARM:2" in info.value.message
+        assert info.value.last_acked == 19
+        assert link.status.alarm == 2
+        assert any(e.kind == "alarm" and e.code == 2 for e in link.events)
+        assert link._counter.outstanding == 0
+        board.state = "Idle"
+        await until(lambda: link.status.state == "Idle")
+        assert link.status.alarm is None
+
+
+async def test_stream_rejects_unsendable_line():
+    board = FakeBoard()
+    async with running(board) as link:
+        lines = [(1, "G0 X1"), (2, "G1 X2 F100 ?"), (3, "G0 X3")]
+        with pytest.raises(StreamAborted) as info:
+            await link.stream(iter(lines), lambda n: None)
+        assert info.value.reason == "error" and info.value.error_line == 2
+        assert "G0 X3" not in board.lines
+
+
+async def test_cancel_stream():
+    board = FakeBoard(auto=False)
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(200)), lambda n: None))
+        await until(lambda: len(board.rx) > 90)
+        link.cancel_stream()
+        with pytest.raises(StreamAborted) as info:
+            await asyncio.wait_for(task, 1)
+        assert info.value.reason == "cancelled"
+
+
+async def test_garbage_from_board_is_ignored():
+    board = FakeBoard()
+    noisy = {"G0 X1": b"\xff\xfe\x00\x00", "G0 X2": b"x" * 5000 + b"\r\n"}
+
+    def noise(line: str) -> list[str] | None:
+        if line in noisy:
+            board.send(raw=noisy[line])
+        return None
+
+    board.on_line = noise
+    async with running(board) as link:
+        board.send(raw=b"\x00\x00\xc3\x28\xa0\xa1 garbage \x07\r\n")
+        await asyncio.sleep(0.02)
+        assert await link.command("G0 X1") == []
+        assert await link.command("G0 X2") == []
+        acked: list[int] = []
+        await link.stream(iter(program(50)), acked.append)
+        assert acked == list(range(1, 51))
+        assert link.connected
+
+
+async def test_disconnect_mid_stream_then_reconnect():
+    board = FakeBoard(auto=False)
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(200)), lambda n: None))
+        await until(lambda: len(board.rx) > 90)
+        board.execute(3)
+        await asyncio.sleep(0.01)
+        board.unplug()
+        with pytest.raises(StreamAborted) as info:
+            await asyncio.wait_for(task, 1)
+        assert info.value.reason == "disconnected" and info.value.last_acked == 3
+        await until(lambda: not link.connected)
+        assert link.status.state == "Disconnected"
+        assert any(e.kind == "disconnected" for e in link.events)
+        with pytest.raises(LinkDown):
+            await link.command("$X")
+        board.auto = True
+        board.unplugged = False
+        await until(lambda: link.connected, 3.0)
+        assert board.connects == 2 and board.lines.count("$$") == 2
+
+
+async def test_silent_board_noticed_within_a_second():
+    board = FakeBoard()
+    async with running(board) as link:
+        board.muted = True
+        t0 = time.monotonic()
+        await until(lambda: not link.connected, 2.0)
+        assert time.monotonic() - t0 < 1.0
+        board.muted = False
+        await until(lambda: link.connected, 3.0)
+
+
+# --- realtime and emergency stop ------------------------------------------------
+
+
+async def test_estop_during_stream_writes_reset_first_and_aborts():
+    board = FakeBoard(auto=False)
+    board.state = "Run"
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(300)), lambda n: None))
+        await until(lambda: len(board.rx) > 90)
+        before = len(board.writes)
+        link.estop()   # synchronous: the byte is out before estop() returns
+        written = board.writes[before:]
+        assert written[-1] == b"\x18"
+        assert all(w in (b"<flush>", b"\x18") for w in written)
+        with pytest.raises(StreamAborted) as info:
+            await asyncio.wait_for(task, 1)
+        assert info.value.reason == "estop"
+        after = board.writes[before + len(written):]
+        assert not any(w.endswith(b"\n") for w in after), "G-code sent after the reset"
+        await until(lambda: link.status.state == "Alarm")
+
+
+async def test_command_after_reset_waits_for_banner():
+    board = FakeBoard()
+    async with running(board) as link:
+        board.muted = True              # the board is busy resetting
+        link.estop()
+        board.muted = False
+        cmd = asyncio.create_task(link.command("$X"))
+        await asyncio.sleep(0.05)
+        assert "$X" not in board.lines  # held back until the banner
+        board.send("ok")                # a late answer to a line from before the reset
+        board.send("", "Grbl 1.1h ['$' for help]")
+        assert await asyncio.wait_for(cmd, 1) == []
+        assert board.lines[-1] == "$X"
+
+
+async def test_realtime_bytes_written_immediately():
+    board = FakeBoard(auto=False)
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(100)), lambda n: None))
+        await until(lambda: len(board.rx) > 90)
+        link.realtime(b"!")
+        assert board.writes[-1] == b"!"
+        link.realtime(b"~")
+        assert board.writes[-1] == b"~"
+        with pytest.raises(ValueError):
+            link.realtime(b"G")
+        link.cancel_stream()
+        with pytest.raises(StreamAborted):
+            await task
+
+
+async def test_reset_to_continue_gets_a_soft_reset():
+    board = FakeBoard()
+    async with running(board) as link:
+        board.send("ALARM:1", "[MSG:Reset to continue]")
+        await until(lambda: b"\x18" in board.writes)
+        assert link.status.alarm == 1
+
+
+async def test_subscriber_errors_do_not_break_the_link():
+    board = FakeBoard()
+    async with running(board) as link:
+        def broken(event: LinkEvent) -> None:
+            raise RuntimeError("subscriber bug")
+
+        unsubscribe = link.subscribe(broken)
+        assert await link.command("G0 X1") == []
+        unsubscribe()
+        assert link.connected
