@@ -75,12 +75,6 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
         return ("failed", 422, [{"line": None, "message": f"import failed: {exc}"}])
 
 
-def _warm_up() -> bool:
-    import plotbridge.importing  # noqa: F401
-
-    return True
-
-
 def public(job: dict[str, Any]) -> dict[str, Any]:
     return {key: job.get(key) for key in PUBLIC_FIELDS}
 
@@ -139,9 +133,6 @@ class JobManager:
 
     def start(self) -> None:
         self._unsubscribe = self.link.subscribe(self._on_link_event)
-        context = multiprocessing.get_context("spawn")
-        self._pool = ProcessPoolExecutor(1, mp_context=context)
-        self._pool.submit(_warm_up)
 
     async def stop(self) -> None:
         if self._unsubscribe:
@@ -305,7 +296,8 @@ class JobManager:
     async def _import(
         self, kind: str, source: str, filename: str, dest: Path, options: dict[str, Any]
     ) -> tuple:
-        assert self._pool is not None
+        if self._pool is None:  # created on first use; spawn, as forking a threaded loop is unsafe
+            self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
         settings = dict(getattr(self.link, "settings", {}) or {})
         loop = asyncio.get_running_loop()
         return await loop.run_in_executor(
@@ -480,17 +472,13 @@ class JobManager:
             log.warning("%s after cancel failed: %s", line, exc)
 
     async def _wait_state(self, predicate: Callable[[str], bool], limit: float) -> str:
-        """Wait for a fresh status report whose state satisfies `predicate`."""
-        since = time.monotonic()
-        deadline = since + limit
-        while time.monotonic() < deadline:
-            status = self.link.status
+        """Wait (at most `limit` s) for the machine state to satisfy `predicate`."""
+        deadline = time.monotonic() + limit
+        while True:
             state = self.machine()["state"]
-            fresh = getattr(status, "updated_at", since) >= since
-            if fresh and predicate(state):
+            if predicate(state) or time.monotonic() > deadline:
                 return state
             await asyncio.sleep(0.02)
-        return self.machine()["state"]
 
     def estop(self, source: str) -> None:
         """Emergency stop: the reset byte goes out first, before any other work."""
@@ -531,7 +519,7 @@ class JobManager:
                 from plotbridge.importing import resume_preamble
 
                 preamble = await asyncio.to_thread(resume_preamble, program, line)
-            start_time = time.monotonic()
+            start_time = time.time()
             await self.link.stream(_numbered(preamble, lines, line), self._on_ack)
             state = await self._wait_done(start_time)
             if state == "Idle":

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 PAPERS = ("A6", "A5", "A4", "A3", "letter")
 
@@ -43,11 +43,17 @@ class SettingsBody(Strict):
     settings: dict[int, float]
 
 
+def _quarter_turn(value: int) -> int:
+    if value not in (0, 90, 180, 270):
+        raise ValueError("must be 0, 90, 180 or 270")
+    return value
+
+
 class Placement(Strict):
     paper: str | None = Field(None, pattern=r"^(A[3-6]|letter)(-landscape)?$")
     margin: float = Field(10.0, ge=0, le=200)
     fit: bool = False
-    rotate: Literal[0, 90, 180, 270] = 0
+    rotate: Annotated[int, AfterValidator(_quarter_turn)] = 0
     scale: float = Field(1.0, gt=0, le=100)
     dx: float = Field(0.0, ge=-10000, le=10000)
     dy: float = Field(0.0, ge=-10000, le=10000)

@@ -47,6 +47,8 @@ async def receive(request: Request, tmp_dir: Path, limit: int) -> tuple[Path | N
     content_type = request.headers.get("content-type", "")
     if content_type.startswith("multipart/form-data"):
         return await _multipart(request, tmp_dir, limit)
+    if content_type.startswith("application/x-www-form-urlencoded"):
+        raise UploadRefused(422, "no file: send multipart field 'file' or the file as a raw body")
     fd, name = tempfile.mkstemp(dir=tmp_dir, prefix="upload-")
     path = Path(name)
     try:

@@ -1,0 +1,525 @@
+"""API unit tests: the real app around a scripted fake link and a fake importer."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import httpx
+import pytest
+from plotbridge.app import create_app, parse_upload_fields
+from plotbridge.config import Config
+from plotbridge.jobs import JobManager
+from starlette.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+TOKEN = "test-token-123"
+AUTH = {"Authorization": f"Bearer {TOKEN}"}
+
+
+class FakeLink:
+    """Acknowledges streamed lines one per `step()` (or all with auto_ack); records output."""
+
+    def __init__(self) -> None:
+        self.status = SimpleNamespace(
+            connected=True, state="Idle", x=0.0, y=0.0, pen="up", firmware="1.1h", alarm=None,
+            planner_free=15, rx_free=128, feed=0.0, pins="", updated_at=time.time(),
+        )  # fmt: skip
+        self.settings: dict[int, float] = {110: 6000.0, 130: 300.0, 131: 220.0, 999: 1.0}
+        self.commands: list[str] = []
+        self.realtime_bytes: list[bytes] = []
+        self.estop_calls = 0
+        self.subscribers: list[Any] = []
+        self.streamed: list[tuple[int, str]] = []
+        self.auto_ack = False
+        self._abort: Exception | None = None
+        self._tick: asyncio.Event | None = None
+
+    async def run(self) -> None:
+        self._tick = asyncio.Event()
+        await asyncio.Event().wait()
+
+    def subscribe(self, callback: Any) -> Any:
+        self.subscribers.append(callback)
+        return lambda: self.subscribers.remove(callback)
+
+    def emit(self, kind: str, **fields: Any) -> None:
+        for callback in list(self.subscribers):
+            callback(SimpleNamespace(kind=kind, **fields))
+
+    def set_state(self, state: str, **fields: Any) -> None:
+        self.status.state = state
+        self.status.updated_at = time.time()
+        for key, value in fields.items():
+            setattr(self.status, key, value)
+        self.emit("status")
+
+    def realtime(self, byte: bytes) -> None:
+        self.realtime_bytes.append(byte)
+
+    def estop(self) -> None:
+        from plotbridge.link import StreamAborted
+
+        self.estop_calls += 1
+        self.abort(StreamAborted("estop", 0, None, "reset"))
+        self.set_state("Alarm", alarm=3)
+
+    def abort(self, exc: Exception) -> None:
+        self._abort = exc
+        if self._tick:
+            self._tick.set()
+
+    def cancel_stream(self) -> None:
+        from plotbridge.link import StreamAborted
+
+        self.abort(StreamAborted("cancelled", 0, None, "cancelled"))
+
+    async def command(self, line: str, timeout: float = 10) -> list[str]:  # noqa: ASYNC109
+        self.commands.append(line)
+        if line == "$X":
+            self.set_state("Idle", alarm=None)
+        return ["ok"]
+
+    def step(self) -> None:
+        assert self._tick is not None
+        self._tick.set()
+
+    async def stream(self, lines: Any, on_ack: Any) -> None:
+        assert self._tick is not None
+        self._abort = None
+        self.set_state("Run")
+        for number, text in lines:
+            if not self.auto_ack:
+                await self._tick.wait()
+                self._tick.clear()
+            if self._abort is not None:
+                raise self._abort
+            self.streamed.append((number, text))
+            on_ack(number)
+            await asyncio.sleep(0)
+        self.set_state("Idle")
+
+
+async def fake_import(self, kind, source, filename, dest, options):
+    """Stands in for the worker-process import: a program of 20 lines."""
+    text = Path(source).read_text() if kind == "file" else "pattern"  # noqa: ASYNC240
+    if "INVALID" in text:
+        return ("failed", 422, [{"line": 3, "message": "unknown command"}])
+    program = ["G21", "G90", "M5"] + [f"G1 X{i}.000 Y0.000 F3000" for i in range(16)] + ["M5"]
+    Path(dest, "program.gcode").write_text("\n".join(program) + "\n")  # noqa: ASYNC240
+    Path(dest, "preview.json").write_text(json.dumps({"strokes": [[[0, 0], [1, 0]]]}))  # noqa: ASYNC240
+    result = SimpleNamespace(
+        format="gcode", lines_total=len(program), estimate_s=10.0,
+        bounds={"min_x": 0, "min_y": 0, "max_x": 15, "max_y": 0},
+        stats={"pen_down_mm": 15.0}, timeline=[(len(program), 10.0)],
+    )  # fmt: skip
+    return ("ok", result)
+
+
+def make_app(tmp_path: Path, **config: Any):
+    link = FakeLink()
+    cfg = Config(data_dir=tmp_path, serial="/dev/fake", **config)
+    return create_app(cfg, link, TOKEN), link
+
+
+@pytest.fixture
+async def api(tmp_path, monkeypatch):
+    monkeypatch.setattr(JobManager, "_import", fake_import)
+    app, link = make_app(tmp_path, max_upload_mb=1)
+    async with app.router.lifespan_context(app):
+        await asyncio.sleep(0)  # let the fake link's run() start
+        transport = httpx.ASGITransport(app=app)
+        async with httpx.AsyncClient(
+            transport=transport, base_url="http://test", headers=AUTH
+        ) as client:
+            yield SimpleNamespace(app=app, link=link, client=client, manager=app.state.manager)
+
+
+async def upload(client: httpx.AsyncClient, text: str = "G1 X1 Y1\n", **data: str):
+    return await client.post("/api/jobs", files={"file": ("drawing.gcode", text)}, data=data)
+
+
+async def settle(predicate, within: float = 2.0) -> None:
+    deadline = time.time() + within
+    while not predicate():
+        assert time.time() < deadline, "condition not reached"
+        await asyncio.sleep(0.01)
+
+
+# ---- auth -----------------------------------------------------------------------
+
+
+async def test_health_needs_no_token(api):
+    response = await api.client.get("/api/health", headers={"Authorization": ""})
+    assert response.json() == {"status": "ok"}
+
+
+@pytest.mark.parametrize("header", ["", "Bearer wrong", "Basic dGVzdA==", f"Bearer {TOKEN}x"])
+async def test_wrong_token_is_401(api, header):
+    for path in ("/api/jobs", "/api/machine", "/api/server"):
+        response = await api.client.get(path, headers={"Authorization": header})
+        assert response.status_code == 401
+        assert "token" in response.json()["detail"]
+
+
+async def test_login_sets_httponly_strict_cookie(api):
+    bad = await api.client.post("/api/login", json={"token": "nope"})
+    assert bad.status_code == 401
+    response = await api.client.post("/api/login", json={"token": TOKEN})
+    assert response.status_code == 204
+    cookie = response.headers["set-cookie"].lower()
+    assert "httponly" in cookie and "samesite=strict" in cookie
+    session = response.cookies["plotbridge_session"]
+    ok = await api.client.get(
+        "/api/jobs", headers={"Authorization": ""}, cookies={"plotbridge_session": session}
+    )
+    assert ok.status_code == 200
+
+
+async def test_login_link_redirects_with_cookie(api):
+    response = await api.client.get(f"/login?token={TOKEN}")
+    assert response.status_code == 303 and response.headers["location"] == "/"
+    assert "plotbridge_session" in response.cookies
+    assert (await api.client.get("/login?token=bad")).status_code == 401
+
+
+async def test_no_cors_headers(api):
+    response = await api.client.options(
+        "/api/jobs",
+        headers={"Origin": "http://evil.example", "Access-Control-Request-Method": "POST"},
+    )
+    assert "access-control-allow-origin" not in response.headers
+
+
+# ---- bad input ------------------------------------------------------------------
+
+
+async def test_malformed_json_is_422(api):
+    response = await api.client.post(
+        "/api/machine/jog", content=b"{not json", headers={"Content-Type": "application/json"}
+    )
+    assert response.status_code == 422 and "detail" in response.json()
+    response = await api.client.post("/api/machine/pen", json={"down": "sideways"})
+    assert response.status_code == 422
+    response = await api.client.post("/api/machine/jog", json={"dx": 1, "feed": -5})
+    assert response.status_code == 422
+
+
+async def test_unknown_job_is_404(api):
+    for method, path in [
+        ("GET", "/api/jobs/nope"), ("POST", "/api/jobs/nope/start"),
+        ("POST", "/api/jobs/nope/cancel"), ("DELETE", "/api/jobs/nope"),
+        ("GET", "/api/jobs/nope/preview"), ("POST", "/api/jobs/nope/pause"),
+    ]:  # fmt: skip
+        response = await api.client.request(method, path)
+        assert response.status_code == 404, path
+        assert "nope" in response.json()["detail"]
+
+
+async def test_empty_upload_is_refused(api):
+    response = await upload(api.client, "")
+    assert response.status_code == 422
+    assert response.json()["detail"]["errors"][0]["message"] == "the upload is empty"
+    raw = await api.client.post("/api/jobs?name=x", content=b"   \n")
+    assert raw.status_code == 422
+
+
+async def test_binary_upload_is_415(api):
+    response = await api.client.post(
+        "/api/jobs", files={"file": ("a.gcode", b"\x89PNG\r\n\x1a\n\x00\x00\x00")}
+    )
+    assert response.status_code == 415
+    assert "binary" in response.json()["detail"]["errors"][0]["message"]
+
+
+async def test_too_large_upload_is_413_and_keeps_nothing(api, tmp_path):
+    big = "G1 X1 Y1\n" * (1024 * 1024 // 9 + 100)
+    response = await upload(api.client, big)
+    assert response.status_code == 413
+    raw = await api.client.post("/api/jobs?name=big", content=big.encode())
+    assert raw.status_code == 413
+    assert list((tmp_path / "tmp").iterdir()) == []
+    assert (await api.client.get("/api/jobs")).json() == []
+
+
+async def test_invalid_upload_is_422_with_lines_and_keeps_nothing(api, tmp_path):
+    response = await upload(api.client, "G1 X1\nG1 X2\nINVALID\n")
+    assert response.status_code == 422
+    assert response.json() == {"detail": {"errors": [{"line": 3, "message": "unknown command"}]}}
+    assert [p.name for p in (tmp_path / "jobs").iterdir()] == []
+    assert (await api.client.get("/api/jobs")).json() == []
+
+
+async def test_bad_placement_field_is_422(api):
+    response = await upload(api.client, rotate="45")
+    assert response.status_code == 422
+    assert "rotate" in response.json()["detail"]["errors"][0]["message"]
+    response = await upload(api.client, start="maybe")
+    assert response.status_code == 422
+
+
+async def test_missing_file_is_422(api):
+    response = await api.client.post("/api/jobs", data={"name": "x"})
+    assert response.status_code == 422
+    assert "file" in response.json()["detail"]["errors"][0]["message"]
+
+
+def test_parse_upload_fields():
+    options, placement, start = parse_upload_fields(
+        {"paper": "A4-landscape", "fit": "true", "rotate": "90", "layers": "a, b", "start": "1"}
+    )
+    assert options["paper"] == "A4-landscape" and options["fit"] is True
+    assert options["rotate"] == 90 and options["layers"] == ["a", "b"] and start is True
+    assert "layers" not in placement
+    with pytest.raises(ValueError, match="paper"):
+        parse_upload_fields({"paper": "A0"})
+
+
+# ---- jobs -------------------------------------------------------------------------
+
+
+async def test_upload_keeps_original_under_generated_name(api, tmp_path):
+    response = await api.client.post(
+        "/api/jobs", files={"file": ("../../etc/evil name.gcode", "G1 X1\n")}
+    )
+    assert response.status_code == 201
+    job = response.json()
+    assert job["state"] == "queued" and job["lines_total"] == 20 and job["name"]
+    files = sorted(p.name for p in (tmp_path / "jobs" / job["id"]).iterdir())
+    assert files == ["original.gcode", "preview.json", "program.gcode"]
+    preview = await api.client.get(f"/api/jobs/{job['id']}/preview")
+    assert preview.json()["strokes"] == [[[0, 0], [1, 0]]]
+
+
+async def test_raw_body_upload(api):
+    response = await api.client.post("/api/jobs?name=raw%20one", content=b"G1 X1 Y1\n")
+    assert response.status_code == 201 and response.json()["name"] == "raw one"
+
+
+async def test_start_runs_to_done(api):
+    job = (await upload(api.client)).json()
+    api.link.auto_ack = True
+    response = await api.client.post(f"/api/jobs/{job['id']}/start")
+    assert response.status_code == 200 and response.json()["state"] == "running"
+    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "done")
+    done = (await api.client.get(f"/api/jobs/{job['id']}")).json()
+    assert done["lines_done"] == 20 and done["progress"] == 1.0 and done["eta_s"] == 0
+    assert [n for n, _ in api.link.streamed] == list(range(1, 21))
+
+
+async def test_start_conflicts(api):
+    first = (await upload(api.client)).json()
+    second = (await upload(api.client)).json()
+    api.link.set_state("Alarm", alarm=1)
+    response = await api.client.post(f"/api/jobs/{first['id']}/start")
+    assert response.status_code == 409 and "$X" in response.json()["detail"]
+    api.link.status.connected = False
+    response = await api.client.post(f"/api/jobs/{first['id']}/start")
+    assert response.status_code == 409 and "not connected" in response.json()["detail"]
+    api.link.status.connected = True
+    api.link.set_state("Idle")
+    assert (await api.client.post(f"/api/jobs/{first['id']}/start")).status_code == 200
+    response = await api.client.post(f"/api/jobs/{second['id']}/start")
+    assert response.status_code == 409 and first["id"] in response.json()["detail"]
+    assert (await api.client.delete(f"/api/jobs/{first['id']}")).status_code == 409
+    assert (await api.client.post("/api/machine/jog", json={"dx": 1})).status_code == 409
+    response = await api.client.post("/api/machine/command", json={"line": "G0 X1"})
+    assert response.status_code == 409
+
+
+async def test_estop_stops_running_job_at_last_ack(api):
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    for _ in range(5):
+        api.link.step()
+        await asyncio.sleep(0.01)
+    response = await api.client.post("/api/machine/estop")
+    assert response.status_code == 202
+    assert api.link.estop_calls == 1
+    stopped = (await api.client.get(f"/api/jobs/{job['id']}")).json()
+    assert stopped["state"] == "stopped" and stopped["lines_done"] == 5
+    assert stopped["resume_line"] is not None and stopped["resume_line"] <= 6
+    assert (await api.client.get("/api/machine")).json()["state"] == "Alarm"
+
+
+async def test_estop_when_idle_is_accepted(api):
+    assert (await api.client.post("/api/machine/estop")).status_code == 202
+    assert api.link.estop_calls == 1
+
+
+async def test_pause_resume_cancel(api):
+    job = (await upload(api.client)).json()
+    jid = job["id"]
+    await api.client.post(f"/api/jobs/{jid}/start")
+    assert (await api.client.post(f"/api/jobs/{jid}/resume")).status_code == 409
+    assert (await api.client.post(f"/api/jobs/{jid}/pause")).json()["state"] == "paused"
+    assert api.link.realtime_bytes == [b"!"]
+    assert (await api.client.post(f"/api/jobs/{jid}/resume")).json()["state"] == "running"
+    assert api.link.realtime_bytes == [b"!", b"~"]
+    api.link.set_state("Hold")
+    response = await api.client.post(f"/api/jobs/{jid}/cancel")
+    assert response.status_code == 200 and response.json()["state"] == "cancelled"
+    assert api.link.estop_calls == 1 and api.link.commands[-2:] == ["$X", "M5"]
+    assert (await api.client.post(f"/api/jobs/{jid}/cancel")).status_code == 409
+
+
+async def test_board_error_fails_job_with_line(api):
+    from plotbridge.link import StreamAborted
+
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    api.link.step()
+    await asyncio.sleep(0.01)
+    api.link.abort(StreamAborted("error", 1, 2, "error:33 invalid target"))
+    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "failed")
+    failed = (await api.client.get(f"/api/jobs/{job['id']}")).json()
+    assert "line 2" in failed["error"] and "error:33" in failed["error"]
+
+
+async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
+    from plotbridge.link import StreamAborted
+
+    job = (await upload(api.client)).json()
+    jid = job["id"]
+    await api.client.post(f"/api/jobs/{jid}/start")
+    for _ in range(12):
+        api.link.step()
+        await asyncio.sleep(0.01)
+    api.link.set_state("Run", planner_free=12)  # 3 blocks still queued at 12 acked lines
+    api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
+    await settle(lambda: api.manager.jobs[jid]["state"] == "interrupted")
+    interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
+    assert interrupted["resume_line"] == 10  # lines 10, 11, 12 are moves not known done
+    import plotbridge.importing as importing
+
+    monkeypatch.setattr(importing, "resume_preamble", lambda path, line: ["M5", "G0 X6 Y0"])
+    api.link.set_state("Idle", planner_free=15)
+    api.link.auto_ack = True
+    response = await api.client.post(f"/api/jobs/{jid}/resume")
+    assert response.status_code == 200
+    await settle(lambda: api.manager.jobs[jid]["state"] == "done")
+    resumed = api.link.streamed[12:]
+    assert resumed[:2] == [(0, "M5"), (0, "G0 X6 Y0")] and resumed[2][0] == 10
+
+
+async def test_move_and_delete(api, tmp_path):
+    ids = [(await upload(api.client)).json()["id"] for _ in range(3)]
+    response = await api.client.post(f"/api/jobs/{ids[2]}/move", json={"position": 0})
+    assert [j["id"] for j in response.json()] == [ids[2], ids[0], ids[1]]
+    response = await api.client.post(f"/api/jobs/{ids[0]}/move", json={"position": -1})
+    assert response.status_code == 422
+    assert (await api.client.delete(f"/api/jobs/{ids[0]}")).status_code == 204
+    assert not (tmp_path / "jobs" / ids[0]).exists()
+    assert [j["id"] for j in (await api.client.get("/api/jobs")).json()] == [ids[2], ids[1]]
+
+
+async def test_machine_endpoints_send_commands(api):
+    await api.client.post("/api/machine/jog", json={"dx": 5, "dy": -2.5, "feed": 1200})
+    await api.client.post("/api/machine/pen", json={"down": True})
+    await api.client.post("/api/machine/unlock")
+    assert api.link.commands == ["$J=G91 G21 X5.000 Y-2.500 F1200", "M3", "$X"]
+    bad = await api.client.post("/api/machine/command", json={"line": "G0 X1 ! "})
+    assert bad.status_code == 422
+    ok = await api.client.post("/api/machine/command", json={"line": "G0 X1"})
+    assert ok.json() == {"responses": ["ok"]}
+
+
+async def test_settings_have_metadata(api):
+    settings = (await api.client.get("/api/machine/settings")).json()["settings"]
+    by_id = {s["id"]: s for s in settings}
+    assert by_id[110]["value"] == 6000.0 and by_id[110]["unit"] == "mm/min"
+    assert by_id[999]["name"] is None
+    response = await api.client.put("/api/machine/settings", json={"settings": {"110": 5000}})
+    assert response.status_code == 200 and "$110=5000" in api.link.commands
+    bad = await api.client.put("/api/machine/settings", json={"settings": {"x": 1}})
+    assert bad.status_code == 422
+
+
+async def test_sim_trace_is_404_without_virtual_plotter(api):
+    response = await api.client.get("/api/sim/trace")
+    assert response.status_code == 404 and "virtual" in response.json()["detail"]
+
+
+async def test_server_info(api, tmp_path):
+    info = (await api.client.get("/api/server")).json()
+    assert info["virtual"] is False and info["serial"] == "/dev/fake"
+    assert info["upload_limit"] == 1024 * 1024 and info["data_dir"] == str(tmp_path)
+
+
+async def test_restart_marks_running_job_interrupted(tmp_path, monkeypatch):
+    monkeypatch.setattr(JobManager, "_import", fake_import)
+    app, link = make_app(tmp_path)
+    async with app.router.lifespan_context(app):
+        await asyncio.sleep(0)
+        async with httpx.AsyncClient(
+            transport=httpx.ASGITransport(app=app), base_url="http://t", headers=AUTH
+        ) as client:
+            jid = (await upload(client)).json()["id"]
+            queued = (await upload(client)).json()["id"]
+            await client.post(f"/api/jobs/{jid}/start")
+            for _ in range(4):
+                link.step()
+                await asyncio.sleep(0.01)
+            app.state.manager._save(app.state.manager.jobs[jid]).result()
+    again, _ = make_app(tmp_path)
+    jobs = {job["id"]: job for job in again.state.manager.list()}
+    assert jobs[jid]["state"] == "interrupted" and jobs[jid]["resume_line"] >= 1
+    assert jobs[queued]["state"] == "queued"
+    assert list(jobs) == [jid, queued]
+
+
+# ---- WebSocket --------------------------------------------------------------------
+
+
+@pytest.fixture
+def sync_client(tmp_path, monkeypatch):
+    monkeypatch.setattr(JobManager, "_import", fake_import)
+    app, link = make_app(tmp_path)
+    with TestClient(app) as client:  # its WebSocket requests say Host: testserver
+        client.link = link
+        yield client
+
+
+def test_ws_requires_token_and_same_origin(sync_client):
+    with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect("/api/ws"):
+        pass
+    assert info.value.code == 4401
+    with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect(
+        f"/api/ws?token={TOKEN}", headers={"origin": "http://evil.example"}
+    ):
+        pass
+    assert info.value.code == 4403
+    with sync_client.websocket_connect(
+        f"/api/ws?token={TOKEN}", headers={"origin": "http://testserver"}
+    ) as ws:
+        assert ws.receive_json()["type"] == "machine"
+
+
+def test_ws_snapshot_and_commands(sync_client):
+    session = sync_client.post("/api/login", json={"token": TOKEN}).cookies["plotbridge_session"]
+    cookie = {"cookie": f"plotbridge_session={session}"}
+    with sync_client.websocket_connect("/api/ws", headers=cookie) as ws:
+        first, second = ws.receive_json(), ws.receive_json()
+        assert first["type"] == "machine" and first["machine"]["state"] == "Idle"
+        assert second == {"type": "jobs", "jobs": []}
+        ws.send_json({"type": "estop"})
+        assert _next_of(ws, "ack") == {"type": "ack", "command": "estop"}
+        assert sync_client.link.estop_calls == 1
+        ws.send_json({"type": "pause"})
+        assert _next_of(ws, "error")["command"] == "pause"
+        ws.send_text("not json")
+        assert _next_of(ws, "error")["command"] is None
+        ws.send_json({"type": "bogus"})
+        assert "unknown" in _next_of(ws, "error")["detail"]
+
+
+def _next_of(ws, kind: str) -> dict:
+    for _ in range(20):
+        message = ws.receive_json()
+        if message["type"] == kind:
+            return message
+    raise AssertionError(f"no {kind} message")
