@@ -1,4 +1,8 @@
-"""Polyline simplification (Ramer-Douglas-Peucker with distance to the segment)."""
+"""Polyline simplification (Ramer-Douglas-Peucker, distance to the segment).
+
+All intervals of one recursion level are split at once with array operations, so the
+cost is a few passes over the points rather than one Python step per kept point.
+"""
 
 from __future__ import annotations
 
@@ -13,26 +17,32 @@ def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
         return points
     keep = np.zeros(n, dtype=bool)
     keep[0] = keep[-1] = True
-    stack = [(0, n - 1)]
+    active = np.arange(1, n - 1)
     tol2 = tolerance * tolerance
-    while stack:
-        a, b = stack.pop()
-        if b - a < 2:
-            continue
+    while active.size:
+        kept = np.flatnonzero(keep)
+        pos = np.searchsorted(kept, active)
+        a, b = kept[pos - 1], kept[pos]
         p = points[a]
         d = points[b] - p
-        rel = points[a + 1:b] - p
-        dd = float(d @ d)
-        if dd == 0.0:
-            dist2 = np.einsum("ij,ij->i", rel, rel)
-        else:
-            t = np.clip(rel @ d / dd, 0.0, 1.0)
-            off = rel - t[:, None] * d
-            dist2 = np.einsum("ij,ij->i", off, off)
-        k = int(np.argmax(dist2))
-        if dist2[k] > tol2:
-            m = a + 1 + k
-            keep[m] = True
-            stack.append((a, m))
-            stack.append((m, b))
+        rel = points[active] - p
+        dd = np.einsum("ij,ij->i", d, d)
+        t = np.einsum("ij,ij->i", rel, d) / np.where(dd > 0, dd, 1.0)
+        np.clip(t, 0.0, 1.0, out=t)
+        off = rel - t[:, None] * d
+        dist2 = np.einsum("ij,ij->i", off, off)
+        starts = np.flatnonzero(np.r_[True, pos[1:] != pos[:-1]])
+        gmax = np.maximum.reduceat(dist2, starts)
+        sizes = np.diff(np.r_[starts, active.size])
+        group = np.repeat(np.arange(starts.size), sizes)
+        split = gmax > tol2
+        # The farthest point of each interval that must be split becomes a kept point.
+        cand = np.flatnonzero((dist2 == gmax[group]) & split[group])
+        if not cand.size:
+            break
+        first = cand[np.r_[True, group[cand][1:] != group[cand][:-1]]]
+        keep[active[first]] = True
+        still = split[group]
+        still[first] = False
+        active = active[still]
     return points[keep]

@@ -1,0 +1,141 @@
+"""G-code import: dialects, units, relative moves, arcs and validation."""
+
+from __future__ import annotations
+
+import pytest
+
+from plotbridge.importing import ImportFailed, MachineProfile
+
+from .import_helpers import drawn_strokes, program_lines, run_import
+
+
+def test_m3_dialect_is_normalized(tmp_path):
+    r = run_import(tmp_path, "G21\nG90\nG0 X10 Y10\nM3\nG1 X20 F1200\nY20\nM5\n")
+    assert program_lines(r) == [
+        "G21", "G90", "M5", "G0 X10.000 Y10.000", "M3",
+        "G1 X20.000 Y10.000 F1200", "G1 X20.000 Y20.000 F1200", "M5"]
+    assert r.lines_total == 8
+    assert r.format == "gcode"
+    assert r.bounds == {"min_x": 10.0, "min_y": 10.0, "max_x": 20.0, "max_y": 20.0}
+    assert r.stats["pen_down_mm"] == pytest.approx(20.0)
+    assert r.stats["pen_lifts"] == 1
+
+
+def test_comments_line_numbers_and_checksums(tmp_path):
+    body = "N3 G1 X5 Y5 F600"
+    check = 0
+    for ch in body.encode():
+        check ^= ch
+    r = run_import(tmp_path, f"(header) ; more\nN1 G0 X1 Y1 (go)\nN2 M3 ; down\n{body}*{check}\n%\n")
+    assert program_lines(r)[3:6] == ["G0 X1.000 Y1.000", "M3", "G1 X5.000 Y5.000 F600"]
+
+
+def test_bad_checksum_is_reported_with_its_line(tmp_path):
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, "M3\nG1 X5 Y5 F600*1\n")
+    assert e.value.status == 422
+    assert e.value.errors[0]["line"] == 2
+    assert "checksum" in e.value.errors[0]["message"]
+
+
+@pytest.mark.parametrize(("text", "options"), [
+    ("G0 Z5\nG0 X10 Y10\nG1 Z-1 F300\nG1 X20 F600\nG0 Z5\n", {}),
+    ("G0 Z5\nG0 X10 Y10\nG1 Z0.5 F300\nG1 X20 F600\nG0 Z5\n", {"pen_dialect": "z",
+                                                               "z_threshold": 1.0}),
+    ("M300 S50\nG0 X10 Y10\nM300 S30\nG1 X20 F600\nM300 S50\n", {}),
+    ("G0 Z90\nG0 X10 Y10\nG0 Z30\nG1 X20 F600\nG0 Z90\n", {"pen_dialect": "servo-z",
+                                                          "servo_down_angle": 30}),
+    ("M5\nG0 X10 Y10\nM3 S1000\nG1 X20 F600\nM5\n", {"pen_dialect": "m3"}),
+])
+def test_pen_dialects_draw_the_same_line(tmp_path, text, options):
+    r = run_import(tmp_path, text, **options)
+    assert drawn_strokes(program_lines(r)) == [[(10.0, 10.0), (20.0, 10.0)]]
+
+
+def test_inches_and_relative_moves_become_absolute_mm(tmp_path):
+    r = run_import(tmp_path, "G20\nG0 X1 Y1\nM3\nG91\nG1 X1 F10\nY0.5\nG90 G21\nG1 X10 Y10\n")
+    lines = program_lines(r)
+    assert "G1 X50.800 Y25.400 F254" in lines
+    assert "G1 X50.800 Y38.100 F254" in lines
+    assert lines[-2] == "G1 X10.000 Y10.000 F254"
+
+
+def test_arcs_are_kept_and_radius_form_converted(tmp_path):
+    r = run_import(tmp_path, "G0 X10 Y10\nM3\nG2 X30 Y10 I10 J0 F600\nG3 X50 Y10 R10\n")
+    lines = program_lines(r)
+    assert "G2 X30.000 Y10.000 I10.000 J0.000 F600" in lines
+    assert "G3 X50.000 Y10.000 I10.000 J0.000 F600" in lines
+    # The clockwise half circle from (10,10) to (30,10) about (20,10) rises to y=20.
+    assert r.bounds["max_y"] == pytest.approx(20.0)
+    assert r.bounds["min_y"] == pytest.approx(0.0)
+
+
+def test_all_errors_reported_with_line_numbers(tmp_path):
+    text = "\n".join([
+        "G0 X10 Y10",
+        "M3",
+        "G1 X20",                       # 3: no feed rate ever given
+        "T1",                           # 4: unsupported word
+        "G1 X500 Y10 F100",             # 5: outside the work area
+        "G2 X30 Y10 I3 J0",             # 6: radius 3 at the start, 7 at the end
+        "G38.2 X1",                     # 7: unsupported command
+        "G1 X1 Y$",                     # 8: unparseable
+        "G1 X15 Y15",
+    ])
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, text)
+    assert e.value.status == 422
+    lines = {err["line"]: err["message"] for err in e.value.errors}
+    assert set(lines) == {3, 4, 5, 6, 7, 8}
+    assert "feed" in lines[3]
+    assert "T1" in lines[4]
+    assert "outside the work area" in lines[5]
+    assert "radius" in lines[6]
+    assert "G38.2" in lines[7]
+    assert not (tmp_path / "out" / "program.gcode").exists()
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_arc_radius_tolerance_is_grbls(tmp_path):
+    # 0.004 mm off is within 0.005 mm: accepted. 0.3 mm off on r=100 is over 0.1%: refused.
+    run_import(tmp_path, "G0 X10 Y100\nM3\nG2 X210 Y100.004 I100 J0 F600\n")
+    with pytest.raises(ImportFailed):
+        run_import(tmp_path, "G0 X10 Y100\nM3\nG2 X210.3 Y100 I100 J0 F600\n")
+
+
+def test_error_list_is_capped(tmp_path):
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, "M3\n" + "G1 X1 Y1 Q7\n" * 500)
+    assert len(e.value.errors) == 100
+    assert "more errors" in e.value.errors[-1]["message"]
+
+
+def test_program_outside_a_smaller_machine_is_refused(tmp_path):
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X150 F600\n",
+                   profile=MachineProfile(width=100, height=100))
+    assert e.value.errors[0]["line"] == 3
+
+
+def test_dwell_is_kept_and_timed(tmp_path):
+    plain = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nM5\n")
+    dwell = run_import(tmp_path, "G0 X10 Y10\nM3\nG4 P1.5\nG1 X20 F600\nM5\n")
+    assert "G4 P1.500" in program_lines(dwell)
+    assert dwell.estimate_s == pytest.approx(plain.estimate_s + 1.5, abs=1e-3)
+
+
+def test_optimize_is_opt_in_for_gcode(tmp_path):
+    text = ("G0 X10 Y10\nM3\nG1 X20 F600\nM5\nG0 X100 Y100\nM3\nG1 X110 F600\nM5\n"
+            "G0 X20 Y10\nM3\nG1 X30 F600\nM5\n")
+    plain = run_import(tmp_path, text)
+    assert plain.stats["pen_lifts"] == 3
+    opt = run_import(tmp_path, text, optimize=True)
+    assert opt.stats["pen_lifts"] == 2       # the two strokes meeting at (20,10) merge
+    assert opt.stats["travel_after_mm"] < opt.stats["travel_before_mm"]
+    assert opt.stats["pen_down_mm"] == pytest.approx(plain.stats["pen_down_mm"])
+
+
+def test_nothing_to_draw_is_refused(tmp_path):
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, "G0 X10 Y10\nG0 X20 Y20\n")
+    assert "nothing to draw" in e.value.errors[0]["message"]
