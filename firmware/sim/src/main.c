@@ -1,0 +1,329 @@
+/* plotsim: the real firmware ELF on a simulated ATmega328P at 16 MHz, wired
+ * to a plotter model. One thread: the loop runs instructions in slices and,
+ * between slices, services the pty and the control socket, paces simulated
+ * time against the wall clock, and keeps the trace file and EEPROM current. */
+#include <errno.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "avr_extint.h"
+#include "sim_avr.h"
+#include "sim_elf.h"
+
+#include "control.h"
+#include "eeprom_file.h"
+#include "machine.h"
+#include "options.h"
+#include "pins.h"
+#include "pty_link.h"
+#include "timer_fix.h"
+#include "trace_out.h"
+
+#define CPU_HZ 16000000u
+/* cycles between services: 0.25 ms simulated keeps the per-cycle cost nil
+ * and the host-visible latency well under a millisecond of wall time */
+#define SLICE_CYCLES 4000u
+#define TRACE_MIN_INTERVAL 0.05  /* 20 writes a second at most */
+#define EEPROM_CHECK_INTERVAL 0.1
+#define MIN_SLEEP 0.0002         /* don't sleep for less than this (wall s) */
+#define MAX_LAG 0.25             /* fell behind more than this: stop catching up */
+
+static volatile sig_atomic_t stop_requested;
+
+static void on_signal(int sig)
+{
+	(void)sig;
+	stop_requested = 1;
+}
+
+struct sim {
+	struct options opt;
+	avr_t *avr;
+	struct machine mc;
+	struct pins pins;
+	struct pty_link pty;
+	struct control ctl;
+	struct eeprom_file ee;
+	double last_step_mono;
+	double trace_due, trace_interval;
+	int quit;
+};
+
+static double monotonic(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static void no_sleep(avr_t *avr, avr_cycle_count_t how_long)
+{
+	/* pacing is the loop's job; simavr would usleep() here */
+	(void)avr;
+	(void)how_long;
+}
+
+static void write_json(struct sim *s, FILE *f, int newline)
+{
+	struct trace_meta meta = {
+		.sim_time = (double)s->avr->cycle / CPU_HZ,
+		.last_step_monotonic = s->last_step_mono,
+		.newline = newline,
+	};
+	trace_write_json(f, &s->mc, &meta);
+}
+
+/* writes via a temporary file and rename, so readers never see half a file */
+static int write_atomic(struct sim *s, const char *path, int svg)
+{
+	char tmp[1100];
+	snprintf(tmp, sizeof tmp, "%s.%d.tmp", path, (int)getpid());
+	FILE *f = fopen(tmp, "w");
+	if (!f)
+		return -1;
+	if (svg)
+		trace_write_svg(f, &s->mc);
+	else
+		write_json(s, f, 1);
+	int ok = !ferror(f);
+	ok = (fclose(f) == 0) && ok;
+	if (!ok || rename(tmp, path) < 0) {
+		unlink(tmp);
+		return -1;
+	}
+	return 0;
+}
+
+static void write_trace(struct sim *s)
+{
+	if (!s->opt.trace)
+		return;
+	double t0 = monotonic();
+	if (write_atomic(s, s->opt.trace, 0) < 0)
+		fprintf(stderr, "plotsim: cannot write trace %s: %s\n", s->opt.trace, strerror(errno));
+	/* a huge trace must not eat the simulation: at most ~10% of the time */
+	double took = monotonic() - t0;
+	s->trace_interval = took * 10 > TRACE_MIN_INTERVAL ? took * 10 : TRACE_MIN_INTERVAL;
+	s->mc.changed = 0;
+}
+
+static int button_named(const char *name)
+{
+	static const char *const names[BUTTON_COUNT] = { "estop", "pause", "resume" };
+	for (int i = 0; i < BUTTON_COUNT; i++)
+		if (strcmp(name, names[i]) == 0)
+			return i;
+	return -1;
+}
+
+static void handle_command(void *ctx, const char *line, FILE *reply)
+{
+	struct sim *s = ctx;
+	char cmd[16] = "", arg[CONTROL_LINE_MAX] = "";
+	if (sscanf(line, " %15s %1023[^\n]", cmd, arg) < 1) {
+		fputs("error: empty command\n", reply);
+		return;
+	}
+	if (strcmp(cmd, "press") == 0 || strcmp(cmd, "release") == 0) {
+		int b = button_named(arg);
+		if (b < 0) {
+			fprintf(reply, "error: unknown button '%s' (estop, pause, resume)\n", arg);
+			return;
+		}
+		pins_set_button(&s->pins, b, cmd[0] == 'p');
+		fputs("ok\n", reply);
+	} else if (strcmp(cmd, "trace") == 0) {
+		write_json(s, reply, 1);
+	} else if (strcmp(cmd, "svg") == 0) {
+		if (!arg[0])
+			fputs("error: svg needs a PATH\n", reply);
+		else if (write_atomic(s, arg, 1) < 0)
+			fprintf(reply, "error: cannot write %s: %s\n", arg, strerror(errno));
+		else
+			fputs("ok\n", reply);
+	} else if (strcmp(cmd, "clear") == 0) {
+		machine_clear(&s->mc, s->avr->cycle);
+		fputs("ok\n", reply);
+	} else if (strcmp(cmd, "quit") == 0) {
+		s->quit = 1;
+		fputs("ok\n", reply);
+	} else {
+		fprintf(reply, "error: unknown command '%s' (press, release, trace, svg, clear, quit)\n",
+			cmd);
+	}
+}
+
+static void service(struct sim *s, double now)
+{
+	if (s->mc.stepped) {
+		s->mc.stepped = 0;
+		s->last_step_mono = now;
+	}
+	pty_link_service(&s->pty);
+	control_service(&s->ctl, handle_command, s);
+}
+
+/* sleeps up to `seconds`, waking early for pty or control input */
+static void idle_wait(struct sim *s, double seconds)
+{
+	struct pollfd fds[2 + CONTROL_MAX_CLIENTS];
+	int n = 0;
+	fds[n++] = (struct pollfd){ .fd = s->pty.master,
+				    .events = (short)(POLLIN | (pty_link_pending_tx(&s->pty) ? POLLOUT : 0)) };
+	n += control_pollfds(&s->ctl, fds + n, (int)(sizeof fds / sizeof fds[0]) - n);
+	struct timespec ts = { .tv_sec = (time_t)seconds,
+			       .tv_nsec = (long)((seconds - (double)(time_t)seconds) * 1e9) };
+	ppoll(fds, (nfds_t)n, &ts, NULL);
+}
+
+static int run(struct sim *s)
+{
+	avr_t *avr = s->avr;
+	double wall0 = monotonic();
+	avr_cycle_count_t cycle0 = avr->cycle;
+	double next_eeprom = wall0 + EEPROM_CHECK_INTERVAL;
+	s->trace_due = wall0;
+	while (!stop_requested && !s->quit) {
+		avr_cycle_count_t until = avr->cycle + SLICE_CYCLES;
+		while (avr->cycle < until) {
+			int state = avr_run(avr);
+			if (state == cpu_Done || state == cpu_Crashed) {
+				fprintf(stderr, "plotsim: the firmware stopped (%s) at pc 0x%05x\n",
+					state == cpu_Done ? "sleep with interrupts off" : "crashed",
+					(unsigned)avr->pc);
+				return 3;
+			}
+		}
+		double now = monotonic();
+		service(s, now);
+		if (s->mc.changed && now >= s->trace_due) {
+			write_trace(s);
+			s->trace_due = now + s->trace_interval;
+		}
+		if (now >= next_eeprom) {
+			eeprom_file_sync(&s->ee, avr);
+			next_eeprom = now + EEPROM_CHECK_INTERVAL;
+		}
+		if (s->opt.speed > 0) {
+			double sim_elapsed = (double)(avr->cycle - cycle0) / CPU_HZ;
+			double wall_needed = sim_elapsed / s->opt.speed;
+			double ahead = wall_needed - (now - wall0);
+			if (ahead > MIN_SLEEP) {
+				idle_wait(s, ahead);
+				service(s, monotonic());
+			} else if (ahead < -MAX_LAG) {
+				wall0 = now - wall_needed;
+			}
+		}
+	}
+	return 0;
+}
+
+static int setup(struct sim *s, char *err, size_t errlen)
+{
+	static elf_firmware_t fw;
+	if (access(s->opt.firmware, R_OK) < 0) {
+		snprintf(err, errlen, "%s: %s", s->opt.firmware, strerror(errno));
+		return -1;
+	}
+	if (elf_read_firmware(s->opt.firmware, &fw) < 0) {
+		snprintf(err, errlen, "%s: not a readable AVR ELF file", s->opt.firmware);
+		return -1;
+	}
+	if (fw.mmcu[0] && strcmp(fw.mmcu, "atmega328p") != 0) {
+		snprintf(err, errlen, "%s is built for %s, not atmega328p", s->opt.firmware, fw.mmcu);
+		return -1;
+	}
+	snprintf(fw.mmcu, sizeof fw.mmcu, "atmega328p");
+	fw.frequency = CPU_HZ;
+	s->avr = avr_make_mcu_by_name("atmega328p");
+	if (!s->avr || avr_init(s->avr) != 0) {
+		snprintf(err, errlen, "simavr cannot create an atmega328p");
+		return -1;
+	}
+	avr_load_firmware(s->avr, &fw);
+	s->avr->frequency = CPU_HZ;
+	s->avr->sleep = no_sleep;
+	/* simavr polls INT0/INT1 every cycle while PD2/PD3 (the step pins) are
+	 * low, even with the interrupts disabled: 60% of the run time. */
+	avr_extint_set_strict_lvl_trig(s->avr, 0, 0);
+	avr_extint_set_strict_lvl_trig(s->avr, 1, 0);
+	timer_fix_install(s->avr);
+	if (eeprom_file_load(&s->ee, s->avr, s->opt.eeprom, err, errlen) < 0)
+		return -1;
+
+	struct machine_config cfg = {
+		.freq = CPU_HZ, .width = s->opt.width, .height = s->opt.height,
+		.steps_per_mm = s->opt.steps_per_mm, .corexy = s->opt.corexy,
+		.pen_up_us = s->opt.pen_up_us, .pen_down_us = s->opt.pen_down_us,
+		.max_step_rate = s->opt.max_step_rate,
+	};
+	machine_init(&s->mc, &cfg, s->opt.start_x, s->opt.start_y);
+	pins_attach(&s->pins, s->avr, &s->mc);
+	if (pty_link_open(&s->pty, s->avr, s->opt.pty_link, err, errlen) < 0)
+		return -1;
+	if (control_open(&s->ctl, s->opt.control, err, errlen) < 0)
+		return -1;
+	return 0;
+}
+
+int main(int argc, char **argv)
+{
+	static struct sim s;
+	char err[1200];
+	int r = options_parse(argc, argv, &s.opt, err, sizeof err);
+	if (r != 0) {
+		if (r < 0)
+			fprintf(stderr, "plotsim: %s\n%s", err, options_usage);
+		return r < 0 ? 2 : 0;
+	}
+	/* Our stdout carries the protocol lines; simavr prints chatter on stdout,
+	 * so its fd 1 goes to stderr and we keep a private handle. */
+	fflush(stdout);
+	int out_fd = dup(STDOUT_FILENO);
+	FILE *out = out_fd >= 0 ? fdopen(out_fd, "w") : NULL;
+	if (!out || dup2(STDERR_FILENO, STDOUT_FILENO) < 0) {
+		perror("plotsim: stdout");
+		return 2;
+	}
+	setvbuf(out, NULL, _IOLBF, 0);
+
+	struct sigaction sa = { .sa_handler = on_signal };
+	sigemptyset(&sa.sa_mask);
+	sigaction(SIGTERM, &sa, NULL);
+	sigaction(SIGINT, &sa, NULL);
+	signal(SIGPIPE, SIG_IGN);
+
+	s.pty.master = s.pty.slave = -1;
+	s.ctl.listen_fd = -1;
+	s.trace_interval = TRACE_MIN_INTERVAL;
+	if (setup(&s, err, sizeof err) < 0) {
+		fprintf(stderr, "plotsim: %s\n", err);
+		pty_link_close(&s.pty);
+		control_close(&s.ctl);
+		return 2;
+	}
+	write_trace(&s);
+	fprintf(out, "plotsim: pty %s\n", s.pty.name);
+	fprintf(out, "plotsim: ready\n");
+
+	r = run(&s);
+
+	write_trace(&s);
+	if (eeprom_file_sync(&s.ee, s.avr) < 0)
+		fprintf(stderr, "plotsim: cannot save the EEPROM to %s\n", s.ee.path);
+	pty_link_close(&s.pty);
+	control_close(&s.ctl);
+	if (s.pty.dropped)
+		fprintf(stderr, "plotsim: %llu bytes of firmware output had no reader\n",
+			(unsigned long long)s.pty.dropped);
+	machine_free(&s.mc);
+	avr_terminate(s.avr);
+	fclose(out);
+	return r;
+}
