@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import pytest
-
 from plotbridge.importing import ImportFailed, MachineProfile
 
 from .import_helpers import drawn_strokes, program_lines, run_import
@@ -26,7 +25,8 @@ def test_comments_line_numbers_and_checksums(tmp_path):
     check = 0
     for ch in body.encode():
         check ^= ch
-    r = run_import(tmp_path, f"(header) ; more\nN1 G0 X1 Y1 (go)\nN2 M3 ; down\n{body}*{check}\n%\n")
+    text = f"(header) ; more\nN1 G0 X1 Y1 (go)\nN2 M3 ; down\n{body}*{check}\n%\n"
+    r = run_import(tmp_path, text)
     assert program_lines(r)[3:6] == ["G0 X1.000 Y1.000", "M3", "G1 X5.000 Y5.000 F600"]
 
 

@@ -68,13 +68,17 @@ def _selected(chain: list[str], element: se.Shape, layers: list[str]) -> bool:
     stroke = element.stroke
     if stroke is None or stroke.value is None:
         return False
+    return any(colour == stroke for colour in _colours(layers))
+
+
+def _colours(layers: list[str]) -> list[se.Color]:
+    """The layer names that are colours (svgelements reads any unknown name as black)."""
+    out = []
     for layer in layers:
-        try:
-            if se.Color(layer) == stroke:
-                return True
-        except ValueError:
-            continue
-    return False
+        colour = se.Color(layer)
+        if colour != se.Color("black") or layer.strip().lower() in ("black", "#000", "#000000"):
+            out.append(colour)
+    return out
 
 
 def read_svg(source: Path, options: ImportOptions, errors: ErrorLog) -> list[Stroke]:
