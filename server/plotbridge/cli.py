@@ -110,7 +110,7 @@ async def serve(config: Config) -> int:
         server = uvicorn.Server(
             uvicorn.Config(
                 app, host=config.host, port=config.port, log_level="warning",
-                ws="websockets", lifespan="on", access_log=False,
+                ws="websockets-sansio", lifespan="on", access_log=False,
             )
         )  # fmt: skip
         print(f"plotbridge: open {_login_url(config, token)}", flush=True)
