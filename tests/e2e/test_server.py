@@ -1,0 +1,249 @@
+"""End to end: a real `plotbridge serve` process, the real firmware in the simulator.
+
+Every test homes the machine first (the firmware starts in Alarm with homing on),
+then drives it only through the REST and WebSocket API.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+import pytest
+from websockets.sync.client import connect
+
+pytestmark = pytest.mark.e2e
+
+FEED = 3000  # mm/min in the test drawings
+TOLERANCE = 0.15  # mm: a step is 0.0125 mm; the trace keeps vertices bending > ~1 step
+
+
+def drawing(circles: int = 1, radius: float = 15.0, segments: int = 72) -> str:
+    """G-code: a square and `circles` circles of short segments, pen by M3/M5."""
+    lines = ["G21", "G90", "M5", "G0 X20 Y20", "M3"]
+    lines += [f"G1 X{x} Y{y} F{FEED}" for x, y in ((60, 20), (60, 60), (20, 60), (20, 20))]
+    lines.append("M5")
+    for index in range(circles):
+        cx, cy = 100 + (index % 5) * 35, 40 + (index // 5) * 35
+        points = [
+            (cx + radius * math.cos(2 * math.pi * k / segments),
+             cy + radius * math.sin(2 * math.pi * k / segments))
+            for k in range(segments + 1)
+        ]  # fmt: skip
+        lines.append(f"G0 X{points[0][0]:.3f} Y{points[0][1]:.3f}")
+        lines.append("M3")
+        lines += [f"G1 X{x:.3f} Y{y:.3f} F{FEED}" for x, y in points[1:]]
+        lines.append("M5")
+    return "\n".join(lines) + "\n"
+
+
+def home(server) -> None:
+    server.wait_machine(lambda m: m["connected"], 30)
+    response = server.client.post("/api/machine/home")
+    assert response.status_code == 200, response.text
+    server.wait_machine(lambda m: m["state"] == "Idle", 30)
+
+
+def submit(server, gcode: str, start: bool = True) -> dict:
+    response = server.client.post("/api/jobs", files={"file": ("drawing.gcode", gcode)})
+    assert response.status_code == 201, response.text
+    job = response.json()
+    if start:
+        started = server.client.post(f"/api/jobs/{job['id']}/start")
+        assert started.status_code == 200, started.text
+    return job
+
+
+def wait_progress(server, job_id: str, lines: int, timeout: float = 30) -> dict:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        job = server.job(job_id)
+        if job["lines_done"] >= lines:
+            return job
+        assert job["state"] == "running", job
+        time.sleep(0.02)
+    raise AssertionError(f"job {job_id} did not reach line {lines}")
+
+
+def preview(server, job_id: str) -> dict:
+    return server.client.get(f"/api/jobs/{job_id}/preview").json()
+
+
+def deviation(points: list, strokes: list) -> float:
+    """Largest distance from any of `points` to the nearest segment of `strokes` (mm)."""
+    segments = []
+    for stroke in strokes:
+        xy = np.asarray([p[:2] for p in stroke], dtype=float)
+        if len(xy) == 1:
+            xy = np.vstack([xy, xy])
+        segments.append(np.hstack([xy[:-1], xy[1:]]))
+    if not segments:
+        return math.inf
+    seg = np.vstack(segments)
+    a, b = seg[:, :2], seg[:, 2:]
+    ab = b - a
+    length2 = np.maximum((ab**2).sum(axis=1), 1e-12)
+    worst = 0.0
+    for point in np.asarray([p[:2] for p in points], dtype=float):
+        t = np.clip(((point - a) * ab).sum(axis=1) / length2, 0, 1)
+        nearest = a + ab * t[:, None]
+        worst = max(worst, float(np.sqrt(((nearest - point) ** 2).sum(axis=1)).min()))
+    return worst
+
+
+def stroke_length(strokes: list) -> float:
+    total = 0.0
+    for stroke in strokes:
+        xy = np.asarray([p[:2] for p in stroke], dtype=float)
+        total += float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum())
+    return total
+
+
+def assert_same_drawing(expected: list, drawn: list) -> None:
+    expected_points = [p for stroke in expected for p in stroke]
+    drawn_points = [p for stroke in drawn for p in stroke]
+    assert deviation(expected_points, drawn) < TOLERANCE, "part of the drawing is missing"
+    assert deviation(drawn_points, expected) < TOLERANCE, "the pen drew where it should not"
+
+
+def test_plot_matches_preview(server, plotter):
+    home(server)
+    plotter.clear()
+    job = submit(server, drawing(circles=2))
+    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+    assert done["state"] == "done", done
+    assert done["lines_done"] == done["lines_total"] and done["progress"] == 1.0
+    expected = preview(server, job["id"])["strokes"]
+    trace = plotter.trace()
+    assert len(trace["strokes"]) == len(expected)
+    assert_same_drawing(expected, trace["strokes"])
+    assert abs(trace["draw_mm"] - stroke_length(expected)) < 1.0
+    assert sum(trace["violations"].values()) == 0
+
+
+def _assert_stopped(server, plotter, job_id: str, sent_at: float) -> None:
+    job = server.wait_job(job_id, ("stopped",), 5)
+    assert 0 < job["lines_done"] < job["lines_total"] and job["error"]
+    server.wait_machine(lambda m: m["state"] == "Alarm", 5)
+    trace = plotter.trace()
+    assert trace["last_step_monotonic"] - sent_at < 0.1, "steps went on after the stop"
+    time.sleep(0.3)
+    assert plotter.trace()["steps"] == trace["steps"]
+
+
+def test_estop_rest_mid_job(server, plotter):
+    home(server)
+    job = submit(server, drawing(circles=6))
+    wait_progress(server, job["id"], 40)
+    sent_at = time.monotonic()
+    response = server.client.post("/api/machine/estop")
+    assert response.status_code == 202
+    _assert_stopped(server, plotter, job["id"], sent_at)
+    # the next job is refused until the alarm is cleared, with a hint
+    other = submit(server, drawing(), start=False)
+    refused = server.client.post(f"/api/jobs/{other['id']}/start")
+    assert refused.status_code == 409 and "$H" in refused.json()["detail"]
+
+
+def test_estop_websocket_mid_job(server, plotter):
+    home(server)
+    job = submit(server, drawing(circles=6))
+    url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
+    with connect(url) as ws:
+        first = json.loads(ws.recv(5))
+        assert first["type"] == "machine"
+        wait_progress(server, job["id"], 40)
+        sent_at = time.monotonic()
+        ws.send(json.dumps({"type": "estop"}))
+        seen_ack = seen_stopped = False
+        deadline = time.monotonic() + 5
+        while not (seen_ack and seen_stopped) and time.monotonic() < deadline:
+            message = json.loads(ws.recv(5))
+            seen_ack |= message == {"type": "ack", "command": "estop"}
+            seen_stopped |= message["type"] == "job" and message["job"]["state"] == "stopped"
+        assert seen_ack and seen_stopped
+    _assert_stopped(server, plotter, job["id"], sent_at)
+
+
+def test_pause_resume(server, plotter):
+    home(server)
+    plotter.clear()
+    job = submit(server, drawing(circles=3))
+    wait_progress(server, job["id"], 30)
+    paused = server.client.post(f"/api/jobs/{job['id']}/pause")
+    assert paused.status_code == 200 and paused.json()["state"] == "paused"
+    server.wait_machine(lambda m: m["state"] == "Hold", 5)
+    time.sleep(0.5)  # deceleration ends
+    held = plotter.trace()["steps"]
+    time.sleep(0.3)
+    assert plotter.trace()["steps"] == held, "the machine moved during a feed hold"
+    assert server.job(job["id"])["state"] == "paused"
+    resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
+    assert resumed.status_code == 200 and resumed.json()["state"] == "running"
+    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+    assert done["state"] == "done", done
+    assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
+
+
+def test_plotter_killed_mid_job_then_resumed(server, plotter):
+    home(server)
+    plotter.clear()
+    job = submit(server, drawing(circles=6))
+    started = time.monotonic()
+    sim_start = plotter.trace()["sim_time"]
+    wait_progress(server, job["id"], 150)
+    plotter.kill()
+    killed_at = time.monotonic()
+    interrupted = server.wait_job(job["id"], ("interrupted",), 5)
+    assert time.monotonic() - killed_at < 2.0, "link loss noticed too late"
+    assert 1 <= interrupted["resume_line"] <= interrupted["lines_done"] + 1
+    before = plotter.trace()  # the trace file as the killed simulator left it
+    sim_rate = (before["sim_time"] - sim_start) / (killed_at - started)  # sim s per wall s
+    x, y = before["position"]["x"], before["position"]["y"]
+    plotter.restart(start=(x, y))
+    server.wait_machine(lambda m: m["connected"], 15)
+    home(server)
+    resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
+    assert resumed.status_code == 200, resumed.text
+    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+    assert done["state"] == "done", done
+    after = plotter.trace()
+    expected = preview(server, job["id"])["strokes"]
+    assert_same_drawing(expected, before["strokes"] + after["strokes"])
+    # Redrawn: at most one status interval of motion (plus the block in progress).
+    status_interval = 1 / 8 * max(sim_rate, 1.0)  # simulated seconds between reports
+    allowance = FEED / 60 * status_interval + 2 * math.pi * 15 / 72 + 1.0
+    redrawn = before["draw_mm"] + after["draw_mm"] - stroke_length(expected)
+    assert redrawn <= allowance, f"{redrawn:.1f} mm drawn twice (allowed {allowance:.1f})"
+
+
+def test_server_killed_mid_job_keeps_queue(server, plotter):
+    home(server)
+    job = submit(server, drawing(circles=4))
+    waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
+    moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
+    assert moved.status_code == 200
+    wait_progress(server, job["id"], 60)
+    time.sleep(1.2)  # a progress write reaches the store
+    server.kill()
+    server.start()
+    jobs = server.client.get("/api/jobs").json()
+    assert [j["id"] for j in jobs] == [job["id"], waiting[1], waiting[0]]
+    assert [j["state"] for j in jobs] == ["interrupted", "queued", "queued"]
+    assert jobs[0]["resume_line"] and jobs[0]["lines_done"] >= 60
+    server.wait_machine(lambda m: m["state"] == "Idle", 30)
+    resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
+    assert resumed.status_code == 200, resumed.text
+    assert server.wait_job(job["id"], ("done", "failed", "interrupted"), 120)["state"] == "done"
+
+
+def test_virtual_mode_serves_the_trace(server_virtual):
+    info = server_virtual.client.get("/api/server").json()
+    assert info["virtual"] is True and info["serial"] is None
+    home(server_virtual)
+    job = submit(server_virtual, drawing())
+    assert server_virtual.wait_job(job["id"], ("done", "failed"), 120)["state"] == "done"
+    trace = server_virtual.client.get("/api/sim/trace").json()
+    assert_same_drawing(preview(server_virtual, job["id"])["strokes"], trace["strokes"])
