@@ -178,6 +178,12 @@ void machine_dir_pin(struct machine *mc, int axis, int level, uint64_t cycle)
 	m->dir = level;
 	m->dir_change = cycle;
 	m->dir_fresh = 1;
+	/* changed in the same port write as a step edge (simavr reports the
+	 * lower pin, the step, first): no setup time at all */
+	if (m->high && m->rise == cycle) {
+		m->dir_fresh = 0;
+		mc->v.dir_setup++;
+	}
 }
 
 void machine_enable_pin(struct machine *mc, int level)

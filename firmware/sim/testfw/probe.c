@@ -12,8 +12,10 @@
  *   P        one X step pulse of two cycles (too short), then the state line
  *   Z        direction change in the same write as the step edge, then the state line
  *   D E      drivers disabled / enabled, then the state line
+ *   W        add one to EEPROM byte 0, answer "W" and its new value in two hex digits
  *   F        step X at 30 kHz forever from a timer interrupt, reversing every 4000 steps
  * The stop LED (A3) follows the stop button. */
+#include <avr/eeprom.h>
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <util/delay.h>
@@ -114,6 +116,22 @@ static void start_fast(void)
 	sei();
 }
 
+static void put_hex(uint8_t v)
+{
+	static const char digits[] = "0123456789ABCDEF";
+	put(digits[v >> 4]);
+	put(digits[v & 15]);
+}
+
+static void bump_eeprom(void)
+{
+	uint8_t v = (uint8_t)(eeprom_read_byte((uint8_t *)0) + 1);
+	eeprom_write_byte((uint8_t *)0, v);
+	put('W');
+	put_hex(v);
+	put('\n');
+}
+
 static void command(char c)
 {
 	switch (c) {
@@ -135,6 +153,7 @@ static void command(char c)
 	case 'D': PORTB |= ENABLE; break;
 	case 'E': PORTB &= (uint8_t)~ENABLE; break;
 	case 'F': start_fast(); return;
+	case 'W': bump_eeprom(); return;
 	case '?': break;
 	default: put(c); return;
 	}
