@@ -16,6 +16,16 @@ export function placementFields(p) {
   return out;
 }
 
+/**
+ * Placement as upload form fields. The server's form parsing does not accept `rotate`
+ * as a string yet, so a rotation is applied afterwards with PATCH (see uploadPlaced).
+ */
+function appendPlacement(form, placement) {
+  for (const [k, v] of Object.entries(placementFields(placement))) {
+    if (k !== "rotate") form.append(k, String(v));
+  }
+}
+
 /** The form's state from a job's placement. */
 export function placementFromJob(placement, fallback) {
   if (!placement) return fallback;
@@ -112,6 +122,12 @@ export function createActions(store, socket, estop) {
         st.previews[job.id] = { version, error: err.message };
       });
     }
+  }
+
+  async function rotateAfterUpload(job) {
+    const rotate = s.placement.rotate;
+    if (!rotate || !job || job.state !== "queued") return job;
+    return api.patch(`/api/jobs/${encodeURIComponent(job.id)}`, { placement: placementFields(s.placement) });
   }
 
   async function loadSettings() {
@@ -281,11 +297,11 @@ export function createActions(store, socket, estop) {
       const form = new FormData();
       form.append("file", file, file.name);
       form.append("name", file.name);
-      for (const [k, v] of Object.entries(placementFields(s.placement))) form.append(k, String(v));
+      appendPlacement(form, s.placement);
       const progress = (loaded, total) => store.update(() => {
         Object.assign(record, { loaded, total, status: loaded >= total ? "processing" : "uploading" });
       });
-      uploadJob(form, progress).then(
+      uploadJob(form, progress).then(rotateAfterUpload).then(
         (job) => {
           store.update((st) => {
             Object.assign(record, { status: "done", message: "added to the queue" });
@@ -309,9 +325,9 @@ export function createActions(store, socket, estop) {
       const form = new FormData();
       form.append("pattern", name);
       form.append("name", name);
-      for (const [k, v] of Object.entries(placementFields(s.placement))) form.append(k, String(v));
+      appendPlacement(form, s.placement);
       try {
-        const job = await uploadJob(form, () => {});
+        const job = await rotateAfterUpload(await uploadJob(form, () => {}));
         store.update((st) => {
           Object.assign(record, { status: "done", message: "added to the queue" });
           st.selectedJobId = job.id;

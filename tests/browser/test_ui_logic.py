@@ -1,0 +1,164 @@
+"""The UI's pure functions, run in Chromium as the page runs them (ES modules from web/)."""
+
+from __future__ import annotations
+
+import pytest
+
+pytestmark = pytest.mark.browser
+
+
+@pytest.fixture
+def modules(desktop, static_web):
+    page, _ = desktop
+    page.goto(static_web + "/no-such-page")  # any page of that origin: modules load from it
+    return page
+
+
+def run(page, body: str):
+    """Evaluate `body` (an async function body) with the UI's modules imported."""
+    return page.evaluate(
+        """async (body) => {
+            const m = {
+              ...(await import('/js/preview-data.js')),
+              ...(await import('/js/store.js')),
+              ...(await import('/js/actions.js')),
+              ...(await import('/js/views/machine.js')),
+              ...(await import('/js/views/jobs.js')),
+              ...(await import('/js/views/control.js')),
+              ...(await import('/js/format.js')),
+            };
+            return await (new Function('m', `return (async () => { ${body} })()`))(m);
+        }""",
+        body,
+    )
+
+
+TWO_STROKES = "m.buildGeometry({strokes: [[[0,0],[1,0],[2,0]], [[5,5],[6,5]]], travel: [[[2,0],[5,5]]]})"
+
+
+def test_points_done_follows_the_normalized_program(modules):
+    # header 3 lines; stroke 1: G0 M3 G1 G1 M5 (lines 4-8); stroke 2: G0 M3 G1 M5 (9-12); M5
+    got = run(modules, f"""
+        const g = {TWO_STROKES};
+        return [g.expectedLines, ...[0, 4, 5, 6, 7, 8, 10, 11, 12, 13].map((n) => m.pointsDone(g, n, 13))];
+    """)
+    assert got == [13, 0, 0, 1, 2, 3, 3, 4, 5, 5, 5]
+
+
+def test_points_done_scales_when_the_program_has_more_lines_than_the_preview(modules):
+    got = run(modules, f"""
+        const g = {TWO_STROKES};
+        return [m.pointsDone(g, 0, 1300), m.pointsDone(g, 650, 1300), m.pointsDone(g, 1300, 1300)];
+    """)
+    assert got[0] == 0 and 0 < got[1] < 5 and got[2] == 5
+
+
+def test_refine_with_pen_finds_the_segment_under_the_pen(modules):
+    got = run(modules, f"""
+        const g = {TWO_STROKES};
+        return [
+          m.refineWithPen(g, 5, {{x: 1.5, y: 0}}),
+          m.refineWithPen(g, 0, {{x: 5.5, y: 5.2}}),
+          m.refineWithPen(g, 3, {{x: 3.5, y: 2.5}}),   // on the pen-up travel only
+          m.refineWithPen(g, 3, null),
+        ];
+    """)
+    assert got == [2, 4, None, None]
+
+
+def test_paper_rect_and_placement_fields(modules):
+    got = run(modules, """
+        const f = m.placementFields({paper: 'A4', landscape: true, margin: 5, fit: true, rotate: 90, scale: 2});
+        return [
+          m.paperRect({paper: 'A4-landscape'}), m.paperRect({paper: null}), m.paperRect({paper: 'letter'}),
+          f, m.placementFromJob(f, {}),
+          m.placementFields({paper: '', landscape: true, margin: 10, fit: false, rotate: 0, scale: 1}),
+        ];
+    """)
+    assert got[0] == {"x": 0, "y": 0, "w": 297, "h": 210}
+    assert got[1] is None
+    assert got[2] == {"x": 0, "y": 0, "w": 215.9, "h": 279.4}
+    assert got[3] == {"paper": "A4-landscape", "margin": 5, "fit": True, "rotate": 90, "scale": 2}
+    assert got[4] == {"paper": "A4", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2}
+    assert "paper" not in got[5]
+
+
+def test_upload_errors_by_line(modules):
+    got = run(modules, """
+        const e = new (await import('/js/api.js')).ApiError(422,
+          {errors: [{line: 4, message: "unsupported word E9"}, {line: null, message: "x"}]});
+        return [m.uploadErrors(e), e.message];
+    """)
+    assert got[0] == [
+        {"key": 0, "line": 4, "message": "unsupported word E9"},
+        {"key": 1, "line": None, "message": "x"},
+    ]
+    assert got[1] == "line 4: unsupported word E9; x"
+
+
+def test_banners_say_what_clears_them(modules):
+    got = run(modules, """
+        const s = m.initialState();
+        const keys = (st) => m.bannersFor(st).map((b) => [b.key, b.actions.map((a) => a.action)]);
+        const out = [keys(s)];
+        s.socket.status = 'open';
+        s.machine = {connected: true, state: 'Alarm', alarm: 3};
+        out.push(keys(s), m.bannersFor(s)[0].text);
+        s.machine = {connected: false, state: 'Disconnected'};
+        out.push(keys(s));
+        s.machine = {connected: true, state: 'Idle'};
+        s.jobs = [{id: 'a', name: 'n', state: 'interrupted', resume_line: 7}];
+        out.push(keys(s));
+        return out;
+    """)
+    assert got[0] == [["socket", ["reconnect"]]]
+    assert got[1] == [["alarm", ["home", "unlock"]]]
+    assert "position is lost" in got[2]
+    assert got[3] == [["link", []]]
+    assert got[4] == [["int-a", ["resume-job"]]]
+
+
+def test_job_buttons_follow_the_state(modules):
+    got = run(modules, """
+        const verbs = (b) => b.map((x) => x.verb + (x.disabled ? '-' : ''));
+        return [
+          verbs(m.jobButtons({state: 'queued'}, 0, 2, false)),
+          verbs(m.jobButtons({state: 'queued'}, 1, 2, true)),
+          verbs(m.jobButtons({state: 'running'}, -1, 0, true)),
+          verbs(m.jobButtons({state: 'paused'}, -1, 0, true)),
+          verbs(m.jobButtons({state: 'stopped'}, -1, 0, false)),
+          verbs(m.jobButtons({state: 'done'}, -1, 0, false)),
+        ];
+    """)
+    assert got == [
+        ["start", "up-", "down", "delete"],
+        ["start-", "up", "down-", "delete"],
+        ["pause", "cancel"],
+        ["resume", "cancel"],
+        ["resume", "delete"],
+        ["start", "delete"],
+    ]
+
+
+def test_stop_confirmation_and_control_lock(modules):
+    got = run(modules, """
+        const s = m.initialState();
+        s.machine = {connected: true, state: 'Run', seq: 5};
+        s.jobs = [{id: 'j', state: 'running'}];
+        const out = [m.controlLock(s)];
+        s.estop = {acked: false, seqAtClick: 5, wasMoving: true};
+        out.push(m.estopConfirmed(s));
+        s.estop.acked = true;
+        out.push(m.estopConfirmed(s));          // still the report from before the click
+        s.machine = {connected: true, state: 'Alarm', seq: 6};
+        out.push(m.estopConfirmed(s));
+        s.jobs = [{id: 'j', state: 'stopped'}];
+        out.push(m.controlLock(s));
+        s.machine = {connected: true, state: 'Idle', seq: 7};
+        out.push(m.controlLock(s));
+        return out;
+    """)
+    assert got[0].startswith("Disabled while a job")
+    assert got[1:4] == [False, False, True]
+    assert got[4].startswith("In alarm")
+    assert got[5] == ""
