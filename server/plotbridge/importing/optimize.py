@@ -156,6 +156,28 @@ def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
     arrays = [a for s in strokes if s and (a := _clean(s, tolerance)) is not None]
     if not arrays:
         return []
-    ordered = order_greedy(arrays, start, merge_distance)
-    ordered = two_opt(ordered, start, deadline)
+    ordered = two_opt(order_greedy(arrays, start, merge_distance), start, deadline)
+    given = join_touching(arrays, merge_distance)
+    if _travel(given, start) < _travel(ordered, start):
+        ordered = given     # greedy is a heuristic: never hand back a worse order
     return [[(float(x), float(y)) for x, y in s] for s in ordered]
+
+
+def join_touching(strokes: list[np.ndarray], merge_distance: float) -> list[np.ndarray]:
+    """The strokes in their given order, each joined to the one before where they meet."""
+    out = [strokes[0]]
+    for s in strokes[1:]:
+        if float(np.hypot(*(s[0] - out[-1][-1]))) <= merge_distance:
+            out[-1] = np.concatenate([out[-1], s[1:]])
+        else:
+            out.append(s)
+    return out
+
+
+def _travel(strokes: list[np.ndarray], start: tuple[float, float]) -> float:
+    pos = np.asarray(start, dtype=float)
+    total = 0.0
+    for s in strokes:
+        total += float(np.hypot(*(s[0] - pos)))
+        pos = s[-1]
+    return total

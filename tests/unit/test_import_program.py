@@ -1,0 +1,90 @@
+"""Preview decimation, the resume preamble and the written files."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from plotbridge.importing import resume_preamble
+from plotbridge.importing.preview import PreviewBuilder
+from plotbridge.importing.simplify import simplify
+
+from .import_helpers import program_lines, run_import
+
+
+def test_simplify_keeps_shape_and_drops_collinear_points():
+    line = np.c_[np.linspace(0, 10, 101), np.zeros(101)]
+    assert simplify(line, 0.01).tolist() == [[0, 0], [10, 0]]
+    zigzag = np.array([[0, 0], [1, 1], [2, 0], [3, 1], [4, 0]], dtype=float)
+    assert len(simplify(zigzag, 0.5)) == 5
+    # A spike back along the line must survive: distance to the segment, not the line.
+    spike = np.array([[0, 0], [10, 0], [5, 0]], dtype=float)
+    assert len(simplify(spike, 0.1)) == 3
+
+
+def test_preview_is_decimated_within_budget_and_tolerance():
+    t = np.linspace(0, 40 * math.pi, 100_000)
+    spiral = np.c_[100 + t * np.cos(t) / 2, 100 + t * np.sin(t) / 2]
+    pb = PreviewBuilder(max_points=5_000)
+    for (x0, y0), (x1, y1) in zip(spiral[:-1], spiral[1:], strict=True):
+        pb.draw(x0, y0, x1, y1)
+    body = pb.finish({})
+    pts = [p for s in body["strokes"] for p in s]
+    assert len(pts) <= 5_000
+    # Every original point is within the final tolerance of the preview polyline.
+    kept = np.asarray(body["strokes"][0])
+    sample = spiral[::997]
+    for p in sample:
+        d = kept[1:] - kept[:-1]
+        rel = p - kept[:-1]
+        tt = np.clip(np.einsum("ij,ij->i", rel, d) / np.einsum("ij,ij->i", d, d), 0, 1)
+        dist = np.min(np.hypot(*(rel - tt[:, None] * d).T))
+        assert dist <= pb.tolerance + 1e-3
+
+
+def test_preview_file_matches_program(tmp_path):
+    r = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nM5\nG0 X30 Y30\nM3\nG1 X40 F600\n")
+    body = json.loads(r.preview_path.read_text())
+    assert body["strokes"] == [[[10, 10], [20, 10]], [[30, 30], [40, 30]]]
+    assert body["travel"] == [[[0, 0], [10, 10]], [[20, 10], [30, 30]]]
+    assert body["bounds"] == r.bounds
+
+
+def test_resume_preamble_restores_position_and_pen(tmp_path):
+    r = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nG1 Y20\nM5\nG0 X50 Y50\n")
+    lines = program_lines(r)
+    assert lines[6] == "G1 X20.000 Y20.000 F600"      # program line 7
+    assert resume_preamble(r.program_path, 7) == [
+        "M5", "G21", "G90", "G0 X20.000 Y10.000", "M3"]
+    assert resume_preamble(r.program_path, 9) == ["M5", "G21", "G90", "G0 X20.000 Y20.000"]
+    assert resume_preamble(r.program_path, 1) == ["M5", "G21", "G90", "G0 X0.000 Y0.000"]
+
+
+def test_resume_after_an_arc(tmp_path):
+    r = run_import(tmp_path, "G0 X10 Y10\nM3\nG2 X30 Y10 I10 J0 F600\nG1 X40 F600\n")
+    assert resume_preamble(r.program_path, 7)[-2:] == ["G0 X30.000 Y10.000", "M3"]
+
+
+def test_normalized_program_is_plain(tmp_path):
+    r = run_import(tmp_path, "; x\nG21 G90 G17\nG0 X1 Y1 Z5\nG1 Z-1 F100\nG1 X2.12345 F1000\n"
+                             "G0 Z5\nM2\n")
+    text = r.program_path.read_text()
+    assert text.endswith("M5\n") and "\n\n" not in text
+    for line in text.splitlines():
+        head = line.split()[0]
+        assert head in {"G21", "G90", "G0", "G1", "G2", "G3", "G4", "M3", "M5"}
+        if head in ("G1", "G2", "G3"):
+            assert " F" in line
+        if head == "G0":
+            assert " F" not in line
+    assert "G1 X2.123 Y1.000 F1000" in text
+
+
+def test_estimate_counts_pen_settle(tmp_path):
+    one = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nM5\n")
+    two = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X15 F600\nM5\nM3\nG1 X20 F600\nM5\n")
+    # Two more pen moves (0.15 s each) and a stop in the middle of the line.
+    assert two.estimate_s > one.estimate_s + 0.3
+    assert one.timeline[-1] == (one.lines_total, pytest.approx(one.estimate_s))
