@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 
@@ -24,7 +25,7 @@ def segments(strokes) -> list[tuple]:
     """Undirected non-degenerate segments, rounded: the drawn geometry, order-free."""
     out = []
     for s in strokes:
-        for a, b in zip(s, s[1:], strict=False):
+        for a, b in itertools.pairwise(s):
             a = (round(a[0], 3), round(a[1], 3))
             b = (round(b[0], 3), round(b[1], 3))
             if a != b:

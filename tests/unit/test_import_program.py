@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 
@@ -28,7 +29,7 @@ def test_preview_is_decimated_within_budget_and_tolerance():
     t = np.linspace(0, 40 * math.pi, 100_000)
     spiral = np.c_[100 + t * np.cos(t) / 2, 100 + t * np.sin(t) / 2]
     pb = PreviewBuilder(max_points=5_000)
-    for (x0, y0), (x1, y1) in zip(spiral[:-1], spiral[1:], strict=True):
+    for (x0, y0), (x1, y1) in itertools.pairwise(spiral):
         pb.draw(x0, y0, x1, y1)
     body = pb.finish({})
     pts = [p for s in body["strokes"] for p in s]
