@@ -252,11 +252,6 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
             pattern = params.get("pattern")
             if pattern:
                 kind, source, filename = "pattern", pattern, pattern
-                from plotbridge.importing import PATTERNS
-
-                if pattern not in PATTERNS:
-                    names = ", ".join(sorted(PATTERNS))
-                    return _upload_error(422, f"unknown pattern {pattern!r}; known: {names}")
             elif path is None:
                 return _upload_error(422, "no file: send multipart field 'file' or a raw body")
             else:
@@ -319,9 +314,8 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
 
     @app.get("/api/patterns", dependencies=guard)
     async def patterns() -> dict[str, Any]:
-        from plotbridge.importing import PATTERNS
-
-        return {"patterns": [{"name": k, "description": v} for k, v in PATTERNS.items()]}
+        known = await manager.patterns()
+        return {"patterns": [{"name": k, "description": v} for k, v in known.items()]}
 
     @app.get("/api/sim/trace", dependencies=guard)
     async def sim_trace() -> dict[str, Any]:

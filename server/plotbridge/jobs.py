@@ -75,6 +75,20 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
         return ("failed", 422, [{"line": None, "message": f"import failed: {exc}"}])
 
 
+def resume_preamble(program: str, line: int) -> list[str]:
+    """Worker-process entry for `importing.resume_preamble`."""
+    from plotbridge.importing import resume_preamble as preamble
+
+    return preamble(Path(program), line)
+
+
+def patterns() -> dict[str, str]:
+    """Worker-process entry: the importer's pattern names and descriptions."""
+    from plotbridge.importing import PATTERNS
+
+    return dict(PATTERNS)
+
+
 def public(job: dict[str, Any]) -> dict[str, Any]:
     return {key: job.get(key) for key in PUBLIC_FIELDS}
 
@@ -116,7 +130,8 @@ class JobManager:
         self._last_machine: dict[str, Any] | None = None
         self._last_machine_sent = 0.0
         self._unsubscribe: Callable[[], None] | None = None
-        self._background: set[asyncio.Task[Any]] = set()
+        self._patterns: dict[str, str] | None = None
+        self._control_at = 0.0
 
     # ---- lifecycle -------------------------------------------------------
 
@@ -208,9 +223,23 @@ class JobManager:
             job["safe_line"] = first_unexecuted_line(
                 self._motion, job["lines_done"], queued, self._run_floor
             )
+        if job is not None:
+            self._follow_buttons(job, getattr(status, "state", None))
         self._send_machine()
         if getattr(status, "state", None) == "Idle":
             self._maybe_auto_start()
+
+    def _follow_buttons(self, job: dict[str, Any], state: str | None) -> None:
+        """The board's pause and resume buttons change the job state too."""
+        settled = time.monotonic() - self._control_at > 0.5  # our own ! or ~ is not yet reported
+        if job["state"] == "running" and state == "Hold" and settled:
+            job["state"] = "paused"
+            self._changed(job)
+            log.info("job %s paused at the machine", job["id"])
+        elif job["state"] == "paused" and state == "Run" and settled:
+            job["state"] = "running"
+            self._changed(job)
+            log.info("job %s resumed at the machine", job["id"])
 
     def _send_machine(self, force: bool = False) -> None:
         machine = self.machine()
@@ -293,16 +322,26 @@ class JobManager:
         self._maybe_auto_start()
         return job
 
+    async def _worker(self, function: Callable[..., Any], *args: Any) -> Any:
+        """Run `function` in the import process (which keeps the importer's heavy
+        modules out of the server process)."""
+        if self._pool is None:  # created on first use; spawn, as forking a threaded loop is unsafe
+            self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+        return await asyncio.get_running_loop().run_in_executor(self._pool, function, *args)
+
     async def _import(
         self, kind: str, source: str, filename: str, dest: Path, options: dict[str, Any]
     ) -> tuple:
-        if self._pool is None:  # created on first use; spawn, as forking a threaded loop is unsafe
-            self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
         settings = dict(getattr(self.link, "settings", {}) or {})
-        loop = asyncio.get_running_loop()
-        return await loop.run_in_executor(
-            self._pool, run_import, kind, source, filename, str(dest), options, settings
-        )
+        return await self._worker(run_import, kind, source, filename, str(dest), options, settings)
+
+    async def _preamble(self, program: Path, line: int) -> list[str]:
+        return await self._worker(resume_preamble, str(program), line)
+
+    async def patterns(self) -> dict[str, str]:
+        if self._patterns is None:
+            self._patterns = await self._worker(patterns)
+        return self._patterns
 
     async def reimport(
         self, job_id: str, name: str | None, placement: dict[str, Any] | None
@@ -419,7 +458,7 @@ class JobManager:
         job = self._active_job(job_id)
         if job["state"] != "running":
             raise JobError(409, f"job {job['id']} is {job['state']}, not running")
-        self.link.realtime(b"!")
+        self._realtime(b"!")
         job["state"] = "paused"
         self._changed(job)
         log.info("job %s paused", job["id"])
@@ -431,11 +470,20 @@ class JobManager:
         job = self._active_job(job_id)
         if job["state"] != "paused":
             raise JobError(409, f"job {job['id']} is {job['state']}, not paused")
-        self.link.realtime(b"~")
+        self._realtime(b"~")
         job["state"] = "running"
         self._changed(job)
         log.info("job %s resumed", job["id"])
         return job
+
+    def _realtime(self, byte: bytes) -> None:
+        from plotbridge.link import LinkDown
+
+        self._control_at = time.monotonic()
+        try:
+            self.link.realtime(byte)
+        except LinkDown as exc:
+            raise JobError(409, "the plotter is not connected") from exc
 
     def _active_job(self, job_id: str | None) -> dict[str, Any]:
         if job_id is not None:
@@ -455,7 +503,7 @@ class JobManager:
             self._finish(job, "cancelled", None)
             return job
         # Hold, soft reset once the hold has stopped motion, then lift the pen.
-        self.link.realtime(b"!")
+        self._realtime(b"!")
         self._finish(job, "cancelled", None)
         await self._wait_state(lambda s: s in ("Hold", "Idle", "Alarm", "Disconnected"), 5.0)
         await asyncio.sleep(0.3)  # let the deceleration complete
@@ -516,9 +564,7 @@ class JobManager:
             self._motion = motion_flags(lines)
             preamble: list[str] = []
             if line > 1:
-                from plotbridge.importing import resume_preamble
-
-                preamble = await asyncio.to_thread(resume_preamble, program, line)
+                preamble = await self._preamble(program, line)
             start_time = time.time()
             await self.link.stream(_numbered(preamble, lines, line), self._on_ack)
             state = await self._wait_done(start_time)
@@ -596,11 +642,10 @@ class JobManager:
             self._finish(job, "stopped", "emergency stop")
         elif reason == "cancelled":
             self._finish(job, "cancelled", None)
-        else:
-            line = getattr(exc, "error_line", None)
+        else:  # error or alarm from the board
+            line = getattr(exc, "error_line", None) or job["lines_done"] + 1
             message = getattr(exc, "message", None) or str(exc)
-            where = f"line {line}: " if line else ""
-            self._finish(job, "failed", f"{where}{message}")
+            self._finish(job, "failed", f"line {line}: {message}")
 
     def _interrupt(self, job: dict[str, Any]) -> None:
         if job["state"] not in ACTIVE:

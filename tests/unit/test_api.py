@@ -394,9 +394,10 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     await settle(lambda: api.manager.jobs[jid]["state"] == "interrupted")
     interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
     assert interrupted["resume_line"] == 10  # lines 10, 11, 12 are moves not known done
-    import plotbridge.importing as importing
+    async def preamble(self, program, line):
+        return ["M5", "G0 X6 Y0"]
 
-    monkeypatch.setattr(importing, "resume_preamble", lambda path, line: ["M5", "G0 X6 Y0"])
+    monkeypatch.setattr(JobManager, "_preamble", preamble)
     api.link.set_state("Idle", planner_free=15)
     api.link.auto_ack = True
     response = await api.client.post(f"/api/jobs/{jid}/resume")
@@ -523,3 +524,34 @@ def _next_of(ws, kind: str) -> dict:
         if message["type"] == kind:
             return message
     raise AssertionError(f"no {kind} message")
+
+
+async def test_machine_buttons_pause_and_resume_the_job(api):
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    api.link.set_state("Hold")
+    assert api.manager.jobs[job["id"]]["state"] == "paused"
+    api.link.set_state("Run")
+    assert api.manager.jobs[job["id"]]["state"] == "running"
+
+
+async def test_real_import_runs_in_a_worker_process(tmp_path):
+    """No fake importer here: the upload goes through the real importer in its process."""
+    app, _ = make_app(tmp_path)
+    async with app.router.lifespan_context(app):
+        async with httpx.AsyncClient(
+            transport=httpx.ASGITransport(app=app), base_url="http://t", headers=AUTH
+        ) as client:
+            gcode = "G21\nG90\nG0 X10 Y10\nM3\nG1 X20 Y10 F3000\nM5\n"
+            response = await client.post("/api/jobs", files={"file": ("a.nc", gcode)})
+            assert response.status_code == 201, response.text
+            job = response.json()
+            assert job["format"] == "gcode" and job["bounds"]["max_x"] == 20
+            bad = await client.post("/api/jobs", files={"file": ("a.gcode", "G1 X1\nG7 Q\n")})
+            assert bad.status_code == 422
+            assert all(isinstance(e["line"], int) for e in bad.json()["detail"]["errors"])
+            assert not [p for p in (tmp_path / "jobs").iterdir() if p.name != job["id"]]
+            names = (await client.get("/api/patterns")).json()["patterns"]
+            assert names and {"name", "description"} <= set(names[0])
+            pattern = await client.post("/api/jobs?pattern=nosuch")
+            assert pattern.status_code == 422
