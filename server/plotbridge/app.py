@@ -92,7 +92,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         ]
         return _error(422, errors)
 
-    def authenticated(request: Request) -> None:
+    async def authenticated(request: Request) -> None:  # async: no thread-pool hop
         if auth.check_header(request.headers.get("authorization")):
             return
         if auth.check_session(request.cookies.get(COOKIE)):
