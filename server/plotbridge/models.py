@@ -10,7 +10,7 @@ PAPERS = ("A6", "A5", "A4", "A3", "letter")
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class LoginBody(Strict):
@@ -40,7 +40,7 @@ class CommandBody(Strict):
 
 
 class SettingsBody(Strict):
-    settings: dict[int, float]
+    settings: dict[Annotated[int, Field(ge=0, le=255)], Annotated[float, Field(ge=-1e6, le=1e6)]]
 
 
 def _quarter_turn(value: int) -> int:

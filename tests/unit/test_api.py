@@ -555,3 +555,49 @@ async def test_real_import_runs_in_a_worker_process(tmp_path):
             assert names and {"name", "description"} <= set(names[0])
             pattern = await client.post("/api/jobs?pattern=nosuch")
             assert pattern.status_code == 422
+
+
+async def test_settings_and_jog_refuse_non_finite_numbers(api):
+    for body in ('{"settings": {"110": Infinity}}', '{"settings": {"300": 1}}',
+                 '{"settings": {"110": NaN}}'):  # fmt: skip
+        response = await api.client.put(
+            "/api/machine/settings", content=body, headers={"Content-Type": "application/json"}
+        )
+        assert response.status_code == 422, body
+    response = await api.client.post(
+        "/api/machine/jog", content='{"dx": NaN}', headers={"Content-Type": "application/json"}
+    )
+    assert response.status_code == 422
+    assert api.link.commands == []
+
+
+async def test_patch_renames_and_reimports_queued_job(api):
+    job = (await upload(api.client)).json()
+    response = await api.client.patch(
+        f"/api/jobs/{job['id']}", json={"name": "renamed", "placement": {"rotate": 90}}
+    )
+    assert response.status_code == 200
+    assert response.json()["name"] == "renamed" and response.json()["placement"]["rotate"] == 90
+    bad = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"rotate": 45}})
+    assert bad.status_code == 422
+    api.link.auto_ack = True
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "done")
+    late = await api.client.patch(f"/api/jobs/{job['id']}", json={"name": "x"})
+    assert late.status_code == 409
+
+
+async def test_auto_start_runs_the_queue(tmp_path, monkeypatch):
+    monkeypatch.setattr(JobManager, "_import", fake_import)
+    app, link = make_app(tmp_path, auto_start=True)
+    link.auto_ack = True
+    async with app.router.lifespan_context(app):
+        await asyncio.sleep(0)
+        async with httpx.AsyncClient(
+            transport=httpx.ASGITransport(app=app), base_url="http://t", headers=AUTH
+        ) as client:
+            first = (await upload(client)).json()["id"]
+            second = (await upload(client)).json()["id"]
+            manager = app.state.manager
+            await settle(lambda: manager.jobs[second]["state"] == "done")
+            assert manager.jobs[first]["state"] == "done"
