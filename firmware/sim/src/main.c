@@ -25,11 +25,12 @@
 #include "trace_out.h"
 
 #define CPU_HZ 16000000u
-/* cycles between services: 0.25 ms simulated keeps the per-cycle cost nil
- * and the host-visible latency well under a millisecond of wall time */
+/* cycles between looks at the wall clock (0.25 ms simulated); system calls
+ * (pty, control socket) happen only every IO_INTERVAL of wall time */
 #define SLICE_CYCLES 4000u
 #define TRACE_MIN_INTERVAL 0.05  /* 20 writes a second at most */
 #define EEPROM_CHECK_INTERVAL 0.1
+#define IO_INTERVAL 0.0005       /* look at the pty and control socket (wall s) */
 #define MIN_SLEEP 0.0002         /* don't sleep for less than this (wall s) */
 #define MAX_LAG 0.25             /* fell behind more than this: stop catching up */
 
@@ -158,27 +159,27 @@ static void handle_command(void *ctx, const char *line, FILE *reply)
 	}
 }
 
-static void service(struct sim *s, double now)
+/* Waits up to `seconds` (0: just looks) for pty or control socket activity
+ * and services what is ready: one system call when nothing is. */
+static void io_tick(struct sim *s, double seconds)
 {
-	if (s->mc.stepped) {
-		s->mc.stepped = 0;
-		s->last_step_mono = now;
-	}
-	pty_link_service(&s->pty);
-	control_service(&s->ctl, handle_command, s);
-}
-
-/* sleeps up to `seconds`, waking early for pty or control input */
-static void idle_wait(struct sim *s, double seconds)
-{
-	struct pollfd fds[2 + CONTROL_MAX_CLIENTS];
+	struct pollfd fds[1 + 1 + CONTROL_MAX_CLIENTS];
 	int n = 0;
-	fds[n++] = (struct pollfd){ .fd = s->pty.master,
-				    .events = (short)(POLLIN | (pty_link_pending_tx(&s->pty) ? POLLOUT : 0)) };
+	fds[n++] = (struct pollfd){ .fd = s->pty.master, .events = POLLIN };
 	n += control_pollfds(&s->ctl, fds + n, (int)(sizeof fds / sizeof fds[0]) - n);
 	struct timespec ts = { .tv_sec = (time_t)seconds,
 			       .tv_nsec = (long)((seconds - (double)(time_t)seconds) * 1e9) };
-	ppoll(fds, (nfds_t)n, &ts, NULL);
+	if (ppoll(fds, (nfds_t)n, &ts, NULL) < 0)
+		return;
+	/* pending output is written (or dropped) whether or not the pty said so */
+	if (fds[0].revents || pty_link_pending_tx(&s->pty))
+		pty_link_service(&s->pty);
+	for (int i = 1; i < n; i++) {
+		if (fds[i].revents) {
+			control_service(&s->ctl, handle_command, s);
+			break;
+		}
+	}
 }
 
 static int run(struct sim *s)
@@ -187,6 +188,7 @@ static int run(struct sim *s)
 	double wall0 = monotonic();
 	avr_cycle_count_t cycle0 = avr->cycle;
 	double next_eeprom = wall0 + EEPROM_CHECK_INTERVAL;
+	double next_io = wall0;
 	s->trace_due = wall0;
 	while (!stop_requested && !s->quit) {
 		avr_cycle_count_t until = avr->cycle + SLICE_CYCLES;
@@ -200,7 +202,14 @@ static int run(struct sim *s)
 			}
 		}
 		double now = monotonic();
-		service(s, now);
+		if (s->mc.stepped) {
+			s->mc.stepped = 0;
+			s->last_step_mono = now;
+		}
+		if (now >= next_io) {
+			io_tick(s, 0);
+			next_io = now + IO_INTERVAL;
+		}
 		if (s->mc.changed && now >= s->trace_due) {
 			write_trace(s);
 			s->trace_due = now + s->trace_interval;
@@ -213,10 +222,9 @@ static int run(struct sim *s)
 			double sim_elapsed = (double)(avr->cycle - cycle0) / CPU_HZ;
 			double wall_needed = sim_elapsed / s->opt.speed;
 			double ahead = wall_needed - (now - wall0);
-			if (ahead > MIN_SLEEP) {
-				idle_wait(s, ahead);
-				service(s, monotonic());
-			} else if (ahead < -MAX_LAG) {
+			if (ahead > MIN_SLEEP)
+				io_tick(s, ahead);
+			else if (ahead < -MAX_LAG) {
 				wall0 = now - wall_needed;
 			}
 		}
