@@ -502,22 +502,28 @@ class JobManager:
         if job["state"] not in ACTIVE:
             self._finish(job, "cancelled", None)
             return job
-        # Hold, soft reset once the hold has stopped motion, then lift the pen.
-        self._realtime(b"!")
+        self._control_at = time.monotonic()
         self._finish(job, "cancelled", None)
+        await self._halt()
+        return job
+
+    async def _halt(self) -> None:
+        """Stop what the board still has queued: hold, soft reset once the hold has
+        stopped motion, then lift the pen (`$X` first if the reset left an alarm)."""
+        with contextlib.suppress(Exception):
+            self.link.realtime(b"!")
         await self._wait_state(lambda s: s in ("Hold", "Idle", "Alarm", "Disconnected"), 5.0)
         await asyncio.sleep(0.3)  # let the deceleration complete
         self.link.estop()
         if await self._wait_state(lambda s: s in ("Idle", "Alarm"), 5.0) == "Alarm":
             await self._quiet_command("$X")
         await self._quiet_command("M5")
-        return job
 
     async def _quiet_command(self, line: str) -> None:
         try:
             await self.link.command(line)
         except Exception as exc:
-            log.warning("%s after cancel failed: %s", line, exc)
+            log.warning("%s after stopping a job failed: %s", line, exc)
 
     async def _wait_state(self, predicate: Callable[[str], bool], limit: float) -> str:
         """Wait (at most `limit` s) for the machine state to satisfy `predicate`."""
@@ -568,6 +574,8 @@ class JobManager:
             start_time = time.time()
             await self.link.stream(_numbered(preamble, lines, line), self._on_ack)
             state = await self._wait_done(start_time)
+            if job["state"] not in ACTIVE:
+                return  # settled meanwhile (estop, cancel)
             if state == "Idle":
                 job["lines_done"] = job["lines_total"]
                 self._finish(job, "done", None)
@@ -576,7 +584,10 @@ class JobManager:
             else:
                 self._interrupt(job)
         except StreamAborted as exc:
+            settled = job["state"] not in ACTIVE
             self._aborted(job, exc)
+            if exc.reason == "error" and not settled:
+                await self._halt()  # the board would go on with the lines it holds
         except LinkDown:
             self._interrupt(job)
         except asyncio.CancelledError:

@@ -60,6 +60,10 @@ class FakeLink:
 
     def realtime(self, byte: bytes) -> None:
         self.realtime_bytes.append(byte)
+        if byte == b"!" and self.status.state == "Run":
+            self.set_state("Hold")
+        elif byte == b"~" and self.status.state == "Hold":
+            self.set_state("Run")
 
     def estop(self) -> None:
         from plotbridge.link import StreamAborted
@@ -360,9 +364,9 @@ async def test_pause_resume_cancel(api):
     assert api.link.realtime_bytes == [b"!"]
     assert (await api.client.post(f"/api/jobs/{jid}/resume")).json()["state"] == "running"
     assert api.link.realtime_bytes == [b"!", b"~"]
-    api.link.set_state("Hold")
     response = await api.client.post(f"/api/jobs/{jid}/cancel")
     assert response.status_code == 200 and response.json()["state"] == "cancelled"
+    assert api.link.realtime_bytes == [b"!", b"~", b"!"]
     assert api.link.estop_calls == 1 and api.link.commands[-2:] == ["$X", "M5"]
     assert (await api.client.post(f"/api/jobs/{jid}/cancel")).status_code == 409
 
@@ -378,6 +382,9 @@ async def test_board_error_fails_job_with_line(api):
     await settle(lambda: api.manager.jobs[job["id"]]["state"] == "failed")
     failed = (await api.client.get(f"/api/jobs/{job['id']}")).json()
     assert "line 2" in failed["error"] and "error:33" in failed["error"]
+    # what the board still held is stopped: hold, reset, unlock, pen up
+    await settle(lambda: "M5" in api.link.commands)
+    assert api.link.realtime_bytes == [b"!"] and api.link.estop_calls == 1
 
 
 async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
