@@ -13,7 +13,7 @@ import json
 import threading
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import pytest
 from playwright.sync_api import Browser, Page, sync_playwright
@@ -83,8 +83,9 @@ def static_web() -> Iterator[str]:
 
 
 class QuietHandler(http.server.SimpleHTTPRequestHandler):
-    extensions_map = {**http.server.SimpleHTTPRequestHandler.extensions_map,
-                      ".js": "text/javascript"}  # fmt: skip
+    extensions_map: ClassVar[dict[str, str]] = {
+        **http.server.SimpleHTTPRequestHandler.extensions_map, ".js": "text/javascript"
+    }
 
     def log_message(self, *args: Any) -> None:
         pass
@@ -112,3 +113,4 @@ def login(page: Page, url: str, token: str) -> None:
     page.click("#login-submit")
     page.wait_for_selector("#app:not([hidden])")
     page.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
+

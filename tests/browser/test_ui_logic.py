@@ -33,14 +33,17 @@ def run(page, body: str):
     )
 
 
-TWO_STROKES = "m.buildGeometry({strokes: [[[0,0],[1,0],[2,0]], [[5,5],[6,5]]], travel: [[[2,0],[5,5]]]})"
+TWO_STROKES = (
+    "m.buildGeometry({strokes: [[[0,0],[1,0],[2,0]], [[5,5],[6,5]]], travel: [[[2,0],[5,5]]]})"
+)
 
 
 def test_points_done_follows_the_normalized_program(modules):
     # header 3 lines; stroke 1: G0 M3 G1 G1 M5 (lines 4-8); stroke 2: G0 M3 G1 M5 (9-12); M5
     got = run(modules, f"""
         const g = {TWO_STROKES};
-        return [g.expectedLines, ...[0, 4, 5, 6, 7, 8, 10, 11, 12, 13].map((n) => m.pointsDone(g, n, 13))];
+        const lines = [0, 4, 5, 6, 7, 8, 10, 11, 12, 13];
+        return [g.expectedLines, ...lines.map((n) => m.pointsDone(g, n, 13))];
     """)
     assert got == [13, 0, 0, 1, 2, 3, 3, 4, 5, 5, 5]
 
@@ -68,18 +71,22 @@ def test_refine_with_pen_finds_the_segment_under_the_pen(modules):
 
 def test_paper_rect_and_placement_fields(modules):
     got = run(modules, """
-        const f = m.placementFields({paper: 'A4', landscape: true, margin: 5, fit: true, rotate: 90, scale: 2});
+        const f = m.placementFields(
+          {paper: 'A4', landscape: true, margin: 5, fit: true, rotate: 90, scale: 2});
         return [
-          m.paperRect({paper: 'A4-landscape'}), m.paperRect({paper: null}), m.paperRect({paper: 'letter'}),
-          f, m.placementFromJob(f, {}),
-          m.placementFields({paper: '', landscape: true, margin: 10, fit: false, rotate: 0, scale: 1}),
+          m.paperRect({paper: 'A4-landscape'}), m.paperRect({paper: null}),
+          m.paperRect({paper: 'letter'}), f, m.placementFromJob(f, {}),
+          m.placementFields(
+            {paper: '', landscape: true, margin: 10, fit: false, rotate: 0, scale: 1}),
         ];
     """)
     assert got[0] == {"x": 0, "y": 0, "w": 297, "h": 210}
     assert got[1] is None
     assert got[2] == {"x": 0, "y": 0, "w": 215.9, "h": 279.4}
     assert got[3] == {"paper": "A4-landscape", "margin": 5, "fit": True, "rotate": 90, "scale": 2}
-    assert got[4] == {"paper": "A4", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2}
+    assert got[4] == {
+        "paper": "A4", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2
+    }
     assert "paper" not in got[5]
 
 

@@ -123,6 +123,7 @@ export class PreviewCanvas {
     this.geomVersion = (this.geomVersion || 0) + 1;
     this.done = 0;
     this.userView = false;
+    this.view = null; // fit the new drawing on the next render
     this.invalidate();
   }
 

@@ -1,0 +1,361 @@
+"""The UI end to end in headless Chromium against a real server and the virtual plotter:
+log in, upload, preview, start, watch, stop, unlock, start the next job; on a desktop and
+on a 360 x 740 phone; refused uploads; the 200,000-point preview's frame time."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import pytest
+
+from tests.browser.conftest import PHONE, login, record, screenshot
+
+pytestmark = pytest.mark.browser
+
+
+def circles_svg(n: int, step: float = 3.0) -> bytes:
+    """Concentric circles: a long plot (minutes of pen-down travel at real speed)."""
+    shapes = "".join(
+        f'<circle cx="100" cy="100" r="{5 + i * step:g}" fill="none" stroke="black"/>'
+        for i in range(n)
+    )
+    return (
+        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" '
+        f'viewBox="0 0 200 200">{shapes}</svg>'
+    ).encode()
+
+
+SQUARE_SVG = (
+    b'<svg xmlns="http://www.w3.org/2000/svg" width="60mm" height="60mm" viewBox="0 0 60 60">'
+    b'<rect x="10" y="10" width="30" height="30" fill="none" stroke="black"/></svg>'
+)
+
+# Starts the stop timer at the first input event, resolves when the page shows stopped.
+ARM_STOP_TIMER = """(eventName) => {
+    window.__stopped = new Promise((resolve) => {
+        let t0 = null;
+        window.addEventListener(eventName, () => { t0 = performance.now(); },
+                                {capture: true, once: true});
+        const panel = document.querySelector('#estop-panel');
+        const check = () => {
+            if (t0 !== null && !panel.hidden && panel.dataset.phase === 'stopped') {
+                observer.disconnect();
+                resolve(performance.now() - t0);
+            }
+        };
+        const observer = new MutationObserver(check);
+        observer.observe(panel, {attributes: true, attributeFilter: ['data-phase', 'hidden']});
+    });
+}"""
+
+
+def upload(page, name: str, data: bytes, mime: str = "image/svg+xml") -> None:
+    page.set_input_files("#file-input", files=[{"name": name, "mimeType": mime, "buffer": data}])
+
+
+def job_row(page, name: str):
+    return page.locator("#queue li.job", has=page.locator(".name", has_text=name))
+
+
+def wait_job_state(page, name: str, states: tuple[str, ...], timeout: float = 20_000) -> str:
+    page.wait_for_function(
+        """([name, states]) => [...document.querySelectorAll('#queue li.job')].some((li) =>
+            li.querySelector('.name').textContent === name &&
+            states.includes(li.querySelector('.badge').textContent))""",
+        arg=[name, list(states)],
+        timeout=timeout,
+    )
+    return job_row(page, name).locator(".badge").text_content()
+
+
+def assert_stop_on_screen(page, viewport: dict[str, int]) -> None:
+    box = page.locator("#estop").bounding_box()
+    assert box is not None
+    assert box["x"] >= 0 and box["y"] >= 0
+    assert box["x"] + box["width"] <= viewport["width"]
+    assert box["y"] + box["height"] <= viewport["height"]
+    assert box["height"] >= 56 and box["width"] >= 150, box  # large: easy to hit
+    # nothing covers it: the element at its centre is the button
+    hit = page.evaluate(
+        "([x, y]) => document.elementFromPoint(x, y)?.id",
+        [box["x"] + box["width"] / 2, box["y"] + box["height"] / 2],
+    )
+    assert hit == "estop"
+
+
+def preview_pixels(page) -> dict[str, int]:
+    """Count canvas pixels in the 'to draw' (blue) and 'drawn' (orange) colours."""
+    return page.evaluate("""() => {
+        const c = document.querySelector('#preview');
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let todo = 0, done = 0;
+        for (let i = 0; i < d.length; i += 4) {
+            const [r, g, b] = [d[i], d[i + 1], d[i + 2]];
+            if (b > 120 && r < 110 && b - r > 60) todo++;
+            else if (r > 180 && g > 60 && g < 150 && b < 90) done++;
+        }
+        return {todo, done};
+    }""")
+
+
+def plot_stop_unlock_next(page, server, viewport, prefix: str, press_stop) -> float:
+    """The main story; returns the stop-to-stopped time in ms."""
+    long_name, next_name = f"{prefix}-circles.svg", f"{prefix}-square.svg"
+    upload(page, long_name, circles_svg(30))
+    wait_job_state(page, long_name, ("queued",))
+    page.wait_for_function("() => (window.plotbridge.preview.geom?.strokes.count ?? 0) > 100")
+    page.wait_for_function("() => window.plotbridge.preview.stats.fullRenders > 0")
+    pixels = preview_pixels(page)
+    assert pixels["todo"] > 500, pixels  # the strokes are on the canvas
+    screenshot(page, f"{prefix}-preview")
+
+    job_row(page, long_name).locator("button[data-verb=start]").click()
+    wait_job_state(page, long_name, ("running",))
+    # progress, and the live pen moving
+    page.wait_for_function(
+        """(name) => window.plotbridge.store.state.jobs.some((j) =>
+            j.name === name && j.lines_done > 0)""",
+        arg=long_name,
+    )
+    first = page.locator("#sum-pos").text_content()
+    page.wait_for_function(
+        "(first) => document.querySelector('#sum-pos').textContent !== first", arg=first
+    )
+    page.wait_for_function("() => window.plotbridge.preview.done > 0")
+    page.wait_for_function(
+        "(name) => document.querySelector('#queue li.job .pct')?.textContent.includes('%')",
+        arg=long_name,
+    )
+    assert preview_pixels(page)["done"] > 0  # the drawn part in its own colour
+    assert_stop_on_screen(page, viewport)
+    screenshot(page, f"{prefix}-running")
+
+    page.evaluate(ARM_STOP_TIMER, "pointerdown")
+    press_stop()
+    elapsed = page.evaluate("window.__stopped")
+    assert elapsed < 1000, f"stopped shown after {elapsed:.0f} ms"
+    assert page.locator("#estop-title").text_content() == "Machine stopped"
+    # the server agrees: the job is stopped and the carriage stands still
+    assert server.wait_job(job_id(page, long_name), "stopped", timeout=5)["state"] == "stopped"
+    wait_job_state(page, long_name, ("stopped",))
+    before = server.machine()["position"]
+    time.sleep(0.3)
+    assert server.machine()["position"] == before
+    screenshot(page, f"{prefix}-stopped")
+
+    page.click("#estop-unlock")
+    page.wait_for_selector("#estop-panel", state="hidden")
+    page.wait_for_function("() => document.querySelector('#sum-state').textContent === 'Idle'")
+
+    upload(page, next_name, SQUARE_SVG)
+    wait_job_state(page, next_name, ("queued",))
+    job_row(page, next_name).locator("button[data-verb=start]").click()
+    wait_job_state(page, next_name, ("running", "done"))
+    wait_job_state(page, next_name, ("done",), timeout=60_000)
+    assert server.job(job_id(page, next_name))["state"] == "done"
+    screenshot(page, f"{prefix}-next-done")
+    return elapsed
+
+
+def job_id(page, name: str) -> str:
+    return page.evaluate(
+        "(name) => window.plotbridge.store.state.jobs.find((j) => j.name === name).id", name
+    )
+
+
+def test_desktop_plot_stop_unlock_next(desktop, server, capsys):
+    page, _ = desktop
+    page.goto(server.url + "/")
+    page.wait_for_selector("#login-view:not([hidden])")
+    screenshot(page, "desktop-login")
+    page.fill("#login-token", "wrong-token")
+    page.click("#login-submit")
+    page.wait_for_function("() => document.querySelector('#login-error').textContent !== ''")
+    assert page.locator("#login-error").text_content() == "Wrong token."
+    login(page, server.url, server.token)
+
+    elapsed = plot_stop_unlock_next(
+        page, server, {"width": 1280, "height": 800}, "desktop", lambda: page.click("#estop")
+    )
+    for tab in ("control", "settings", "console"):
+        page.click(f".tab[data-tab={tab}]")
+        page.wait_for_selector(f"#tab-{tab}:not([hidden])")
+        if tab == "settings":
+            page.wait_for_selector("#settings-body tr")
+        screenshot(page, f"desktop-{tab}")
+    record("stop_desktop_click", {"ms": round(elapsed, 1)})
+    with capsys.disabled():
+        print(f"\n[ui] desktop: click on stop -> 'Machine stopped' shown: {elapsed:.0f} ms")
+
+
+def test_phone_plot_stop_unlock_next(phone, server, capsys):
+    page, _ = phone
+    # the link printed on the console logs in directly
+    page.goto(f"{server.url}/login?token={server.token}")
+    page.wait_for_selector("#app:not([hidden])")
+    page.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
+    for tab in ("plot", "control", "settings", "console"):
+        page.click(f".tab[data-tab={tab}]")
+        page.wait_for_selector(f"#tab-{tab}:not([hidden])")
+        assert_stop_on_screen(page, PHONE)
+        page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
+        assert_stop_on_screen(page, PHONE)
+        screenshot(page, f"phone-{tab}")
+        page.evaluate("window.scrollTo(0, 0)")
+    page.click(".tab[data-tab=plot]")
+
+    elapsed = plot_stop_unlock_next(page, server, PHONE, "phone", lambda: page.tap("#estop"))
+    record("stop_phone_tap", {"ms": round(elapsed, 1)})
+    with capsys.disabled():
+        print(f"\n[ui] phone: tap on stop -> 'Machine stopped' shown: {elapsed:.0f} ms")
+
+
+def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys):
+    page, _ = desktop
+    login(page, server.url, server.token)
+    bad = b"G21\nG90\nG1 X10 Y10 F1000\nG1 X10 E9\nFOO 12\nG1 X10 Y10 Q\n"
+    upload(page, "bad.gcode", bad, "text/plain")
+    item = page.locator("#uploads li.upload.failed", has_text="bad.gcode")
+    item.wait_for()
+    lines = item.locator(".errors li .line").all_text_contents()
+    assert "line 4" in lines and "line 5" in lines, lines
+    assert all(m for m in item.locator(".errors li .msg").all_text_contents())
+    screenshot(page, "desktop-upload-errors")
+
+    # a name made of markup is shown as text and creates no element
+    evil = '<img src=x onerror="window.__pwned=1">.svg'
+    upload(page, evil, SQUARE_SVG)
+    wait_job_state(page, evil, ("queued",))
+    assert page.evaluate("document.querySelectorAll('#app img').length") == 0
+    assert page.evaluate("window.__pwned") is None
+    assert job_row(page, evil).locator(".name").text_content() == evil
+
+    # Escape is the stop key, from anywhere on the page, also with the machine idle
+    page.evaluate(ARM_STOP_TIMER, "keydown")
+    page.keyboard.press("Escape")
+    elapsed = page.evaluate("window.__stopped")
+    assert elapsed < 1000
+    record("stop_idle_escape", {"ms": round(elapsed, 1)})
+    with capsys.disabled():
+        print(f"\n[ui] Escape key (machine idle) -> 'Machine stopped' shown: {elapsed:.0f} ms")
+
+    # a 401 anywhere (here: the session is gone) returns to the login view
+    page.context.clear_cookies()
+    page.click(".tab[data-tab=settings]")
+    page.click("#settings-reload")
+    page.wait_for_selector("#login-view:not([hidden])")
+    assert page.locator("#app").is_hidden()
+
+
+def big_gcode(strokes: int = 500, points: int = 500) -> bytes:
+    """A plot of strokes * points distinct points, wobbly enough to survive simplification."""
+    out = ["G21", "G90"]
+    for s in range(strokes):
+        cx, cy = 20 + (s % 25) * 10.5, 20 + (s // 25) * 9
+        for i in range(points):
+            a = i * 0.09
+            r = 1 + i * 0.01 + math.sin(i * 2.3) * 0.5
+            x, y = cx + r * math.cos(a), cy + r * math.sin(a)
+            if i == 0:
+                out += [f"G0 X{x:.3f} Y{y:.3f}", "M3"]
+            else:
+                out.append(f"G1 X{x:.3f} Y{y:.3f} F3000")
+        out.append("M5")
+    return ("\n".join(out) + "\n").encode()
+
+
+# Full redraws (cache invalidated by a zoom step) flushed with getImageData, and the
+# frame interval while panning, as requestAnimationFrame sees it.
+MEASURE_FRAMES = """async () => {
+    const p = window.plotbridge.preview;
+    const ctx = p.canvas.getContext('2d');
+    const full = [];
+    for (let k = 0; k < 20; k++) {
+        p.view = {...p.view, scale: p.view.scale * (k % 2 ? 1.02 : 1 / 1.02)};
+        p.interactingUntil = 0;
+        const t = performance.now();
+        p.render();
+        ctx.getImageData(0, 0, 1, 1);
+        full.push(performance.now() - t);
+    }
+    const pan = [];
+    await new Promise((resolve) => {
+        let last = performance.now(), n = 0;
+        const step = () => {
+            const now = performance.now();
+            if (n > 0) pan.push(now - last);
+            last = now;
+            if (++n > 40) return resolve();
+            p.panBy(4, 2);
+            requestAnimationFrame(step);
+        };
+        requestAnimationFrame(step);
+    });
+    const sorted = (a) => [...a].sort((x, y) => x - y);
+    const med = (a) => sorted(a)[Math.floor(a.length / 2)];
+    return {points: p.geom.strokes.count, fullMedian: med(full), fullMax: Math.max(...full),
+            panMedian: med(pan), panMax: Math.max(...pan)};
+}"""
+
+
+SWAP_IN_200K = """async () => {
+    const {buildGeometry} = await import('/js/preview-data.js');
+    const {previewJob} = await import('/js/store.js');
+    const {store} = window.plotbridge;
+    const strokes = [];
+    for (let s = 0; s < 400; s++) {
+        const line = [];
+        const cx = 20 + (s % 20) * 13, cy = 20 + Math.floor(s / 20) * 9;
+        for (let i = 0; i < 500; i++) {
+            const a = i * 0.09, r = 1 + i * 0.012 + Math.sin(i * 1.7) * 0.3;
+            line.push([cx + r * Math.cos(a), cy + r * Math.sin(a)]);
+        }
+        strokes.push(line);
+    }
+    const travel = strokes.slice(1).map((l, i) => [strokes[i][499], l[0]]);
+    store.update((st) => {
+        const entry = st.previews[previewJob(st).id];
+        entry.geom = buildGeometry({strokes, travel});
+    });
+}"""
+
+
+def test_200k_point_preview_frame_time(desktop, server, capsys):
+    page, _ = desktop
+    login(page, server.url, server.token)
+    page.evaluate("""() => {
+        window.__seen = new Set();
+        new MutationObserver(() => {
+            for (const s of document.querySelectorAll('#uploads .status')) {
+                window.__seen.add(s.textContent.includes(' of ') ? 'bytes' : s.textContent);
+            }
+        }).observe(document.querySelector('#uploads'),
+                   {subtree: true, childList: true, characterData: true});
+    }""")
+    upload(page, "big.gcode", big_gcode(), "text/plain")
+    wait_job_state(page, "big.gcode", ("queued",), timeout=120_000)
+    seen = page.evaluate("[...window.__seen]")
+    assert "importing…" in seen, seen  # the upload showed its progress, then the import
+    page.wait_for_function(
+        "() => (window.plotbridge.preview.geom?.strokes.count ?? 0) >= 150000", timeout=60_000
+    )
+    served = page.evaluate(MEASURE_FRAMES)
+    # exactly 200,000 points (the server simplifies uploads to at most that): fed to the
+    # shown job's preview in the page's state, drawn by the same render path
+    page.evaluate(SWAP_IN_200K)
+    page.wait_for_function("() => window.plotbridge.preview.geom.strokes.count === 200000")
+    exact = page.evaluate(MEASURE_FRAMES)
+    page.click("#zoom-fit")
+    page.wait_for_timeout(200)
+    screenshot(page, "desktop-preview-200k")
+    for label, result in (("uploaded", served), ("synthetic", exact)):
+        record(f"preview_frame_ms_{label}", {k: round(v, 1) for k, v in result.items()})
+        with capsys.disabled():
+            print(
+                f"\n[ui] {label} preview of {result['points']} points: full redraw median "
+                f"{result['fullMedian']:.1f} ms (max {result['fullMax']:.1f}); frame interval "
+                f"while panning median {result['panMedian']:.1f} ms (max {result['panMax']:.1f})"
+            )
+        assert result["fullMedian"] < 50
+        assert result["panMedian"] < 50
