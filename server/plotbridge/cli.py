@@ -137,6 +137,9 @@ def main(argv: list[str] | None = None) -> int:
         return asyncio.run(serve(config_from_args(args)))
     except KeyboardInterrupt:
         return 0
+    except (RuntimeError, OSError) as exc:  # no virtual plotter, unusable data dir, port taken
+        log.error("cannot serve: %s", exc)
+        return 1
 
 
 if __name__ == "__main__":
