@@ -23,8 +23,10 @@ from plotbridge.config import Config
 from plotbridge.jobs import JobError, JobManager, public
 from plotbridge.models import (
     CommandBody,
+    Job,
     JogBody,
     LoginBody,
+    Machine,
     MotorsBody,
     MoveBody,
     PatchJobBody,
@@ -148,7 +150,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
 
     # ---- machine ------------------------------------------------------------------
 
-    @app.get("/api/machine", dependencies=guard)
+    @app.get("/api/machine", dependencies=guard, response_model=Machine)
     async def machine() -> dict[str, Any]:
         return manager.machine()
 
@@ -232,7 +234,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
 
     # ---- jobs --------------------------------------------------------------------------
 
-    @app.get("/api/jobs", dependencies=guard)
+    @app.get("/api/jobs", dependencies=guard, response_model=list[Job])
     async def list_jobs() -> list[dict[str, Any]]:
         return manager.list()
 
@@ -271,11 +273,11 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
             manager.start_job(job["id"])
         return JSONResponse(public(job), status_code=201)
 
-    @app.get("/api/jobs/{job_id}", dependencies=guard)
+    @app.get("/api/jobs/{job_id}", dependencies=guard, response_model=Job)
     async def get_job(job_id: str) -> dict[str, Any]:
         return public(manager.get(job_id))
 
-    @app.patch("/api/jobs/{job_id}", dependencies=guard)
+    @app.patch("/api/jobs/{job_id}", dependencies=guard, response_model=Job)
     async def patch_job(job_id: str, body: PatchJobBody) -> dict[str, Any]:
         placement = body.placement.model_dump() if body.placement else None
         return public(await manager.reimport(job_id, body.name, placement))
@@ -285,23 +287,23 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         await manager.delete(job_id)
         return Response(status_code=204)
 
-    @app.post("/api/jobs/{job_id}/start", dependencies=guard)
+    @app.post("/api/jobs/{job_id}/start", dependencies=guard, response_model=Job)
     async def start_job(job_id: str) -> dict[str, Any]:
         return public(manager.start_job(job_id))
 
-    @app.post("/api/jobs/{job_id}/pause", dependencies=guard)
+    @app.post("/api/jobs/{job_id}/pause", dependencies=guard, response_model=Job)
     async def pause_job(job_id: str) -> dict[str, Any]:
         return public(manager.pause(job_id))
 
-    @app.post("/api/jobs/{job_id}/resume", dependencies=guard)
+    @app.post("/api/jobs/{job_id}/resume", dependencies=guard, response_model=Job)
     async def resume_job(job_id: str) -> dict[str, Any]:
         return public(manager.resume(job_id))
 
-    @app.post("/api/jobs/{job_id}/cancel", dependencies=guard)
+    @app.post("/api/jobs/{job_id}/cancel", dependencies=guard, response_model=Job)
     async def cancel_job(job_id: str) -> dict[str, Any]:
         return public(await manager.cancel(job_id))
 
-    @app.post("/api/jobs/{job_id}/move", dependencies=guard)
+    @app.post("/api/jobs/{job_id}/move", dependencies=guard, response_model=list[Job])
     async def move_job(job_id: str, body: MoveBody) -> list[dict[str, Any]]:
         return manager.move(job_id, body.position)
 
