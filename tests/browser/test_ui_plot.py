@@ -99,7 +99,9 @@ def preview_pixels(page) -> dict[str, int]:
     }""")
 
 
-def plot_stop_unlock_next(page, server, viewport, prefix: str, press_stop) -> float:
+def plot_stop_unlock_next(
+    page, server, viewport, prefix: str, press_stop, clear_from_banner: bool = False
+) -> float:
     """The main story; returns the stop-to-stopped time in ms."""
     long_name, next_name = f"{prefix}-circles.svg", f"{prefix}-square.svg"
     upload(page, long_name, circles_svg(30))
@@ -144,8 +146,15 @@ def plot_stop_unlock_next(page, server, viewport, prefix: str, press_stop) -> fl
     assert server.machine()["position"] == before
     screenshot(page, f"{prefix}-stopped")
 
-    page.click("#estop-unlock")
+    if clear_from_banner:
+        # closing the stop panel leaves the alarm banner, with the action that clears it
+        page.click("#estop-close")
+        page.locator("#banners .banner", has_text="Alarm").wait_for()
+        page.locator("#banners button[data-action=unlock]").click()
+    else:
+        page.click("#estop-unlock")
     page.wait_for_selector("#estop-panel", state="hidden")
+    page.wait_for_selector("#banners .banner >> text=Alarm", state="detached")
     page.wait_for_function("() => document.querySelector('#sum-state').textContent === 'Idle'")
 
     upload(page, next_name, SQUARE_SVG)
@@ -205,7 +214,9 @@ def test_phone_plot_stop_unlock_next(phone, server, capsys):
         page.evaluate("window.scrollTo(0, 0)")
     page.click(".tab[data-tab=plot]")
 
-    elapsed = plot_stop_unlock_next(page, server, PHONE, "phone", lambda: page.tap("#estop"))
+    elapsed = plot_stop_unlock_next(
+        page, server, PHONE, "phone", lambda: page.tap("#estop"), clear_from_banner=True
+    )
     record("stop_phone_tap", {"ms": round(elapsed, 1)})
     with capsys.disabled():
         print(f"\n[ui] phone: tap on stop -> 'Machine stopped' shown: {elapsed:.0f} ms")
@@ -239,6 +250,23 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     record("stop_idle_escape", {"ms": round(elapsed, 1)})
     with capsys.disabled():
         print(f"\n[ui] Escape key (machine idle) -> 'Machine stopped' shown: {elapsed:.0f} ms")
+
+    # the live connection drops with the server and comes back by itself
+    page.click("#estop-close")
+    page.evaluate("""() => {
+        window.__banners = new Set();
+        new MutationObserver(() => {
+            for (const b of document.querySelectorAll('#banners .banner')) {
+                window.__banners.add(b.textContent);
+            }
+        }).observe(document.querySelector('#banners'),
+                   {subtree: true, childList: true, characterData: true});
+    }""")
+    server.restart()
+    page.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
+    page.wait_for_selector("#banners .banner >> text=live connection", state="detached")
+    seen = page.evaluate("[...window.__banners]")
+    assert any("Lost the live connection" in text for text in seen), seen
 
     # a 401 anywhere (here: the session is gone) returns to the login view
     page.context.clear_cookies()

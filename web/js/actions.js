@@ -168,8 +168,9 @@ export function createActions(store, socket, estop) {
     }
   }
 
-  async function afterClear(ok) {
-    if (ok) estop.dismiss();
+  /** Home and unlock clear the stopped state: the panel goes once they succeed. */
+  async function clearing(path) {
+    if (await machineCall(path)) estop.dismiss();
   }
 
   const actions = {
@@ -258,7 +259,8 @@ export function createActions(store, socket, estop) {
         store.update((st) => {
           const detail = msg.detail ?? msg.message ?? "error from the server";
           const text = typeof detail === "string" ? detail : new ApiError(0, detail).message;
-          st.notice = { text: `${msg.command ?? "command"}: ${text}`, error: true };
+          if (msg.command === "command") st.commandError = text;
+          else st.notice = { text: `${msg.command ?? "command"}: ${text}`, error: true };
         });
       }
     },
@@ -423,12 +425,8 @@ export function createActions(store, socket, estop) {
 
     // ---- machine ----
 
-    async home() {
-      afterClear(await machineCall("/api/machine/home"));
-    },
-    async unlock() {
-      afterClear(await machineCall("/api/machine/unlock"));
-    },
+    home: () => clearing("/api/machine/home"),
+    unlock: () => clearing("/api/machine/unlock"),
     pen: (down) => machineCall("/api/machine/pen", { down }),
     motors: (enabled) => machineCall("/api/machine/motors", { enabled }),
     jog: (ux, uy) => machineCall("/api/machine/jog", { dx: ux * s.jog.step, dy: uy * s.jog.step, feed: s.jog.feed }),
