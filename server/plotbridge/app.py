@@ -94,6 +94,11 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         ]
         return _error(422, errors)
 
+    @app.exception_handler(Exception)
+    async def unexpected(_: Request, exc: Exception) -> JSONResponse:
+        log.exception("unexpected error")  # a bug: bad input must never land here
+        return _error(500, f"internal error: {type(exc).__name__}: {exc}")
+
     async def authenticated(request: Request) -> None:  # async: no thread-pool hop
         if auth.check_header(request.headers.get("authorization")):
             return

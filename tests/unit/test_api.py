@@ -11,6 +11,8 @@ from typing import Any
 
 import httpx
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from plotbridge.app import create_app, parse_upload_fields
 from plotbridge.config import Config
 from plotbridge.jobs import JobManager
@@ -608,3 +610,37 @@ async def test_auto_start_runs_the_queue(tmp_path, monkeypatch):
             manager = app.state.manager
             await settle(lambda: manager.jobs[second]["state"] == "done")
             assert manager.jobs[first]["state"] == "done"
+
+
+JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats(allow_nan=False) | st.text(max_size=20),
+    lambda inner: st.lists(inner, max_size=4)
+    | st.dictionaries(st.text(max_size=8), inner, max_size=4),
+    max_leaves=10,
+)
+BODY_ENDPOINTS = [
+    ("POST", "/api/machine/jog"), ("POST", "/api/machine/pen"), ("POST", "/api/machine/motors"),
+    ("POST", "/api/machine/command"), ("PUT", "/api/machine/settings"), ("POST", "/api/login"),
+    ("PATCH", "/api/jobs/{id}"), ("POST", "/api/jobs/{id}/move"),
+]  # fmt: skip
+
+
+@settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(endpoint=st.sampled_from(BODY_ENDPOINTS), body=JSON | st.binary(max_size=40))
+def test_no_body_gets_a_5xx(sync_client, endpoint, body):
+    if not hasattr(sync_client, "job_id"):
+        upload = sync_client.post(
+            "/api/jobs", files={"file": ("a.gcode", "G1 X1\n")}, headers=AUTH
+        )
+        sync_client.job_id = upload.json()["id"]
+    method, path = endpoint
+    content = body if isinstance(body, bytes) else json.dumps(body).encode()
+    response = sync_client.request(
+        method, path.format(id=sync_client.job_id), content=content,
+        headers={**AUTH, "Content-Type": "application/json"},
+    )  # fmt: skip
+    assert response.status_code < 500, (endpoint, body, response.text)
+    if response.status_code >= 400:
+        assert "detail" in response.json()
