@@ -644,3 +644,36 @@ def test_no_body_gets_a_5xx(sync_client, endpoint, body):
     assert response.status_code < 500, (endpoint, body, response.text)
     if response.status_code >= 400:
         assert "detail" in response.json()
+
+
+@pytest.fixture
+def real_import_client(tmp_path):
+    app, _ = make_app(tmp_path)
+    with TestClient(app) as client:
+        client.data_dir = tmp_path
+        yield client
+
+
+GCODE_WORDS = st.sampled_from([
+    "G0", "G1", "G2", "G3", "M3", "M5", "X1", "Y-2", "F3000", "I1",
+    "Z0", "G91", "G20", "S50", "M300", "(c)", ";x", "%", "X", "1e9",
+])  # fmt: skip
+GCODE = st.lists(st.lists(GCODE_WORDS, max_size=5).map(" ".join), max_size=12).map("\n".join)
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    name=st.sampled_from(["a.gcode", "a.svg", "a.txt", "a", "../x.nc"]),
+    body=GCODE | st.text(max_size=200) | st.binary(max_size=200),
+)
+def test_no_upload_gets_a_5xx_or_leaves_files(real_import_client, name, body):
+    response = real_import_client.post("/api/jobs", files={"file": (name, body)}, headers=AUTH)
+    assert response.status_code in (201, 413, 415, 422), response.text
+    if response.status_code != 201:
+        errors = response.json()["detail"]["errors"]
+        assert errors and all(e["message"] for e in errors)
+    jobs_dir = real_import_client.data_dir / "jobs"
+    assert not [p for p in jobs_dir.iterdir() if p.name.startswith(".")]
+    assert not list((real_import_client.data_dir / "tmp").iterdir())
