@@ -74,7 +74,7 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
             writer.write_ops(ops_factory())
             writer.finish()
         errors.raise_if_any()
-        if writer.pen_down_mm == 0 and writer.preview.points == 0:
+        if writer.pen_lifts == 0:
             raise ImportFailed.one(422, "nothing to draw: the input has no pen-down moves")
         bounds = writer.bounds_dict()
         writer.preview.write(tmp_preview, bounds)

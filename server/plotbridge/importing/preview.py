@@ -7,16 +7,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .simplify import simplify
+from .simplify import simplify_all, simplify_mask
 
 MAX_POINTS = 200_000
 BASE_TOLERANCE = 0.1   # mm: below what a preview on any screen shows
-_CHUNK = 4096          # raw points simplified at a time inside one long stroke
+_BATCH = 1 << 16       # raw points simplified at a time
 
 
 class PreviewBuilder:
     """Collects pen-down polylines and pen-up travel as they are written; strokes are
-    simplified as they end, harder only when the total would exceed `max_points`."""
+    simplified in batches, harder only when the total would exceed `max_points`."""
 
     def __init__(self, max_points: int = MAX_POINTS) -> None:
         self.max_points = max_points
@@ -25,7 +25,10 @@ class PreviewBuilder:
         self.travel: list[tuple[float, float, float, float]] = []
         self.points = 0
         self._raw: list[tuple[float, float]] = []
-        self._done: list[np.ndarray] = []
+        # Raw pieces waiting for the next batch: (points, continues into the next piece).
+        self._pending: list[tuple[list[tuple[float, float]], bool]] = []
+        self._pending_points = 0
+        self._open: np.ndarray | None = None   # simplified start of a stroke still going
         self._travel_from: tuple[float, float] | None = None
         self._travel_to = (0.0, 0.0)
 
@@ -36,9 +39,8 @@ class PreviewBuilder:
         if not raw:
             raw.append((x0, y0))
         raw.append((x, y))
-        if len(raw) >= _CHUNK:
-            part = simplify(np.array(raw), self.tolerance)
-            self._done.append(part[:-1])
+        if len(raw) >= _BATCH:
+            self._queue(continues=True)
             self._raw = [raw[-1]]
 
     def move(self, x0: float, y0: float, x: float, y: float) -> None:
@@ -55,21 +57,42 @@ class PreviewBuilder:
         self.points += 2
 
     def end_stroke(self) -> None:
-        if not self._raw:
+        if self._raw:
+            self._queue(continues=False)
+            self._raw = []
+
+    def _queue(self, continues: bool) -> None:
+        self._pending.append((self._raw, continues))
+        self._pending_points += len(self._raw)
+        if self._pending_points >= _BATCH:
+            self._simplify_pending()
+
+    def _simplify_pending(self) -> None:
+        if not self._pending:
             return
-        parts = [*self._done, simplify(np.array(self._raw), self.tolerance)]
-        stroke = np.concatenate(parts) if len(parts) > 1 else parts[0]
-        if len(parts) > 1:
-            stroke = simplify(stroke, self.tolerance)
-        self._raw, self._done = [], []
-        self.strokes.append(stroke)
-        self.points += len(stroke)
+        sizes = [len(p) for p, _ in self._pending]
+        pts = np.array([q for p, _ in self._pending for q in p], dtype=float)
+        ends = np.cumsum(sizes)
+        fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
+        keep = simplify_mask(pts, self.tolerance, fixed)
+        for (_, continues), lo, hi in zip(self._pending, ends - np.array(sizes), ends,
+                                          strict=True):
+            piece = pts[lo:hi][keep[lo:hi]]
+            if self._open is not None:
+                piece = np.concatenate([self._open, piece[1:]])
+                self._open = None
+            if continues:
+                self._open = piece
+            else:
+                self.strokes.append(piece)
+                self.points += len(piece)
+        self._pending, self._pending_points = [], 0
         self._fit()
 
     def _fit(self) -> None:
         while self.points > self.max_points and self.tolerance < 50:
             self.tolerance *= 2
-            self.strokes = [simplify(s, self.tolerance) for s in self.strokes]
+            self.strokes = simplify_all(self.strokes, self.tolerance)
             self.points = sum(len(s) for s in self.strokes) + 2 * len(self.travel)
         if self.points > self.max_points:
             # Only travel can still be too much: keep an even sample of it.
@@ -82,6 +105,7 @@ class PreviewBuilder:
         self.end_stroke()
         if self._travel_from is not None:
             self._flush_travel()
+        self._simplify_pending()
         self._fit()
         return {
             "strokes": [np.round(s, 3).tolist() for s in self.strokes],

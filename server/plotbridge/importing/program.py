@@ -160,9 +160,11 @@ class ProgramWriter:
         self.x, self.y = x, y
 
     def finish(self) -> None:
-        if self.down or self.last != "M5":
-            self.down = True
+        if self.down:
             self.pen(None, False)
+        elif self.last != "M5":
+            self._write("M5")
+            self.planner.stop(self.line, self.profile.pen_settle_s)
         self.planner.flush()
         self.flush()
 

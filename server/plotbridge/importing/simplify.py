@@ -12,12 +12,31 @@ import numpy as np
 def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
     """The subset of `points` (n x 2) that keeps every dropped point within `tolerance`
     of the simplified line; ends are always kept."""
-    n = len(points)
-    if n < 3 or tolerance <= 0:
+    if len(points) < 3 or tolerance <= 0:
         return points
+    return points[simplify_mask(points, tolerance, np.array([0, len(points) - 1]))]
+
+
+def simplify_all(polylines: list[np.ndarray], tolerance: float) -> list[np.ndarray]:
+    """`simplify` over many polylines in one pass."""
+    if not polylines or tolerance <= 0:
+        return polylines
+    sizes = np.array([len(p) for p in polylines])
+    ends = np.cumsum(sizes)
+    starts = ends - sizes
+    pts = np.concatenate(polylines)
+    keep = simplify_mask(pts, tolerance, np.unique(np.concatenate([starts, ends - 1])))
+    return [pts[a:b][keep[a:b]] for a, b in zip(starts, ends, strict=True)]
+
+
+def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np.ndarray:
+    """Which points to keep; `fixed` are indices always kept, which must include the
+    first and the last (several polylines laid end to end are simplified at once by
+    fixing the ends of each)."""
+    n = len(points)
     keep = np.zeros(n, dtype=bool)
-    keep[0] = keep[-1] = True
-    active = np.arange(1, n - 1)
+    keep[fixed] = True
+    active = np.flatnonzero(~keep)
     tol2 = tolerance * tolerance
     while active.size:
         kept = np.flatnonzero(keep)
@@ -45,4 +64,4 @@ def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
         still = split[group]
         still[first] = False
         active = active[still]
-    return points[keep]
+    return keep
