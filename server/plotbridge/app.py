@@ -274,9 +274,13 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         finally:
             if path is not None:
                 path.unlink(missing_ok=True)
+        answer = public(job)
         if start and job["state"] == "queued":
-            manager.start_job(job["id"])
-        return JSONResponse(public(job), status_code=201)
+            try:
+                answer = public(manager.start_job(job["id"]))
+            except JobError as exc:  # the upload stands; say why it did not start
+                answer["start_error"] = exc.detail
+        return JSONResponse(answer, status_code=201)
 
     @app.get("/api/jobs/{job_id}", dependencies=guard, response_model=Job)
     async def get_job(job_id: str) -> dict[str, Any]:

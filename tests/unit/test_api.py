@@ -301,6 +301,13 @@ async def test_upload_keeps_original_under_generated_name(api, tmp_path):
     assert preview.json()["strokes"] == [[[0, 0], [1, 0]]]
 
 
+async def test_upload_with_start(api):
+    started = (await upload(api.client, start="true")).json()
+    assert started["state"] == "running" and "start_error" not in started
+    queued = (await upload(api.client, start="1")).json()
+    assert queued["state"] == "queued" and started["id"] in queued["start_error"]
+
+
 async def test_raw_body_upload(api):
     response = await api.client.post("/api/jobs?name=raw%20one", content=b"G1 X1 Y1\n")
     assert response.status_code == 201 and response.json()["name"] == "raw one"
