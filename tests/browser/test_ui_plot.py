@@ -242,6 +242,30 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     assert page.evaluate("window.__pwned") is None
     assert job_row(page, evil).locator(".name").text_content() == evil
 
+    # placement: changing it re-imports the queued job and reloads its preview
+    before = page.evaluate("() => window.plotbridge.preview.geom.bounds")
+    page.select_option("#placement select[name=paper]", "A5")
+    page.check("#placement input[name=fit]")
+    page.wait_for_function(
+        """(name) => {
+            const j = window.plotbridge.store.state.jobs.find((x) => x.name === name);
+            return j.placement.paper === 'A5' && j.placement.fit === true;
+        }""",
+        arg=evil,
+    )
+    page.wait_for_function(
+        "(b) => JSON.stringify(window.plotbridge.preview.geom?.bounds) !== JSON.stringify(b)",
+        arg=before,
+    )
+    assert page.evaluate("window.plotbridge.preview.paper") == {"x": 0, "y": 0, "w": 148, "h": 210}
+    b = page.evaluate("window.plotbridge.preview.geom.bounds")
+    assert 9 < b["minX"] and b["maxX"] < 139 and 9 < b["minY"] and b["maxY"] < 201, b
+    screenshot(page, "desktop-placement")
+    # a paper larger than the work area is refused with the reason, the job is kept as it was
+    page.select_option("#placement select[name=paper]", "A3")
+    page.wait_for_function("() => document.querySelector('#place-error').textContent !== ''")
+    assert "larger than the work area" in page.locator("#place-error").text_content()
+
     # Escape is the stop key, from anywhere on the page, also with the machine idle
     page.evaluate(ARM_STOP_TIMER, "keydown")
     page.keyboard.press("Escape")

@@ -48,7 +48,7 @@ export function buildGeometry(preview) {
     line += strokes.starts[s + 1] - strokes.starts[s] + 2;
     lineEnd[s] = line;
   }
-  return { strokes, travel, lineEnd, expectedLines: line + 1, bounds: boundsOf(strokes, travel) };
+  return { strokes, travel, lineEnd, expectedLines: line + 1, bounds: boundsOf(strokes) };
 }
 
 function boundsOf(...sets) {
