@@ -126,16 +126,16 @@ def test_byte_timing_follows_115200_in_real_time(
 
 def test_speed_paces_simulated_time(plotter_factory: PlotterFactory, sim_build: SimBuild) -> None:
     rates = {}
-    for speed in (1, 3, 0):
+    for speed in (1, 2, 0):
         p = plotter_factory(firmware=sim_build.probe, speed=speed)
         t0, w0 = p.trace()["sim_time"], time.monotonic()
         time.sleep(0.5)
         t1, w1 = p.trace()["sim_time"], time.monotonic()
         rates[speed] = (t1 - t0) / (w1 - w0)
         p.stop()
-    assert rates[1] == pytest.approx(1, rel=0.15)
-    assert rates[3] == pytest.approx(3, rel=0.15)
-    assert rates[0] > 3.5  # unthrottled: as fast as the host allows
+    assert rates[1] == pytest.approx(1, rel=0.15), rates
+    assert rates[2] == pytest.approx(2, rel=0.15), rates
+    assert rates[0] > 2.5, rates  # unthrottled: as fast as the host allows
 
 
 def test_limit_switch_closes_past_the_edge(

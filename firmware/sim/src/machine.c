@@ -9,6 +9,9 @@
 /* Pulses outside this range are not servo commands (e.g. a pin glitch). */
 #define SERVO_MIN_US 100.0
 #define SERVO_MAX_US 5000.0
+/* Stroke tolerance: a staircase of steps along a straight move, stepped one
+ * motor after the other, strays up to about two steps from the line. */
+#define PATH_TOL_STEPS 2.0
 
 void machine_position(const struct machine *mc, double *x, double *y)
 {
@@ -84,8 +87,7 @@ void machine_init(struct machine *mc, const struct machine_config *cfg, double x
 	mc->pen_us = 0;
 	mc->min_pulse_cycles = UINT64_MAX;
 	strokes_init(&mc->strokes);
-	/* one step of the coarser motion, in mm */
-	path_simplify_start(&mc->path, 1.0 / spm, here(mc, 0));
+	path_simplify_start(&mc->path, PATH_TOL_STEPS / spm, here(mc, 0));
 	double x, y;
 	machine_position(mc, &x, &y);
 	mc->limit[AXIS_X] = x < 0 || x > cfg->width;

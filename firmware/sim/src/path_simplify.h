@@ -1,6 +1,7 @@
 /* Streaming polyline simplification: keeps a vertex only where the path bends
- * by more than a tolerance (about one motor step), so a straight move made of
- * thousands of steps becomes two points. O(1) work and memory per sample. */
+ * by more than a tolerance (a couple of motor steps: a staircase of steps
+ * along a straight move wanders that far from it), so a straight move made
+ * of thousands of steps becomes two points. O(1) work and memory per sample. */
 #ifndef PATH_SIMPLIFY_H
 #define PATH_SIMPLIFY_H
 
@@ -8,12 +9,14 @@ struct path_point {
 	double x, y, t;
 };
 
+#define PATH_HISTORY 16
+
 struct path_simplify {
 	double tol;             /* max distance of dropped samples from the kept segment */
-	double back_tol;        /* going back by more than this is a bend (reversal) */
 	struct path_point anchor; /* last kept vertex */
 	struct path_point cand;   /* latest sample: the end of the open segment */
-	struct path_point prev;   /* the sample before cand (== anchor at first) */
+	struct path_point hist[PATH_HISTORY]; /* latest samples, hist[(head - 1) % N] == cand */
+	unsigned head, count;
 	int has_wedge;
 	double ref, lo, hi;     /* directions (relative to ref) a segment from anchor may take */
 	double dmax;            /* farthest accepted sample from the anchor */
