@@ -275,6 +275,23 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     with capsys.disabled():
         print(f"\n[ui] Escape key (machine idle) -> 'Machine stopped' shown: {elapsed:.0f} ms")
 
+    # the REST fallback: at once when the socket cannot send, after ~300 ms without an ack
+    for breakage, fallback_ms in (("throw new Error('down')", 0), ("", 300)):
+        page.click("#estop-close")
+        page.evaluate(
+            "(body) => { window.__send = WebSocket.prototype.send;"
+            " WebSocket.prototype.send = new Function(body); }",
+            breakage,
+        )
+        page.evaluate(ARM_STOP_TIMER, "keydown")
+        with page.expect_request(
+            lambda r: r.method == "POST" and r.url.endswith("/api/machine/estop")
+        ):
+            page.keyboard.press("Escape")
+        elapsed = page.evaluate("window.__stopped")
+        assert fallback_ms <= elapsed < fallback_ms + 700, elapsed
+        page.evaluate("() => { WebSocket.prototype.send = window.__send; }")
+
     # the live connection drops with the server and comes back by itself
     page.click("#estop-close")
     page.evaluate("""() => {

@@ -121,15 +121,15 @@ function tabFromHash() {
 function bind() {
   // The stop button acts on pointerdown too: no waiting for the click to complete.
   const stop = $("#estop");
-  let firedByPointer = false;
+  let pointerAt = -Infinity;
   stop.addEventListener("pointerdown", (e) => {
     if (e.button !== 0) return;
-    firedByPointer = true;
+    pointerAt = performance.now();
     estop.trigger();
   });
   stop.addEventListener("click", () => {
-    if (!firedByPointer) estop.trigger(); // keyboard (Enter/Space) or assistive tech
-    firedByPointer = false;
+    // keyboard (Enter/Space) and assistive tech click without a pointerdown first
+    if (performance.now() - pointerAt > 1000) estop.trigger();
   });
   document.addEventListener("keydown", (e) => {
     if (e.key === "Escape" && store.state.view === "app") {
