@@ -287,3 +287,16 @@ def test_cli_rejects_a_bad_eeprom_image(sim_build: SimBuild, tmp_path: Path) -> 
     )  # fmt: skip
     assert result.returncode == 2
     assert "expected 1024 bytes" in result.stderr
+
+
+def test_watchdog_reset_keeps_pins_and_serial(probe: Plotter) -> None:
+    port = open_port(probe)
+    probe.press("pause")
+    port.write(b"R")  # watchdog reset: the probe starts over and draws again
+    trace = probe.wait_trace(lambda t: t["pen_lifts"] == 2)
+    assert trace["position"] == {"x": 20.0, "y": 10.0}
+    # after the reset the pins read as they are (pull-ups, the held button)
+    # and the serial link still carries bytes both ways
+    assert ask(port, b"?") == b"S01000\n"
+    probe.release("pause")
+    assert ask(port, b"?") == b"S00000\n"

@@ -131,6 +131,9 @@ void pty_link_service(struct pty_link *p)
 			break;
 		p->rx_len += (size_t)n;
 	}
+	/* a chip reset cancels all cycle timers, the pump's too */
+	if (p->pumping && avr_cycle_timer_status(p->avr, rx_pump, p) == 0)
+		p->pumping = 0;
 	if (p->rx_len && !p->pumping) {
 		p->pumping = 1;
 		avr_cycle_timer_register(p->avr, cycles_per_byte(p->avr), rx_pump, p);

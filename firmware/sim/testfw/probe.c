@@ -13,11 +13,13 @@
  *   Z        direction change in the same write as the step edge, then the state line
  *   D E      drivers disabled / enabled, then the state line
  *   W        add one to EEPROM byte 0, answer "W" and its new value in two hex digits
+ *   R        watchdog reset (the power-up drawing runs again)
  *   F        step X at 30 kHz forever from a timer interrupt, reversing every 4000 steps
  * The stop LED (A3) follows the stop button. */
 #include <avr/eeprom.h>
 #include <avr/interrupt.h>
 #include <avr/io.h>
+#include <avr/wdt.h>
 #include <util/delay.h>
 
 #define STEP_X _BV(PD2)
@@ -154,6 +156,10 @@ static void command(char c)
 	case 'E': PORTB &= (uint8_t)~ENABLE; break;
 	case 'F': start_fast(); return;
 	case 'W': bump_eeprom(); return;
+	case 'R':
+		wdt_enable(WDTO_15MS);
+		for (;;)
+			;
 	case '?': break;
 	default: put(c); return;
 	}
@@ -162,6 +168,8 @@ static void command(char c)
 
 int main(void)
 {
+	MCUSR = 0; /* after a watchdog reset the watchdog stays on until cleared */
+	wdt_disable();
 	DDRD = STEP_X | STEP_Y | DIR_X | DIR_Y;
 	DDRB = ENABLE | SERVO;
 	PORTB = LIMIT_X | LIMIT_Y;          /* pull-ups; drivers enabled (low) */
