@@ -104,7 +104,7 @@ def test_corexy_kinematics(plotter_factory: PlotterFactory, sim_build: SimBuild)
 
 def test_pty_carries_bytes_both_ways(probe: Plotter) -> None:
     port = open_port(probe)
-    commands = b"?XxYyPZDEFW"
+    commands = b"?XxYyPZDEFWR"
     data = bytes(b for b in range(256) if b not in commands) * 2
     port.write(data)
     assert port.read(len(data)) == data
