@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -300,3 +301,24 @@ def test_watchdog_reset_keeps_pins_and_serial(probe: Plotter) -> None:
     assert ask(port, b"?") == b"S01000\n"
     probe.release("pause")
     assert ask(port, b"?") == b"S00000\n"
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"hello\n", "not an ELF file"),
+        (Path(sys.executable).resolve().read_bytes()[:4096], "not an ELF file"),  # 64-bit
+        (b"\x7fELF\x01\x01\x01" + bytes(9) + b"\x02\x00\x03\x00" + bytes(100), "not AVR"),
+        (b"\x7fELF\x01\x01\x01" + bytes(9) + b"\x02\x00\x53\x00" + bytes(100), "no program"),
+    ],
+)
+def test_cli_rejects_files_that_are_no_avr_program(
+    sim_build: SimBuild, tmp_path: Path, content: bytes, message: str
+) -> None:
+    elf = tmp_path / "firmware.elf"
+    elf.write_bytes(content)
+    result = subprocess.run(
+        [str(sim_build.plotsim), str(elf)], capture_output=True, text=True, timeout=10
+    )
+    assert result.returncode == 2
+    assert message in result.stderr

@@ -2,6 +2,7 @@
  * to a plotter model. One thread: the loop runs instructions in slices and,
  * between slices, services the pty and the control socket, paces simulated
  * time against the wall clock, and keeps the trace file and EEPROM current. */
+#include <elf.h>
 #include <errno.h>
 #include <poll.h>
 #include <signal.h>
@@ -232,15 +233,43 @@ static int run(struct sim *s)
 	return 0;
 }
 
+/* simavr's loader trusts its input (another architecture's ELF crashes it):
+ * check the header first */
+static int check_elf(const char *path, char *err, size_t errlen)
+{
+	Elf32_Ehdr h;
+	FILE *f = fopen(path, "rb");
+	if (!f) {
+		snprintf(err, errlen, "%s: %s", path, strerror(errno));
+		return -1;
+	}
+	size_t n = fread(&h, 1, sizeof h, f);
+	fclose(f);
+	if (n != sizeof h || memcmp(h.e_ident, ELFMAG, SELFMAG) != 0 ||
+	    h.e_ident[EI_CLASS] != ELFCLASS32 || h.e_ident[EI_DATA] != ELFDATA2LSB) {
+		snprintf(err, errlen, "%s: not an ELF file for a 32-bit little-endian target", path);
+		return -1;
+	}
+	if (h.e_machine != EM_AVR) {
+		snprintf(err, errlen, "%s: an ELF file for machine %u, not AVR", path,
+			 (unsigned)h.e_machine);
+		return -1;
+	}
+	return 0;
+}
+
 static int setup(struct sim *s, char *err, size_t errlen)
 {
 	static elf_firmware_t fw;
-	if (access(s->opt.firmware, R_OK) < 0) {
-		snprintf(err, errlen, "%s: %s", s->opt.firmware, strerror(errno));
+	if (check_elf(s->opt.firmware, err, errlen) < 0)
+		return -1;
+	if (elf_read_firmware(s->opt.firmware, &fw) < 0 || fw.flashsize == 0) {
+		snprintf(err, errlen, "%s: no program in this AVR ELF file", s->opt.firmware);
 		return -1;
 	}
-	if (elf_read_firmware(s->opt.firmware, &fw) < 0) {
-		snprintf(err, errlen, "%s: not a readable AVR ELF file", s->opt.firmware);
+	if (fw.flashsize + fw.datasize > 32768) {
+		snprintf(err, errlen, "%s: %u bytes of program do not fit the 32 KiB flash",
+			 s->opt.firmware, (unsigned)(fw.flashsize + fw.datasize));
 		return -1;
 	}
 	if (fw.mmcu[0] && strcmp(fw.mmcu, "atmega328p") != 0) {
