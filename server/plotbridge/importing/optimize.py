@@ -4,7 +4,8 @@
 2. order greedily: from where the pen is, go to the nearest free stroke end (either
    end: a stroke may be drawn backwards), found through a grid index; when that end
    is within `merge_distance` the two strokes become one and the pen stays down;
-3. improve the order with 2-opt moves (reverse a run of strokes) until a deadline.
+3. improve the order with 2-opt moves (reverse a run of up to TWO_OPT_WINDOW
+   strokes) until none helps or a deadline passes.
 """
 
 from __future__ import annotations
@@ -15,9 +16,10 @@ import time
 import numpy as np
 
 from .ops import Stroke
-from .simplify import simplify
+from .simplify import simplify_all
 
 MERGE_DISTANCE = 0.01   # mm: ends this close are joined without lifting the pen
+TWO_OPT_WINDOW = 64     # longest run of strokes a 2-opt move reverses
 
 
 class EndIndex:
@@ -61,7 +63,7 @@ class EndIndex:
             ring += 1
 
 
-def _clean(stroke: Stroke, tolerance: float) -> np.ndarray | None:
+def _clean(stroke: Stroke) -> np.ndarray:
     a = np.asarray(stroke, dtype=float)
     if len(a) > 1:
         keep = np.ones(len(a), dtype=bool)
@@ -69,7 +71,7 @@ def _clean(stroke: Stroke, tolerance: float) -> np.ndarray | None:
         a = a[keep]
     if len(a) == 1:
         a = np.vstack([a, a])       # a dot: pen down and up at one place
-    return simplify(a, tolerance) if tolerance > 0 else a
+    return a
 
 
 def order_greedy(strokes: list[np.ndarray], start: tuple[float, float],
@@ -103,49 +105,42 @@ def order_greedy(strokes: list[np.ndarray], start: tuple[float, float],
     return out
 
 
-def two_opt(strokes: list[np.ndarray], start: tuple[float, float],
-            deadline: float) -> list[np.ndarray]:
-    """Reverses runs of strokes (and each stroke in them) while that shortens travel."""
+def two_opt(strokes: list[np.ndarray], start: tuple[float, float], deadline: float,
+            window: int = TWO_OPT_WINDOW) -> list[np.ndarray]:
+    """Reverses runs of up to `window` strokes (and each stroke in them) while that
+    shortens the travel, until no run does or the deadline passes."""
     n = len(strokes)
     if n < 3:
         return strokes
-    order = list(range(n))
-    rev = [False] * n
-    heads = np.array([s[0] for s in strokes])
-    tails = np.array([s[-1] for s in strokes])
-
-    def ends_of() -> tuple[np.ndarray, np.ndarray]:
-        o = np.array(order)
-        r = np.array(rev)
-        s = np.where(r[:, None], tails[o], heads[o])
-        e = np.where(r[:, None], heads[o], tails[o])
-        return s, e
-
+    order = np.arange(n)
+    flipped = np.zeros(n, dtype=bool)
+    s = np.array([st[0] for st in strokes], dtype=float)    # start of position k
+    e = np.array([st[-1] for st in strokes], dtype=float)   # end of position k
+    origin = np.asarray(start, dtype=float)
     improved = True
     while improved and time.monotonic() < deadline:
         improved = False
-        s, e = ends_of()
-        prev_end = np.vstack([np.asarray(start, dtype=float)[None, :], e[:-1]])
         for i in range(n - 1):
-            if time.monotonic() >= deadline:
+            if i % 64 == 0 and time.monotonic() >= deadline:
                 break
-            # Reverse positions i..j: edge into i becomes prev_end[i] -> e[j], edge out of j
-            # becomes s[i] -> s[j+1] (nothing after the last stroke).
-            js = np.arange(i + 1, n)
-            old = np.hypot(*(s[i] - prev_end[i])) + np.where(
-                js + 1 < n, np.hypot(*(s[np.minimum(js + 1, n - 1)] - e[js]).T), 0.0)
-            new = np.hypot(*(e[js] - prev_end[i]).T) + np.where(
-                js + 1 < n, np.hypot(*(s[np.minimum(js + 1, n - 1)] - s[i]).T), 0.0)
+            # Reversing positions i..j turns the edges prev→s[i] and e[j]→s[j+1] into
+            # prev→e[j] and s[i]→s[j+1] (no edge after the last position).
+            prev = e[i - 1] if i else origin
+            hi = min(n, i + 1 + window)
+            js = np.arange(i, hi)
+            nxt = np.minimum(js + 1, n - 1)
+            last = js + 1 >= n
+            old = np.hypot(*(s[i] - prev)) + np.where(last, 0.0, np.hypot(*(s[nxt] - e[js]).T))
+            new = np.hypot(*(e[js] - prev).T) + np.where(last, 0.0, np.hypot(*(s[nxt] - s[i]).T))
             gain = old - new
             k = int(np.argmax(gain))
             if gain[k] > 1e-9:
-                j = int(js[k])
-                order[i:j + 1] = order[i:j + 1][::-1]
-                rev[i:j + 1] = [not r for r in rev[i:j + 1][::-1]]
-                s, e = ends_of()
-                prev_end = np.vstack([np.asarray(start, dtype=float)[None, :], e[:-1]])
+                j = i + k
+                s[i:j + 1], e[i:j + 1] = e[i:j + 1][::-1].copy(), s[i:j + 1][::-1].copy()
+                order[i:j + 1] = order[i:j + 1][::-1].copy()
+                flipped[i:j + 1] = ~flipped[i:j + 1][::-1]
                 improved = True
-    return [strokes[o][::-1] if r else strokes[o] for o, r in zip(order, rev, strict=True)]
+    return [strokes[o][::-1] if f else strokes[o] for o, f in zip(order, flipped, strict=True)]
 
 
 def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
@@ -153,9 +148,10 @@ def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
                      merge_distance: float = MERGE_DISTANCE) -> list[Stroke]:
     """Strokes reordered, reversed, merged and simplified; the drawn geometry stays
     within `tolerance` of the original."""
-    arrays = [a for s in strokes if s and (a := _clean(s, tolerance)) is not None]
+    arrays = [_clean(s) for s in strokes if s]
     if not arrays:
         return []
+    arrays = simplify_all(arrays, tolerance)
     ordered = two_opt(order_greedy(arrays, start, merge_distance), start, deadline)
     given = join_touching(arrays, merge_distance)
     if _travel(given, start) < _travel(ordered, start):

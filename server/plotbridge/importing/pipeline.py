@@ -117,7 +117,8 @@ def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: Imp
     placed = [[transform.apply(x, y) for x, y in s] for s in strokes]
     before = travel_of(placed)
     if optimize:
-        deadline = time.monotonic() + 2.0
+        # 2-opt gets time in proportion to the work, at most 2 s.
+        deadline = time.monotonic() + min(2.0, 0.05 + 1e-4 * len(placed))
         placed = optimize_strokes(placed, options.tolerance, deadline)
     draw_feed = feed or options.feed
     return write_program(lambda: strokes_to_ops(placed, draw_feed), fmt, dest_dir, Transform(),

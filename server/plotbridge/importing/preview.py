@@ -115,5 +115,5 @@ class PreviewBuilder:
         }
 
     def write(self, path: Path, bounds: dict[str, float]) -> None:
-        with path.open("w", encoding="utf-8") as f:
-            json.dump(self.finish(bounds), f, separators=(",", ":"))
+        # json.dumps uses the C encoder; json.dump to a file would not.
+        path.write_text(json.dumps(self.finish(bounds), separators=(",", ":")), encoding="utf-8")

@@ -36,29 +36,25 @@ def _flatten(seg, tol_px: float) -> np.ndarray:
         n *= 4
 
 
-def path_strokes(path: se.Path, tol_px: float) -> list[np.ndarray]:
-    strokes: list[np.ndarray] = []
-    cur: list[np.ndarray] = []
-
-    def close() -> None:
-        if cur and sum(len(c) for c in cur) > 1:
-            strokes.append(np.concatenate(cur))
-
+def path_strokes(path: se.Path, tol_px: float) -> list[list[tuple[float, float]]]:
+    strokes: list[list[tuple[float, float]]] = []
+    cur: list[tuple[float, float]] = []
     for seg in path.segments():
         if isinstance(seg, se.Move):
-            close()
-            cur = [np.array([[seg.end.x, seg.end.y]])]
-        elif isinstance(seg, (se.Line, se.Close)):
-            if seg.end is None or seg.start is None:
-                continue
-            if not cur:
-                cur = [np.array([[seg.start.x, seg.start.y]])]
-            cur.append(np.array([[seg.end.x, seg.end.y]]))
+            if len(cur) > 1:
+                strokes.append(cur)
+            cur = [(seg.end.x, seg.end.y)]
+            continue
+        if seg.start is None or seg.end is None:
+            continue
+        if not cur:
+            cur = [(seg.start.x, seg.start.y)]
+        if isinstance(seg, (se.Line, se.Close)):
+            cur.append((seg.end.x, seg.end.y))
         else:
-            if not cur:
-                cur = [np.array([[seg.start.x, seg.start.y]])]
-            cur.append(_flatten(seg, tol_px))
-    close()
+            cur.extend(map(tuple, _flatten(seg, tol_px).tolist()))
+    if len(cur) > 1:
+        strokes.append(cur)
     return strokes
 
 
@@ -114,9 +110,7 @@ def read_svg(source: Path, options: ImportOptions, errors: ErrorLog) -> list[Str
                 if layers and not _selected(chain, child, layers):
                     continue
                 for s in path_strokes(se.Path(child), tol_px):
-                    mm = s * PX_MM
-                    mm[:, 1] = height_mm - mm[:, 1]
-                    out.append([(float(x), float(y)) for x, y in mm])
+                    out.append([(x * PX_MM, height_mm - y * PX_MM) for x, y in s])
 
     walk(doc, [])
     if not out:

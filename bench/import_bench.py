@@ -1,0 +1,299 @@
+"""Importer benchmark: prints figures measured in this run, each with its target.
+
+(a) import + validate + estimate throughput on a generated one-million-line G-code
+    file, against a plain line count of the same file (target: within 10x);
+(b) pen-up travel and time of our optimization against vpype's
+    `linemerge linesort` on the same generated SVGs (target: travel no worse,
+    time no slower);
+(c) estimate against the virtual plotter's simulated plot time on five drawings of
+    different character (target: within 2% each).
+
+Usage: python bench/import_bench.py [--lines N] [--skip a,b,c] [--sim-speed X]
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import multiprocessing
+import random
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO))
+
+from plotbridge.importing import (  # noqa: E402
+    ImportOptions,
+    MachineProfile,
+    import_file,
+    import_pattern,
+)
+from plotbridge.importing.models import ErrorLog  # noqa: E402
+from plotbridge.importing.optimize import optimize_strokes  # noqa: E402
+from plotbridge.importing.svg import read_svg  # noqa: E402
+
+PX_MM = 25.4 / 96
+
+
+# ---------------------------------------------------------------- (a) throughput
+
+def write_big_gcode(path: Path, lines: int) -> None:
+    """Random-walk strokes of 1 mm steps with comments and mixed feeds, ~50 bytes a line."""
+    rng = random.Random(1)
+    n = 2
+    x, y = 150.0, 110.0
+    with path.open("w") as f:
+        f.write("G21\nG90\n")
+        while n < lines:
+            f.write(f"G0 X{x:.3f} Y{y:.3f}\nM3\n")
+            n += 2
+            for _ in range(min(200, lines - n - 1)):
+                x = min(max(x + rng.uniform(-1, 1), 1), 299)
+                y = min(max(y + rng.uniform(-1, 1), 1), 219)
+                f.write(f"G1 X{x:.4f} Y{y:.4f} F{rng.choice((1500, 3000, 4500))} "
+                        f"; stroke segment {n:07d}\n")
+                n += 1
+            f.write("M5\n")
+            n += 1
+
+
+def _import_in_child(src: str, dest: str, queue) -> None:
+    t = time.perf_counter()
+    r = import_file(Path(src), "big.gcode", Path(dest), ImportOptions(), MachineProfile())
+    queue.put((time.perf_counter() - t, r.lines_total, r.estimate_s,
+               resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+
+
+def bench_throughput(tmp: Path, lines: int) -> None:
+    src = tmp / "big.gcode"
+    write_big_gcode(src, lines)
+    size = src.stat().st_size / 1e6
+    t = time.perf_counter()
+    with src.open("r") as f:
+        count = sum(1 for _ in f)
+    floor = time.perf_counter() - t
+    queue: multiprocessing.Queue = multiprocessing.Queue()
+    child = multiprocessing.get_context("fork").Process(
+        target=_import_in_child, args=(str(src), str(tmp / "big"), queue))
+    child.start()
+    took, _, estimate, rss = queue.get()
+    child.join()
+    print(f"(a) {count} lines, {size:.1f} MB: line count {floor:.2f} s "
+          f"({count / floor:,.0f} lines/s); import+validate+estimate {took:.2f} s "
+          f"({count / took:,.0f} lines/s), peak RSS {rss:.0f} MB, estimate {estimate / 3600:.2f} h")
+    ratio = took / floor
+    print(f"    ratio {ratio:.1f}x the line count (target <= 10x): "
+          f"{'MET' if ratio <= 10 else 'NOT MET'}")
+
+
+# ---------------------------------------------------------------- (b) vs vpype
+
+def svg_doc(paths: list[str], w: float = 250, h: float = 180) -> str:
+    body = "\n".join(f'<path d="{d}" fill="none" stroke="black"/>' for d in paths)
+    return (f'<svg xmlns="http://www.w3.org/2000/svg" width="{w}mm" height="{h}mm" '
+            f'viewBox="0 0 {w} {h}">\n{body}\n</svg>\n')
+
+
+def generated_svgs() -> dict[str, str]:
+    rng = random.Random(7)
+    lines = []
+    for _ in range(3000):
+        x, y = rng.uniform(10, 240), rng.uniform(10, 170)
+        a = rng.uniform(0, math.tau)
+        r = rng.uniform(1, 8)
+        lines.append(f"M {x:.3f} {y:.3f} L {x + r * math.cos(a):.3f} {y + r * math.sin(a):.3f}")
+    circles = []
+    for _ in range(600):
+        x, y, r = rng.uniform(15, 235), rng.uniform(15, 165), rng.uniform(1, 10)
+        circles.append(f"M {x - r:.3f} {y:.3f} A {r:.3f} {r:.3f} 0 1 0 {x + r:.3f} {y:.3f} "
+                       f"A {r:.3f} {r:.3f} 0 1 0 {x - r:.3f} {y:.3f}")
+    hatch = [f"M {10 + k * 0.5:.3f} 10 L {10 + k * 0.5:.3f} 170" for k in range(460)]
+    rng.shuffle(hatch)
+    walks = []
+    for _ in range(400):
+        x, y = rng.uniform(20, 230), rng.uniform(20, 160)
+        pts = []
+        for _ in range(40):
+            x = min(max(x + rng.uniform(-2, 2), 1), 249)
+            y = min(max(y + rng.uniform(-2, 2), 1), 179)
+            pts.append(f"{x:.3f} {y:.3f}")
+        walks.append("M " + " L ".join(pts))
+    return {"short lines": svg_doc(lines), "circles": svg_doc(circles),
+            "shuffled hatch": svg_doc(hatch), "random walks": svg_doc(walks)}
+
+
+def program_strokes(program: Path) -> list[list[tuple[float, float]]]:
+    strokes: list[list[tuple[float, float]]] = []
+    x = y = 0.0
+    down = False
+    for line in program.read_text().splitlines():
+        if line == "M3":
+            down = True
+            strokes.append([(x, y)])
+        elif line == "M5":
+            down = False
+        elif line[:3] in ("G0 ", "G1 "):
+            w = {v[0]: float(v[1:]) for v in line.split()[1:3]}
+            x, y = w["X"], w["Y"]
+            if down:
+                strokes[-1].append((x, y))
+    return strokes
+
+
+def between_strokes(strokes) -> float:
+    return sum(math.dist(a[-1], b[0]) for a, b in itertools.pairwise(strokes))
+
+
+def bench_vs_vpype(tmp: Path) -> None:
+    import vpype_cli
+
+    for name, text in generated_svgs().items():
+        src = tmp / f"{name.replace(' ', '_')}.svg"
+        src.write_text(text)
+        t = time.perf_counter()
+        r = import_file(src, src.name, tmp / f"out_{src.stem}", ImportOptions(),
+                        MachineProfile(width=300, height=220))
+        ours_t = time.perf_counter() - t
+        strokes = program_strokes(r.program_path)
+        ours = between_strokes(strokes)
+        t = time.perf_counter()
+        doc = vpype_cli.execute(f"read '{src}' linemerge linesort write '{tmp / 'vp.svg'}'")
+        vp_t = time.perf_counter() - t
+        vp_travel = sum(lc.pen_up_length()[0] for lc in doc.layers.values()) * PX_MM
+        vp_lines = sum(len(lc) for lc in doc.layers.values())
+        # The optimization steps alone, on drawings already read.
+        drawn = read_svg(src, ImportOptions(), ErrorLog())
+        t = time.perf_counter()
+        optimize_strokes(drawn, 0.02, time.monotonic() + min(2.0, 0.05 + 1e-4 * len(drawn)))
+        ours_opt = time.perf_counter() - t
+        doc = vpype_cli.execute(f"read '{src}'")
+        t = time.perf_counter()
+        vpype_cli.execute("linemerge linesort", document=doc)
+        vp_opt = time.perf_counter() - t
+        print(f"(b) {name}: pen-up travel ours {ours:.1f} mm ({len(strokes)} strokes) vs "
+              f"vpype {vp_travel:.1f} mm ({vp_lines}): ratio {ours / vp_travel:.2f} "
+              f"[{'MET' if ours <= vp_travel * 1.0001 else 'NOT MET'}]")
+        print(f"    time, whole pipeline: ours {ours_t:.2f} s (read, optimize, write program "
+              f"and preview, estimate) vs vpype {vp_t:.2f} s (read, linemerge, linesort, "
+              f"write): ratio {ours_t / vp_t:.2f} [{'MET' if ours_t <= vp_t else 'NOT MET'}]")
+        print(f"    time, optimization only: ours {ours_opt:.3f} s vs vpype linemerge+linesort "
+              f"{vp_opt:.3f} s: ratio {ours_opt / vp_opt:.2f} "
+              f"[{'MET' if ours_opt <= vp_opt else 'NOT MET'}]")
+
+
+# ---------------------------------------------------------------- (c) estimate vs plot
+
+def accuracy_drawings(tmp: Path) -> dict[str, Path]:
+    """Five drawings of different character as uploads."""
+    out: dict[str, Path] = {}
+    # Long straight lines: acceleration is a small part.
+    p = tmp / "long.gcode"
+    p.write_text("G0 X20 Y20\nM3\nG1 X200 Y20 F4000\nG1 X200 Y180\nG1 X20 Y180\nG1 X20 Y20\n"
+                 "G1 X200 Y180\nM5\nG0 X200 Y20\nM3\nG1 X20 Y180 F4000\nM5\n")
+    out["long lines"] = p
+    # Arcs, cut into chords by the firmware.
+    lines = []
+    for k in range(1, 9):
+        r = 8.0 * k
+        lines += [f"G0 X{100 + r:.3f} Y100", "M3",
+                  f"G3 X{100 - r:.3f} Y100 I{-r:.3f} J0 F3000",
+                  f"G3 X{100 + r:.3f} Y100 I{r:.3f} J0", "M5"]
+    p = tmp / "arcs.gcode"
+    p.write_text("\n".join(lines) + "\n")
+    out["arcs"] = p
+    # A spiral of 0.2 mm segments: bounded by the planner's look-ahead.
+    pts = []
+    t = 0.0
+    while t < 60 * math.pi:
+        r = 2 + 0.25 * t
+        pts.append(f"G1 X{100 + r * math.cos(t):.3f} Y{100 + r * math.sin(t):.3f} F6000")
+        t += 0.2 / r
+    p = tmp / "spiral.gcode"
+    p.write_text("G0 X102 Y100\nM3\n" + "\n".join(pts) + "\nM5\n")
+    out["tiny segments"] = p
+    # Sharp zig-zag corners: junction deviation.
+    zz = [f"G1 X{20 + k * 2}.000 Y{60 if k % 2 else 20}.000 F5000" for k in range(80)]
+    p = tmp / "zigzag.gcode"
+    p.write_text("G0 X20 Y20\nM3\n" + "\n".join(zz) + "\nM5\n")
+    out["zig-zag"] = p
+    # Many pen lifts: text (pen settle time).
+    out["text"] = Path("pattern:text")
+    return out
+
+
+def bench_accuracy(tmp: Path, speed: float) -> None:
+    try:
+        from tests.e2e.test_import_plot import Board
+        from tests.fixtures import plotsim
+    except ImportError as e:
+        print(f"(c) NOT MEASURED: {e}")
+        return
+    firmware = plotsim.FIRMWARE_ELF
+    try:
+        plotsim._make("-C", "firmware/sim")
+        plotsim._make("-C", "firmware", "all")
+    except Exception as e:  # the build prints its own output
+        print(f"(c) NOT MEASURED: firmware or simulator does not build: {e}")
+        return
+    if not firmware.exists():
+        print(f"(c) NOT MEASURED: no firmware at {firmware}")
+        return
+    profile = MachineProfile()
+    for name, src in accuracy_drawings(tmp).items():
+        dest = tmp / f"acc_{src.stem}"
+        if str(src).startswith("pattern:"):
+            r = import_pattern(src.name.split(":")[1], dest, ImportOptions(paper="A5-landscape"),
+                               profile)
+        else:
+            r = import_file(src, src.name, dest, ImportOptions(), profile)
+        plotter = plotsim.Plotter(plotsim.PLOTSIM, firmware, tmp / f"{src.stem}.eeprom",
+                                  speed, (0.0, 0.0), ())
+        plotter.start()
+        try:
+            board = Board(plotter.port)
+            board.command("$X")
+            t0 = plotter.trace()["sim_time"]
+            board.stream(r.program_path.read_text().splitlines(), timeout=3600)
+            board.wait_idle(timeout=3600)
+            board.close()
+            trace = plotter.trace()
+        finally:
+            plotter.cleanup()
+        # The program ends with the last stroke and M5: motion ends at the last vertex.
+        measured = trace["strokes"][-1][-1][2] - t0
+        predicted = r.estimate_s - profile.pen_settle_s
+        err = (predicted - measured) / measured
+        print(f"(c) {name:14s} predicted {predicted:8.2f} s, plotted {measured:8.2f} s "
+              f"(simulated): error {err * 100:+.2f}% "
+              f"[{'MET' if abs(err) <= 0.02 else 'NOT MET'}]")
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--lines", type=int, default=1_000_000)
+    ap.add_argument("--skip", default="")
+    ap.add_argument("--sim-speed", type=float, default=1.0,
+                    help="virtual plotter speed for (c); 1 keeps the sender realistic")
+    args = ap.parse_args()
+    skip = set(args.skip.split(","))
+    with tempfile.TemporaryDirectory(prefix="import-bench-") as d:
+        tmp = Path(d)
+        if "a" not in skip:
+            bench_throughput(tmp, args.lines)
+        if "b" not in skip:
+            bench_vs_vpype(tmp)
+        if "c" not in skip:
+            bench_accuracy(tmp, args.sim_speed)
+    return 0
+
+
+if __name__ == "__main__":
+    np.seterr(all="ignore")
+    sys.exit(main())
