@@ -322,3 +322,10 @@ def test_cli_rejects_files_that_are_no_avr_program(
     )
     assert result.returncode == 2
     assert message in result.stderr
+
+
+def test_quit_command_exits_cleanly(probe: Plotter) -> None:
+    assert probe.control("quit") == "ok"
+    assert probe.proc.wait(timeout=5) == 0
+    assert not os.path.lexists(probe.port)
+    assert json.loads(probe.trace_path.read_text())["sim_time"] > 0
