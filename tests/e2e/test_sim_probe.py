@@ -18,7 +18,7 @@ from typing import Any
 import pytest
 import serial
 
-from tests.fixtures.plotsim import Plotter, PlotterFactory, SimBuild
+from tests.fixtures.plotsim import REPO, Plotter, PlotterFactory, SimBuild
 
 pytestmark = pytest.mark.e2e
 
@@ -329,3 +329,34 @@ def test_quit_command_exits_cleanly(probe: Plotter) -> None:
     assert probe.proc.wait(timeout=5) == 0
     assert not os.path.lexists(probe.port)
     assert json.loads(probe.trace_path.read_text())["sim_time"] > 0
+
+
+def test_plotsim_dies_with_the_test_process(sim_build: SimBuild, tmp_path: Path) -> None:
+    script = (
+        "import sys, time\n"
+        "from pathlib import Path\n"
+        "from tests.fixtures.plotsim import Plotter\n"
+        f"p = Plotter(Path({str(sim_build.plotsim)!r}), Path({str(sim_build.probe)!r}),"
+        f" Path({str(tmp_path / 'ee.bin')!r})).start()\n"
+        "print(p.proc.pid, flush=True)\n"
+        "time.sleep(60)\n"
+    )
+    parent = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, text=True, cwd=REPO
+    )
+    try:
+        pid = int(parent.stdout.readline())
+        assert Path(f"/proc/{pid}").exists()
+    finally:
+        parent.kill()
+        parent.wait(timeout=10)
+    deadline = time.monotonic() + 5
+    while True:
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+        except FileNotFoundError:
+            break  # gone
+        if status.split("State:")[1].split()[0] == "Z":  # exited, not yet reaped
+            break
+        assert time.monotonic() < deadline, "plotsim outlived the process that started it"
+        time.sleep(0.05)
