@@ -107,8 +107,11 @@ def test_pty_carries_bytes_both_ways(probe: Plotter) -> None:
     port = open_port(probe)
     commands = b"?XxYyPZDEFWR"
     data = bytes(b for b in range(256) if b not in commands) * 2
+    before = probe.trace()["sim_time"]
     port.write(data)
     assert port.read(len(data)) == data
+    # unthrottled, yet the bytes took their time on the simulated wire
+    assert probe.trace()["sim_time"] - before > len(data) * BYTE_TIME
     assert ask(port, b"?") == b"S00000\n"
 
 
