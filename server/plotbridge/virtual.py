@@ -16,6 +16,7 @@ import logging
 import os
 import signal
 import socket
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -51,6 +52,8 @@ class VirtualPlotter:
         self.port = self.data_dir / "plotter.pty"
         self.trace_path = self.data_dir / "trace.json"
         self.control_path = self.data_dir / "control.sock"
+        if len(str(self.control_path)) > 100:  # Unix socket paths are limited to 107 bytes
+            self.control_path = Path(tempfile.mkdtemp(prefix="plotbridge-")) / "control.sock"
         self.eeprom_path = self.data_dir / "eeprom.bin"
         self.elf = self.firmware_dir / "build" / "plotbridge.elf"
         self.plotsim = self.firmware_dir / "sim" / "build" / "plotsim"
