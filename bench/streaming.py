@@ -1,0 +1,131 @@
+"""Streaming efficiency: is the board ever starved while plotting 0.5 mm segments?
+
+Runs the real firmware in the virtual plotter (real time by default), streams
+a circle of short segments through plotbridge's Link, and samples the board's
+status reports (`Bf:` planner blocks free, receive-buffer bytes free) while it
+runs. Starved = the planner ran empty while lines were still to come.
+
+    .venv/bin/python bench/streaming.py [--segments 1200] [--seg-mm 0.5] [--feed 3000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import math
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from plotbridge.link import Link, LinkEvent
+from plotbridge.virtual import VirtualPlotter
+
+
+def circle(segments: int, seg_mm: float, feed: float) -> list[str]:
+    r = segments * seg_mm / (2 * math.pi)
+    cx, cy = 150.0, 110.0
+    if r > 100:
+        sys.exit(f"{segments} segments of {seg_mm} mm make a circle too big for the work area")
+    pts = [(cx + r * math.cos(2 * math.pi * i / segments),
+            cy + r * math.sin(2 * math.pi * i / segments)) for i in range(segments + 1)]
+    lines = ["G21", "G90", "M5", f"G0 X{pts[0][0]:.3f} Y{pts[0][1]:.3f}", "M3"]
+    lines += [f"G1 X{x:.3f} Y{y:.3f} F{feed:g}" for x, y in pts[1:]]
+    return [*lines, "M5"]
+
+
+async def wait(predicate, limit: float, what: str) -> None:
+    deadline = time.monotonic() + limit
+    while not predicate():
+        if time.monotonic() > deadline:
+            sys.exit(f"bench failed: {what} not within {limit} s")
+        await asyncio.sleep(0.01)
+
+
+def summary(values: list[int]) -> str:
+    if not values:
+        return "-"
+    return f"min {min(values)}, median {statistics.median(values):g}, max {max(values)}"
+
+
+async def run(args: argparse.Namespace) -> dict:
+    data = Path(tempfile.mkdtemp(prefix="pb-stream-"))
+    plotter = VirtualPlotter(data, speed=args.speed)
+    await plotter.start()
+    link = Link(str(plotter.port), poll_hz=args.poll_hz)
+    task = asyncio.create_task(link.run())
+    try:
+        await wait(lambda: link.connected, 15, "connect")
+        if link.status.state == "Alarm":
+            await link.command("$X")
+        await wait(lambda: link.status.state == "Idle" and link.status.planner_free, 5, "Idle")
+        blocks = link.status.planner_free or 0
+        program = circle(args.segments, args.seg_mm, args.feed)
+        first_motion = 6   # line number of the first G1
+        samples: list[tuple[float, str, int, int, int]] = []
+        acked = [0]
+
+        def watch(event: LinkEvent) -> None:
+            s = event.status
+            if s is not None and s.rx_free is not None and s.planner_free is not None:
+                samples.append((time.monotonic(), s.state, blocks - s.planner_free,
+                                128 - s.rx_free, acked[0]))
+
+        def on_ack(n: int) -> None:
+            acked[0] = n
+
+        link.subscribe(watch)
+        started = time.monotonic()
+        await link.stream(iter(enumerate(program, 1)), on_ack)
+        all_acked = time.monotonic()
+        await wait(lambda: link.status.state == "Idle", 120, "Idle after the job")
+        finished = time.monotonic()
+        trace = await asyncio.to_thread(plotter.trace)
+    finally:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+        await plotter.stop()
+
+    # The body: from the first acknowledged G1 until the last line is acknowledged.
+    body = [s for s in samples if s[4] >= first_motion and s[0] <= all_acked]
+    planner = [s[2] for s in body]
+    rx = [s[3] for s in body]
+    starved = [s for s in body if s[2] == 0 or s[1] not in ("Run", "Hold")]
+    path_mm = args.segments * args.seg_mm
+    result = {
+        "segments": args.segments, "segment_mm": args.seg_mm, "feed_mm_min": args.feed,
+        "sim_speed": args.speed, "planner_blocks": blocks,
+        "wall_s": round(finished - started, 2),
+        "ideal_s_at_feed": round(path_mm / (args.feed / 60), 2),
+        "status_samples_in_body": len(body),
+        "planner_fill": summary(planner),
+        "rx_buffer_bytes_used": summary(rx),
+        "starved_samples": len(starved),
+        "draw_mm": trace.get("draw_mm"),
+        "violations": trace.get("violations"),
+    }
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--segments", type=int, default=1200)
+    parser.add_argument("--seg-mm", type=float, default=0.5)
+    parser.add_argument("--feed", type=float, default=3000)
+    parser.add_argument("--speed", type=float, default=1, help="simulation speed (1 = real time)")
+    parser.add_argument("--poll-hz", type=float, default=20)
+    args = parser.parse_args()
+    result = asyncio.run(run(args))
+    for key, value in result.items():
+        print(f"{key:24} {value}")
+    print(json.dumps(result))
+    if result["starved_samples"]:
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
