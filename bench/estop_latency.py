@@ -1,0 +1,256 @@
+"""Emergency-stop latency through the whole server, with 50 WebSocket clients watching.
+
+Starts `plotbridge serve --virtual` (real firmware in the simulator, real time
+by default), connects 50 WebSocket clients that read everything, then 50
+times: upload and start a job, let it plot, send an emergency stop (REST and
+WebSocket alternately) and take the simulator's `last_step_monotonic` (the
+same clock as time.monotonic()) minus the moment the request was sent.
+Also samples the server's CPU and resident memory while a job plots.
+
+    .venv/bin/python bench/estop_latency.py [--runs 50] [--clients 50] [--sim-speed 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import os
+import random
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import httpx
+import websockets
+
+TOKEN = "bench-token"
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+def zigzag(rows: int = 100) -> str:
+    lines = ["G21", "G90", "M5", "G0 X20 Y20", "M3"]
+    for i in range(rows):
+        x = 280 if i % 2 == 0 else 20
+        lines.append(f"G1 X{x} Y{20 + (i * 1.5) % 180:.3f} F3000")
+    return "\n".join([*lines, "M5"]) + "\n"
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+class Bench:
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+        self.data = Path(tempfile.mkdtemp(prefix="pb-estop-"))
+        self.port = free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.http = httpx.AsyncClient(base_url=self.url, timeout=30,
+                                      headers={"Authorization": f"Bearer {TOKEN}"})
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.received = 0
+
+    def spawn_server(self) -> None:
+        with (self.data / "server.log").open("wb") as log:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "plotbridge", "serve", "--host", "127.0.0.1",
+                 "--port", str(self.port), "--data-dir", str(self.data / "data"),
+                 "--token", TOKEN, "--virtual", "--sim-speed", f"{self.args.sim_speed:g}"],
+                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+
+    def stop_server(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(15)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+
+    async def start_server(self) -> None:
+        await asyncio.to_thread(self.spawn_server)
+        await self.until(self.healthy, 180, "server health")
+        await self.until(self.connected, 30, "board connected")
+
+    async def healthy(self) -> bool:
+        with contextlib.suppress(httpx.HTTPError):
+            return (await self.http.get("/api/health", timeout=1)).status_code == 200
+        return False
+
+    async def machine(self) -> dict:
+        return (await self.http.get("/api/machine")).json()
+
+    async def connected(self) -> bool:
+        return bool((await self.machine()).get("connected"))
+
+    async def until(self, predicate, limit: float, what: str) -> None:
+        deadline = time.monotonic() + limit
+        while not await predicate():
+            if self.proc is not None and self.proc.poll() is not None:
+                raise RuntimeError(f"server exited; see {self.data / 'server.log'}")
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"{what}: not within {limit} s")
+            await asyncio.sleep(0.05)
+
+    async def watcher(self, ready: asyncio.Event, count: list[int]) -> None:
+        uri = f"ws://127.0.0.1:{self.port}/api/ws?token={TOKEN}"
+        async with websockets.connect(uri, max_size=None) as ws:
+            count[0] += 1
+            if count[0] == self.args.clients:
+                ready.set()
+            async for _ in ws:
+                self.received += 1
+
+    async def trace(self) -> dict:
+        return (await self.http.get("/api/sim/trace")).json()
+
+    async def start_job(self) -> str:
+        await self.ready_machine()
+        answer = await self.http.post("/api/jobs", params={"name": "bench.gcode", "start": "true"},
+                                      content=zigzag().encode())
+        job = answer.json()
+        if answer.status_code != 201 or job.get("state") != "running":
+            raise RuntimeError(f"job did not start: {answer.status_code} {job}")
+        return job["id"]
+
+    async def ready_machine(self) -> None:
+        if (await self.machine())["state"] == "Alarm":
+            answer = await self.http.post("/api/machine/unlock")
+            if answer.status_code != 200:
+                raise RuntimeError(f"unlock failed: {answer.text}")
+
+        async def idle() -> bool:
+            return (await self.machine())["state"] == "Idle"
+
+        await self.until(idle, 10, "Idle")
+
+    async def moving(self) -> bool:
+        first = (await self.trace())["steps"]
+        await asyncio.sleep(0.05)
+        return (await self.trace())["steps"] != first
+
+    async def job_state(self, job_id: str) -> str:
+        return (await self.http.get(f"/api/jobs/{job_id}")).json()["state"]
+
+    async def load_sample(self) -> dict:
+        """Server CPU and memory over a few seconds of plotting."""
+        assert self.proc is not None
+        job = await self.start_job()
+        await self.until(self.moving, 20, "motion")
+        c0, t0 = cpu_seconds(self.proc.pid), time.monotonic()
+        await asyncio.sleep(self.args.load_seconds)
+        c1, t1 = cpu_seconds(self.proc.pid), time.monotonic()
+        rss = rss_mb(self.proc.pid)
+        await self.http.post(f"/api/jobs/{job}/cancel")
+        await asyncio.sleep(1.0)
+        return {"cpu_percent_of_one_core": round(100 * (c1 - c0) / (t1 - t0), 1),
+                "rss_mb": round(rss, 1)}
+
+    async def one_stop(self, run: int, ws: websockets.ClientConnection) -> float:
+        job = await self.start_job()
+        await self.until(self.moving, 20, "motion")
+        await asyncio.sleep(random.uniform(0.1, 0.6))
+        via = "websocket" if run % 2 else "rest"
+        sent = time.monotonic()
+        if via == "rest":
+            answer = await self.http.post("/api/machine/estop")
+            if answer.status_code != 202:
+                raise RuntimeError(f"estop answered {answer.status_code}")
+        else:
+            await ws.send(json.dumps({"type": "estop"}))
+        await asyncio.sleep(0.4)
+        before = await self.trace()
+        await asyncio.sleep(0.2)
+        after = await self.trace()
+        if before["steps"] != after["steps"]:
+            raise RuntimeError(f"run {run}: still stepping 0.4 s after the stop")
+
+        async def stopped() -> bool:
+            return await self.job_state(job) == "stopped"
+
+        await self.until(stopped, 5, "job stopped")
+        return after["last_step_monotonic"] - sent
+
+    async def run(self) -> dict:
+        await self.start_server()
+        ready, count = asyncio.Event(), [0]
+        watchers = [asyncio.create_task(self.watcher(ready, count))
+                    for _ in range(self.args.clients)]
+        await asyncio.wait_for(ready.wait(), 30)
+        load = await self.load_sample()
+        uri = f"ws://127.0.0.1:{self.port}/api/ws?token={TOKEN}"
+        latencies: list[tuple[str, float]] = []
+        async with websockets.connect(uri, max_size=None) as control:
+            drain = asyncio.create_task(self.drain(control))
+            for run in range(self.args.runs):
+                latency = await self.one_stop(run, control)
+                latencies.append(("websocket" if run % 2 else "rest", latency))
+                print(f"run {run + 1:2}: {latencies[-1][0]:9} {latency * 1000:7.2f} ms",
+                      flush=True)
+            drain.cancel()
+        for task in watchers:
+            task.cancel()
+        ms = [v * 1000 for _, v in latencies]
+        return {
+            "runs": len(ms), "clients": self.args.clients, "sim_speed": self.args.sim_speed,
+            "median_ms": round(statistics.median(ms), 2), "worst_ms": round(max(ms), 2),
+            "best_ms": round(min(ms), 2),
+            "rest_worst_ms": round(max(v * 1000 for k, v in latencies if k == "rest"), 2),
+            "ws_worst_ms": round(max((v * 1000 for k, v in latencies if k == "websocket"),
+                                     default=float("nan")), 2),
+            "ws_messages_received": self.received, **load,
+        }
+
+    async def drain(self, ws: websockets.ClientConnection) -> None:
+        async for _ in ws:
+            pass
+
+    async def close(self) -> None:
+        await self.http.aclose()
+        await asyncio.to_thread(self.stop_server)
+
+
+async def main_async(args: argparse.Namespace) -> dict:
+    bench = Bench(args)
+    try:
+        return await bench.run()
+    finally:
+        await bench.close()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=50)
+    parser.add_argument("--clients", type=int, default=50)
+    parser.add_argument("--sim-speed", type=float, default=1)
+    parser.add_argument("--load-seconds", type=float, default=5)
+    args = parser.parse_args()
+    result = asyncio.run(main_async(args))
+    for key, value in result.items():
+        print(f"{key:24} {value}")
+    print(json.dumps(result))
+    sys.exit(0 if result["worst_ms"] < 20 else 1)
+
+
+if __name__ == "__main__":
+    main()
