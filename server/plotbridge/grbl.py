@@ -279,6 +279,10 @@ class CharCounter:
         self._outstanding -= size
         return tag
 
+    def peek(self) -> Any:
+        """The tag of the oldest outstanding line, or None."""
+        return self._entries[0][1] if self._entries else None
+
     def tags(self) -> list[Any]:
         return [tag for _, tag in self._entries]
 

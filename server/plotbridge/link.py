@@ -16,6 +16,7 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
+import os
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -160,7 +161,8 @@ class _PortProtocol(asyncio.Protocol):
 
 class Link:
     # Timings; class attributes so tests can shorten them.
-    banner_wait = 0.5          # s to wait for a banner before asking with '?'
+    banner_wait = 0.5          # s to wait for a banner before asking with '?' (pty)
+    banner_wait_serial = 2.0   # the same for a real port: DTR reset + bootloader take ~1-2 s
     handshake_timeout = 5.0    # s for the board to answer at all
     silence_timeout = 0.8      # s without a byte from the board while polling: link lost
     reset_settle = 2.5         # s commands wait for the banner after a soft reset
@@ -189,6 +191,7 @@ class Link:
         self._wco: tuple[float, ...] = (0.0, 0.0, 0.0)
         self._settings_stale = False
         self._tasks: set[asyncio.Task[Any]] = set()
+        self._real_port = False     # a real serial device (not a pty): may reset on open
 
     # --- public API -------------------------------------------------------
 
@@ -434,8 +437,7 @@ class Link:
                 front.responses.append(line)
 
     def _front(self) -> Any:
-        tags = self._counter.tags()
-        return tags[0] if tags else None
+        return self._counter.peek()
 
     def _on_ack(self, ok: bool, code: int | None, line: str) -> None:
         try:
@@ -523,7 +525,14 @@ class Link:
         kwargs: dict[str, Any] = {"baudrate": self.baud, "timeout": 0, "write_timeout": 0}
         if self.device.startswith("/"):
             kwargs["exclusive"] = True
-        port = await asyncio.to_thread(serial.serial_for_url, self.device, **kwargs)
+
+        def open_port() -> serial.SerialBase:
+            port = serial.serial_for_url(self.device, **kwargs)
+            real = os.path.realpath(self.device)
+            self._real_port = real.startswith("/dev/") and not real.startswith("/dev/pts/")
+            return port
+
+        port = await asyncio.to_thread(open_port)
         loop = asyncio.get_running_loop()
         transport, _ = await serial_asyncio.connection_for_serial(
             loop, lambda: _PortProtocol(self), port)
@@ -551,8 +560,9 @@ class Link:
         assert self._lost is not None
         # A board reset by opening the port (DTR) announces itself; on a pty or
         # a board that was already running nothing comes, so ask. Never reset.
+        wait = self.banner_wait_serial if self._real_port else self.banner_wait
         with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(self._alive.wait(), self.banner_wait)
+            await asyncio.wait_for(self._alive.wait(), wait)
         deadline = time.monotonic() + self.handshake_timeout
         while not self._alive.is_set():
             if self._lost.done():

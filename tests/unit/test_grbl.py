@@ -101,6 +101,7 @@ def test_counter_accounting_and_order():
     c.push(cost("G1 X1"), "a")
     c.push(cost("G1 X22"), "b")
     assert c.outstanding == 6 + 7 and len(c) == 2
+    assert c.peek() == "a"
     assert c.ack() == "a" and c.outstanding == 7
     assert c.ack() == "b" and c.outstanding == 0
     with pytest.raises(LookupError):
