@@ -1,0 +1,284 @@
+#include <math.h>
+#include <string.h>
+#include "gcode.h"
+#include "numparse.h"
+#include "status.h"
+
+#define ARC_RADIUS_ABS_TOL 0.005f
+#define ARC_RADIUS_REL_TOL 0.001f
+#define Z_PEN_THRESHOLD 0.0f
+#define M300_THRESHOLD 40.0f /* M300 S30 down, S50 up */
+
+/* word letters that carry a value, as bits for repeat detection */
+enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_COUNT };
+static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N'};
+
+/* non-modal G commands (one per line) */
+enum { NM_NONE, NM_DWELL, NM_G28, NM_G92 };
+
+void gc_init(gc_state_t *st)
+{
+    memset(st, 0, sizeof(*st));
+    st->motion = MOTION_G0;
+    st->z = 1.0f;
+}
+
+void gc_program_end(gc_state_t *st)
+{
+    st->motion = MOTION_G1;
+    st->incremental = 0;
+}
+
+static uint8_t word_index(char letter)
+{
+    for (uint8_t w = 0; w < W_COUNT; w++)
+        if (word_letters[w] == letter)
+            return w;
+    return W_COUNT;
+}
+
+/* Centre of an R-form arc: on the perpendicular bisector of the chord;
+ * negative R picks the long way round. */
+static uint8_t arc_center_from_radius(const float *s, const float *t, float r, uint8_t cw, float *c)
+{
+    float dx = t[0] - s[0], dy = t[1] - s[1];
+    float d2 = dx * dx + dy * dy;
+    if (d2 == 0.0f)
+        return ERR_INVALID_TARGET;
+    float h2 = 4.0f * r * r - d2;
+    if (h2 < 0.0f) {
+        if (h2 < -ARC_RADIUS_ABS_TOL * d2)
+            return ERR_INVALID_TARGET;
+        h2 = 0.0f;
+    }
+    float h = -sqrtf(h2) / sqrtf(d2);
+    if (!cw)
+        h = -h;
+    if (r < 0.0f)
+        h = -h;
+    c[0] = s[0] + 0.5f * (dx - dy * h);
+    c[1] = s[1] + 0.5f * (dy + dx * h);
+    return STATUS_OK;
+}
+
+uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t jog)
+{
+    gc_state_t st = *st_out;
+    float val[W_COUNT];
+    uint16_t seen = 0;
+    int8_t motion = -1;
+    uint8_t non_modal = NM_NONE, g53 = 0, pen = PEN_KEEP, m300 = 0;
+    uint8_t g_units = 0, g_dist = 0; /* groups seen on this line */
+    uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pen_groups = 0;
+
+    memset(blk, 0, sizeof(*blk));
+    for (uint8_t i = 0; line[i];) {
+        char letter = line[i++];
+        if (letter < 'A' || letter > 'Z')
+            return ERR_EXPECTED_LETTER;
+        float v;
+        if (!read_number(line, &i, &v))
+            return ERR_BAD_NUMBER;
+        if (letter == 'G' || letter == 'M') {
+            if (v < 0.0f || v > 1000.0f)
+                return ERR_UNSUPPORTED;
+            uint16_t code10 = (uint16_t)lroundf(v * 10.0f);
+            if (fabsf(v * 10.0f - (float)code10) > 0.001f)
+                return ERR_UNSUPPORTED;
+            if (letter == 'G') {
+                if (jog && code10 != 200 && code10 != 210 && code10 != 900 && code10 != 910 &&
+                    code10 != 530)
+                    return ERR_INVALID_JOG;
+                switch (code10) {
+                case 0: case 10: case 20: case 30:
+                    if (motion >= 0)
+                        return ERR_MODAL_CONFLICT;
+                    motion = (int8_t)(code10 / 10);
+                    break;
+                case 40: case 280: case 920:
+                    if (non_modal)
+                        return ERR_MODAL_CONFLICT;
+                    non_modal = code10 == 40 ? NM_DWELL : code10 == 280 ? NM_G28 : NM_G92;
+                    break;
+                case 530: g53 = 1; break;
+                case 200: case 210:
+                    if (g_units++)
+                        return ERR_MODAL_CONFLICT;
+                    st.inches = code10 == 200;
+                    break;
+                case 900: case 910:
+                    if (g_dist++)
+                        return ERR_MODAL_CONFLICT;
+                    st.incremental = code10 == 910;
+                    break;
+                case 170: case 940: case 540: break; /* XY plane, mm/min, G54: all we have */
+                default: return ERR_UNSUPPORTED;
+                }
+            } else {
+                if (jog)
+                    return ERR_INVALID_JOG;
+                switch (code10) {
+                case 30: case 40: pen = PEN_DOWN; m_pen_groups++; break;
+                case 50: pen = PEN_UP; m_pen_groups++; break;
+                case 3000: m300 = 1; m_pen_groups++; break;
+                case 170: m_motors = MOTORS_ON; break;
+                case 180: case 840: m_motors = MOTORS_OFF; break;
+                case 20: case 300: m_end = 1; break;
+                default: return ERR_UNSUPPORTED;
+                }
+                if (m_pen_groups > 1)
+                    return ERR_MODAL_CONFLICT;
+            }
+            continue;
+        }
+        uint8_t w = word_index(letter);
+        if (w == W_COUNT)
+            return jog ? ERR_INVALID_JOG : ERR_UNSUPPORTED;
+        if (seen & (1u << w))
+            return ERR_WORD_REPEATED;
+        seen |= (uint16_t)(1u << w);
+        val[w] = v;
+    }
+
+    float scale = st.inches ? 25.4f : 1.0f;
+    uint8_t axes = (uint8_t)(seen & ((1u << W_X) | (1u << W_Y)));
+    if (jog) {
+        if (seen & ~((1u << W_X) | (1u << W_Y) | (1u << W_F) | (1u << W_N)))
+            return ERR_INVALID_JOG;
+        if (!axes || !(seen & (1u << W_F)))
+            return ERR_INVALID_JOG;
+        motion = MOTION_G1;
+    }
+    if ((seen & (1u << W_N)) && (val[W_N] < 0.0f || val[W_N] != (float)(uint32_t)val[W_N]))
+        return ERR_BAD_NUMBER;
+    if (seen & (1u << W_F)) {
+        if (val[W_F] < 0.0f)
+            return ERR_NEGATIVE;
+        if (jog)
+            blk->feed = val[W_F] * scale;
+        else
+            st.feed = val[W_F] * scale;
+    }
+    if (m300) {
+        if (!(seen & (1u << W_S)))
+            return ERR_VALUE_WORD_MISSING;
+        pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
+    }
+    if (seen & (1u << W_Z)) {
+        float z = st.incremental ? st.z + val[W_Z] * scale : val[W_Z] * scale;
+        if (fabsf(z) > GC_MAX_COORD)
+            return ERR_INVALID_TARGET;
+        st.z = z;
+        if (pen == PEN_KEEP)  /* an explicit M3/M5 on the same line wins */
+            pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
+    }
+    if (g53 && (non_modal || (motion != MOTION_G0 && motion != MOTION_G1 && !jog)))
+        return ERR_UNSUPPORTED;
+
+    /* where the axis words point, in machine mm */
+    float target[N_AXIS];
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        target[a] = st.pos[a];
+        if (!(axes & (1u << a)))
+            continue;
+        float v = val[a] * scale;
+        if (g53)
+            target[a] = v;
+        else if (st.incremental)
+            target[a] = st.pos[a] + v;
+        else
+            target[a] = v + st.offset[a];
+        if (fabsf(target[a]) > GC_MAX_COORD)
+            return ERR_INVALID_TARGET;
+    }
+
+    uint16_t used = (uint16_t)((1u << W_X) | (1u << W_Y) | (1u << W_Z) | (1u << W_F) | (1u << W_N) |
+                               (1u << W_S));
+    blk->pen = pen;
+    blk->motors = m_motors;
+    blk->program_end = m_end;
+    memcpy(blk->start, st.pos, sizeof(st.pos));
+
+    if (non_modal == NM_DWELL) {
+        if (axes || motion >= 0)
+            return ERR_AXIS_COMMAND_CONFLICT;
+        if (!(seen & (1u << W_P)))
+            return ERR_VALUE_WORD_MISSING;
+        if (val[W_P] < 0.0f)
+            return ERR_NEGATIVE;
+        if (val[W_P] > 3600.0f)
+            return ERR_BAD_NUMBER;
+        blk->action = ACT_DWELL;
+        blk->dwell_s = val[W_P];
+        used |= 1u << W_P;
+    } else if (non_modal == NM_G92) {
+        if (motion >= 0)
+            return ERR_AXIS_COMMAND_CONFLICT;
+        if (!axes)
+            return ERR_NO_AXIS_WORDS;
+        for (uint8_t a = 0; a < N_AXIS; a++)
+            if (axes & (1u << a))
+                st.offset[a] = st.pos[a] - val[a] * scale;
+    } else if (non_modal == NM_G28) {
+        if (motion >= 0)
+            return ERR_AXIS_COMMAND_CONFLICT;
+        blk->action = ACT_G28;
+        blk->has_via = axes != 0;
+        memcpy(blk->via, target, sizeof(target));
+        for (uint8_t a = 0; a < N_AXIS; a++)
+            st.pos[a] = blk->target[a] = 0.0f;
+    } else {
+        if (motion >= 0)
+            st.motion = (uint8_t)motion;
+        uint8_t moving = axes != 0;
+        if (!moving && motion >= MOTION_G2)
+            return ERR_NO_AXIS_WORDS;
+        if (moving || (motion >= 0 && st.motion >= MOTION_G2)) {
+            if (st.motion != MOTION_G0) {
+                float f = jog ? blk->feed : st.feed;
+                if (f <= 0.0f)
+                    return ERR_UNDEFINED_FEED;
+                blk->feed = f;
+            }
+            blk->action = st.motion == MOTION_G0 ? ACT_RAPID : st.motion == MOTION_G1 ? ACT_LINE : ACT_ARC;
+            if (blk->action == ACT_ARC) {
+                blk->clockwise = st.motion == MOTION_G2;
+                if (seen & (1u << W_R)) {
+                    if (seen & ((1u << W_I) | (1u << W_J)))
+                        return ERR_UNUSED_WORDS;
+                    uint8_t e = arc_center_from_radius(st.pos, target, val[W_R] * scale,
+                                                       blk->clockwise, blk->center);
+                    if (e)
+                        return e;
+                    used |= 1u << W_R;
+                } else {
+                    if (!(seen & ((1u << W_I) | (1u << W_J))))
+                        return ERR_NO_OFFSETS;
+                    float r0 = 0.0f;
+                    for (uint8_t a = 0; a < N_AXIS; a++) {
+                        float off = (seen & (1u << (W_I + a))) ? val[W_I + a] * scale : 0.0f;
+                        if (fabsf(off) > GC_MAX_COORD)
+                            return ERR_INVALID_TARGET;
+                        blk->center[a] = st.pos[a] + off;
+                        r0 += off * off;
+                    }
+                    r0 = sqrtf(r0);
+                    float ex = target[0] - blk->center[0], ey = target[1] - blk->center[1];
+                    float r1 = sqrtf(ex * ex + ey * ey);
+                    float dr = fabsf(r1 - r0);
+                    if (r0 == 0.0f || (dr > ARC_RADIUS_ABS_TOL && dr > ARC_RADIUS_REL_TOL * r0))
+                        return ERR_INVALID_TARGET;
+                    used |= (1u << W_I) | (1u << W_J);
+                }
+            }
+            memcpy(blk->target, target, sizeof(target));
+            memcpy(st.pos, target, sizeof(target));
+        }
+    }
+    if (seen & ~used)
+        return ERR_UNUSED_WORDS;
+    if (m_end)
+        gc_program_end(&st);
+    *st_out = st;
+    return STATUS_OK;
+}

@@ -1,0 +1,362 @@
+#include <avr/interrupt.h>
+#include <avr/sleep.h>
+#include <avr/wdt.h>
+#include <math.h>
+#include <string.h>
+#include "arc.h"
+#include "inputs.h"
+#include "machine.h"
+#include "planner.h"
+#include "realtime.h"
+#include "report.h"
+#include "ring.h"
+#include "segment.h"
+#include "serial.h"
+#include "servo.h"
+#include "settings.h"
+#include "status.h"
+#include "stepper.h"
+
+#define SOFT_LIMIT_EPS 0.0005f
+
+machine_t mach;
+gc_state_t gc;
+static uint32_t idle_since;
+
+uint32_t machine_ms(void) { return timebase_ms(); }
+
+void machine_init(void)
+{
+    plan_reset();
+    seg_reset();
+    gc_init(&gc);
+    machine_resync();
+}
+
+void machine_resync(void)
+{
+    int32_t motor[N_AXIS], cart[N_AXIS];
+    stepper_get_position(motor);
+    plan_cart_from_motor(motor, cart);
+    plan_set_position(cart);
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        gc.pos[a] = (float)cart[a] / settings.steps_per_mm[a];
+}
+
+uint8_t machine_moving(void)
+{
+    return stepper_busy() || plan_count() || seg_head != seg_tail || mach.dwelling;
+}
+
+void machine_alarm(uint8_t code)
+{
+    stepper_halt();
+    plan_reset();
+    seg_reset();
+    machine_resync();
+    mach.alarm = code;
+    mach.hold = mach.jog = mach.jog_cancel = 0;
+    mach.abort = 1;
+    if (code != ALARM_LOCKED)
+        report_alarm(code);
+}
+
+void machine_report_status(void)
+{
+    uint8_t in = inputs_read();
+    RPT("<");
+    if (mach.alarm)
+        RPT("Alarm");
+    else if (mach.homing)
+        RPT("Home");
+    else if (mach.check)
+        RPT("Check");
+    else if (mach.hold)
+        report_pstr(seg_hold_reached() && !stepper_busy() ? PSTR("Hold:0") : PSTR("Hold:1"));
+    else if (mach.jog && machine_moving())
+        RPT("Jog");
+    else if (machine_moving())
+        RPT("Run");
+    else
+        RPT("Idle");
+    int32_t motor[N_AXIS], cart[N_AXIS];
+    stepper_get_position(motor);
+    plan_cart_from_motor(motor, cart);
+    float div = settings.report_inches ? 25.4f : 1.0f;
+    RPT("|MPos:");
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        report_fixed((float)cart[a] / settings.steps_per_mm[a] / div, 3);
+        RPT(",");
+    }
+    RPT("0.000");
+    if (settings.report_mask & 2) {
+        RPT("|Bf:");
+        report_uint(plan_free());
+        RPT(",");
+        report_uint(serial_rx_free());
+    }
+    RPT("|FS:");
+    report_uint((uint32_t)(stepper_busy() ? seg_speed() * 60.0f + 0.5f : 0));
+    RPT(",0");
+    if (in) {
+        RPT("|Pn:");
+        if (in & PIN_X_LIMIT)
+            RPT("X");
+        if (in & PIN_Y_LIMIT)
+            RPT("Y");
+        if (in & PIN_ESTOP)
+            RPT("R");
+        if (in & PIN_PAUSE)
+            RPT("H");
+        if (in & PIN_RESUME)
+            RPT("S");
+    }
+    if (mach.pen_down)
+        RPT("|A:S");
+    RPT(">\r\n");
+}
+
+static void start_hold(void)
+{
+    if (!machine_moving() || mach.hold)
+        return;
+    mach.hold = 1;
+    seg_hold(1);
+    if (mach.jog)
+        mach.jog_cancel = 1;
+}
+
+void machine_poll(void)
+{
+    wdt_reset();
+    uint8_t f = realtime_take();
+    if (f & RT_ALARM) {
+        uint8_t code;
+        cli();
+        code = rt_alarm;
+        rt_alarm = 0;
+        sei();
+        machine_alarm(code);
+        if (code == ALARM_ABORT_CYCLE)
+            mach.homed = 0;
+    }
+    if (f & RT_RESET) {
+        mach.reset = 1;
+        mach.abort = 1;
+    }
+    if (f & RT_STATUS)
+        machine_report_status();
+    if (f & (RT_HOLD | RT_JOG_CANCEL)) {
+        if (!(f & RT_HOLD) && !mach.jog)
+            f &= (uint8_t)~RT_JOG_CANCEL;
+        else
+            start_hold();
+    }
+    if ((f & RT_RESUME) && mach.hold && !mach.jog_cancel && !mach.alarm) {
+        mach.hold = 0;
+        seg_hold(0);
+    }
+    if (mach.alarm || mach.reset)
+        return;
+    seg_fill();
+    if (!(mach.hold && seg_hold_reached() && seg_head == seg_tail))
+        stepper_start();
+    if (mach.jog_cancel && seg_hold_reached() && !stepper_busy()) {
+        /* a cancelled jog forgets the rest of its moves */
+        seg_drop_block();
+        plan_reset();
+        seg_reset();
+        machine_resync();
+        mach.hold = mach.jog_cancel = mach.jog = 0;
+    }
+    if (!machine_moving()) {
+        mach.jog = 0;
+        if (settings.idle_delay_ms != 255 && stepper_enabled() &&
+            machine_ms() - idle_since >= settings.idle_delay_ms)
+            stepper_enable(0);
+    } else {
+        idle_since = machine_ms();
+    }
+}
+
+/* Let the main loop sleep until the next interrupt (UART, a step, the 1 ms
+ * servo tick) when there is nothing to prepare: simavr then skips time. */
+static void idle_wait(void)
+{
+    set_sleep_mode(SLEEP_MODE_IDLE);
+    cli();
+    if (!rt_flags) {
+        sleep_enable();
+        sei();
+        sleep_cpu();
+        sleep_disable();
+    }
+    sei();
+}
+
+uint8_t machine_sync(void)
+{
+    while (machine_moving() || (mach.hold && !mach.abort)) {
+        machine_poll();
+        if (mach.abort)
+            return 0;
+        idle_wait();
+    }
+    return !mach.abort;
+}
+
+uint8_t machine_dwell_ms(uint32_t ms)
+{
+    if (!machine_sync())
+        return 0;
+    uint32_t start = machine_ms();
+    mach.dwelling = 1;
+    while (machine_ms() - start < ms) {
+        machine_poll();
+        if (mach.abort)
+            break;
+        idle_wait();
+    }
+    mach.dwelling = 0;
+    return !mach.abort;
+}
+
+void machine_pen(uint8_t down)
+{
+    if (mach.check)
+        return;
+    if (!machine_sync())
+        return;
+    if (down == mach.pen_down)
+        return;
+    mach.pen_down = down;
+    servo_set_us(down ? settings.pen_down_us : settings.pen_up_us);
+    machine_dwell_ms(settings.pen_settle_ms);
+}
+
+static uint8_t outside_work_area(const float *t)
+{
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        if (t[a] < -SOFT_LIMIT_EPS || t[a] > settings.max_travel[a] + SOFT_LIMIT_EPS)
+            return 1;
+    return 0;
+}
+
+/* Queue one straight move, waiting for planner room. */
+static uint8_t line_to(const float *target, float feed, uint8_t flags)
+{
+    if (mach.check)
+        return STATUS_OK;
+    while (!plan_free()) {
+        machine_poll();
+        if (mach.abort)
+            return ERR_LOCKED;
+        idle_wait();
+    }
+    plan_line(target, feed, flags);
+    machine_poll();
+    return mach.abort ? ERR_LOCKED : STATUS_OK;
+}
+
+static uint8_t soft_limit_violation(const gc_block_t *blk)
+{
+    if (!settings.soft_limits)
+        return 0;
+    if (blk->action == ACT_G28)
+        return blk->has_via && outside_work_area(blk->via);
+    if (blk->action == ACT_RAPID || blk->action == ACT_LINE)
+        return outside_work_area(blk->target);
+    if (blk->action == ACT_ARC) {
+        /* the arc's bounding box: its ends, plus each axis extreme it sweeps */
+        arc_t arc;
+        if (arc_init(&arc, blk->start, blk->target, blk->center, blk->clockwise, settings.arc_tolerance))
+            return 1;
+        if (outside_work_area(blk->target))
+            return 1;
+        float r = arc.r0 > arc.r1 ? arc.r0 : arc.r1;
+        for (uint8_t q = 0; q < 4; q++) {
+            float ang = (float)q * (float)M_PI_2;
+            /* is ang inside the sweep from angle0? */
+            float rel = (ang - arc.angle0) / (arc.sweep < 0 ? -1.0f : 1.0f);
+            while (rel < 0.0f)
+                rel += 2.0f * (float)M_PI;
+            while (rel >= 2.0f * (float)M_PI)
+                rel -= 2.0f * (float)M_PI;
+            if (rel <= fabsf(arc.sweep)) {
+                float p[N_AXIS] = {arc.center[0] + r * cosf(ang), arc.center[1] + r * sinf(ang)};
+                if (outside_work_area(p))
+                    return 1;
+            }
+        }
+    }
+    return 0;
+}
+
+uint8_t machine_execute(const gc_block_t *blk)
+{
+    if (blk->motors == MOTORS_ON && !mach.check)
+        stepper_enable(1);
+    if (blk->pen != PEN_KEEP)
+        machine_pen(blk->pen == PEN_DOWN);
+    if (mach.abort)
+        return ERR_LOCKED;
+    uint8_t e = STATUS_OK;
+    switch (blk->action) {
+    case ACT_RAPID: e = line_to(blk->target, 0.0f, PB_RAPID); break;
+    case ACT_LINE: e = line_to(blk->target, blk->feed, 0); break;
+    case ACT_ARC: {
+        arc_t arc;
+        e = arc_init(&arc, blk->start, blk->target, blk->center, blk->clockwise, settings.arc_tolerance);
+        for (uint16_t k = 1; !e && k <= arc.segments; k++) {
+            float p[N_AXIS];
+            arc_point(&arc, k, p);
+            e = line_to(p, blk->feed, 0);
+        }
+        break;
+    }
+    case ACT_DWELL:
+        if (!mach.check)
+            machine_dwell_ms((uint32_t)(blk->dwell_s * 1000.0f + 0.5f));
+        break;
+    case ACT_G28:
+        if (blk->has_via)
+            e = line_to(blk->via, 0.0f, PB_RAPID);
+        if (!e)
+            e = line_to(blk->target, 0.0f, PB_RAPID);
+        break;
+    default: break;
+    }
+    if (!e && blk->program_end)
+        machine_pen(0);
+    if (!e && blk->motors == MOTORS_OFF && !mach.check && machine_sync())
+        stepper_enable(0);
+    if (mach.abort)
+        return ERR_LOCKED;
+    return e;
+}
+
+uint8_t machine_check_limits(const gc_block_t *blk)
+{
+    if (mach.check || !soft_limit_violation(blk))
+        return 0;
+    /* the moves before it are valid: let them finish, then lock */
+    if (machine_sync())
+        machine_alarm(ALARM_SOFT_LIMIT);
+    return 1;
+}
+
+uint8_t machine_jog(const char *body)
+{
+    gc_state_t tmp = gc;
+    gc_block_t blk;
+    uint8_t e = gc_parse(body, &tmp, &blk, 1);
+    if (e)
+        return e;
+    if (settings.soft_limits && outside_work_area(blk.target))
+        return ERR_TRAVEL_EXCEEDED;
+    if (mach.check)
+        return STATUS_OK;
+    mach.jog = 1;
+    memcpy(gc.pos, tmp.pos, sizeof(gc.pos));
+    return line_to(blk.target, blk.feed, PB_JOG);
+}

@@ -1,0 +1,42 @@
+/* Machine state and the execution of parsed blocks: motion into the
+ * planner, pen moves, dwells, alarms, feed hold, and the polling that every
+ * wait loop runs so that realtime requests act everywhere. */
+#ifndef MACHINE_H
+#define MACHINE_H
+#include <stdint.h>
+#include "gcode.h"
+
+#define ALARM_LOCKED 0xFF /* power-up with homing enabled: locked, no ALARM:N printed */
+
+typedef struct {
+    uint8_t alarm;         /* 0 or the alarm code holding the machine */
+    uint8_t check;         /* $C dry run */
+    uint8_t homing;
+    uint8_t abort;         /* unwind the line being executed */
+    uint8_t reset;         /* soft reset requested */
+    uint8_t hold;          /* feed hold active */
+    uint8_t jog;           /* the queued motion is a jog */
+    uint8_t jog_cancel;
+    uint8_t pen_down;
+    uint8_t dwelling;
+    uint8_t homed;
+} machine_t;
+
+extern machine_t mach;
+extern gc_state_t gc;
+
+void machine_init(void);
+void machine_poll(void);              /* realtime work; call from every wait loop */
+uint8_t machine_moving(void);         /* motion queued or running */
+uint8_t machine_sync(void);           /* wait for all motion to end; 0 if aborted */
+uint8_t machine_execute(const gc_block_t *blk);
+uint8_t machine_jog(const char *body);
+/* Soft limits: 1 (and ALARM:2 after the queued motion ends) if blk leaves the work area. */
+uint8_t machine_check_limits(const gc_block_t *blk);
+void machine_pen(uint8_t down);
+uint8_t machine_dwell_ms(uint32_t ms);
+void machine_resync(void);            /* planner and parser take the stepper position */
+void machine_report_status(void);
+void machine_alarm(uint8_t code);     /* main-context alarm (soft limit, homing) */
+uint32_t machine_ms(void);
+#endif

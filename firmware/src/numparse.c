@@ -1,0 +1,65 @@
+#include "numparse.h"
+
+#define MAX_MAGNITUDE 1.0e9f
+#define MAX_SIG_DIGITS 9 /* what a uint32 holds exactly; more cannot change a float */
+
+uint8_t read_number(const char *line, uint8_t *pos, float *out)
+{
+    uint8_t i = *pos;
+    uint8_t negative = 0;
+    if (line[i] == '-' || line[i] == '+') {
+        negative = line[i] == '-';
+        i++;
+    }
+    uint32_t mantissa = 0;
+    uint8_t sig = 0;       /* significant digits kept in mantissa */
+    int16_t exponent = 0;  /* power of ten applied to mantissa */
+    uint8_t digits = 0, point = 0;
+    for (;; i++) {
+        char c = line[i];
+        if (c == '.') {
+            if (point)
+                break;
+            point = 1;
+            continue;
+        }
+        if (c < '0' || c > '9')
+            break;
+        digits++;
+        if (sig == 0 && c == '0') {
+            if (point)
+                exponent--;   /* leading zero after the point */
+            continue;
+        }
+        if (sig < MAX_SIG_DIGITS) {
+            mantissa = mantissa * 10u + (uint32_t)(c - '0');
+            sig++;
+            if (point)
+                exponent--;
+        } else if (!point) {
+            if (exponent < 100)
+                exponent++;  /* dropped integer digit still scales */
+        }
+    }
+    if (digits == 0)
+        return 0;
+    *pos = i;
+    if (sig + exponent > 10)  /* more than ten integer digits: surely too big */
+        return 0;
+    float v = (float)mantissa;
+    if (exponent < -40) {
+        v = 0.0f;
+    } else {
+        for (; exponent > 0; exponent--)
+            v *= 10.0f;
+        /* divide in steps of 1e4 to keep the rounding error small */
+        for (; exponent <= -4; exponent += 4)
+            v /= 10000.0f;
+        for (; exponent < 0; exponent++)
+            v /= 10.0f;
+    }
+    if (v > MAX_MAGNITUDE)
+        return 0;
+    *out = negative ? -v : v;
+    return 1;
+}

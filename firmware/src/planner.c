@@ -1,0 +1,170 @@
+#include <math.h>
+#include <string.h>
+#include "planner.h"
+#include "settings.h"
+
+#define STRAIGHT_COS -0.999999f
+#define REVERSAL_COS 0.999999f
+#define MIN_STEP_RATE 32.0f /* steps/s the 2 MHz 16-bit step timer can time */
+
+static plan_block_t ring[PLAN_SIZE];
+static uint8_t head, tail, count;
+static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
+static float prev_unit[N_AXIS];
+static float prev_nominal_sqr;
+static float exec_exit_limit;       /* for ring[tail] */
+
+static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == PLAN_SIZE ? 0 : i + 1); }
+static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? PLAN_SIZE - 1 : i - 1); }
+
+void plan_reset(void)
+{
+    head = tail = count = 0;
+    prev_nominal_sqr = 0.0f;
+    exec_exit_limit = 0.0f;
+    memset(prev_unit, 0, sizeof(prev_unit));
+}
+
+void plan_set_position(const int32_t *steps) { memcpy(position, steps, sizeof(position)); }
+void plan_get_position(int32_t *steps) { memcpy(steps, position, sizeof(position)); }
+uint8_t plan_free(void) { return (uint8_t)(PLAN_SIZE - 1 - count); }
+uint8_t plan_count(void) { return count; }
+plan_block_t *plan_current(void) { return count ? &ring[tail] : 0; }
+
+float plan_next_entry_sqr(void) { return count > 1 ? ring[next_index(tail)].entry_sqr : 0.0f; }
+
+void plan_discard_current(void)
+{
+    if (!count)
+        return;
+    tail = next_index(tail);
+    count--;
+    exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0.0f;
+}
+
+void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = v_sqr; }
+
+void plan_motor_steps(const int32_t *cart, int32_t *motor)
+{
+    if (settings.corexy) {
+        motor[0] = cart[0] + cart[1];
+        motor[1] = cart[0] - cart[1];
+    } else {
+        motor[0] = cart[0];
+        motor[1] = cart[1];
+    }
+}
+
+void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
+{
+    if (settings.corexy) {
+        /* A + B and A - B are always even for positions reached by plan_motor_steps */
+        cart[0] = (motor[0] + motor[1]) / 2;
+        cart[1] = (motor[0] - motor[1]) / 2;
+    } else {
+        cart[0] = motor[0];
+        cart[1] = motor[1];
+    }
+}
+
+/* Backward pass: every block must be able to slow to the next block's entry
+ * (and the last to a stop). Forward pass: no block may enter faster than the
+ * one before can accelerate to. Both on squared speeds: v^2 = u^2 + 2as. */
+static void recalculate(void)
+{
+    uint8_t i = prev_index(head);
+    float next_entry = 0.0f;
+    for (uint8_t n = count; n > 1; n--) {
+        plan_block_t *b = &ring[i];
+        float e = next_entry + b->accel_dist2;
+        b->entry_sqr = e < b->max_entry_sqr ? e : b->max_entry_sqr;
+        next_entry = b->entry_sqr;
+        i = prev_index(i);
+    }
+    i = tail;
+    float reach = exec_exit_limit;
+    for (uint8_t n = count; n > 1; n--) {
+        i = next_index(i);
+        plan_block_t *b = &ring[i];
+        if (b->entry_sqr > reach)
+            b->entry_sqr = reach;
+        reach = b->entry_sqr + b->accel_dist2;
+    }
+}
+
+uint8_t plan_line(const float *target, float feed, uint8_t flags)
+{
+    int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
+    float d_mm[N_AXIS], mm2 = 0.0f;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        cart[a] = lroundf(target[a] * settings.steps_per_mm[a]);
+        delta[a] = cart[a] - position[a];
+        d_mm[a] = (float)delta[a] / settings.steps_per_mm[a];
+        mm2 += d_mm[a] * d_mm[a];
+    }
+    plan_motor_steps(delta, motor);
+    uint32_t events = 0;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        uint32_t m = (uint32_t)(motor[a] < 0 ? -motor[a] : motor[a]);
+        if (m > events)
+            events = m;
+    }
+    if (events == 0)
+        return 0;
+
+    plan_block_t *b = &ring[head];
+    b->flags = flags;
+    memcpy(b->steps, motor, sizeof(motor));
+    b->events = events;
+    b->mm = sqrtf(mm2);
+    float unit[N_AXIS];
+    float speed = (flags & PB_RAPID) ? 1.0e9f : feed / 60.0f;
+    float accel = 1.0e9f;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        unit[a] = d_mm[a] / b->mm;
+        float u = fabsf(unit[a]);
+        if (u > 1.0e-6f) {
+            float vmax = settings.max_rate[a] / 60.0f / u;
+            if (vmax < speed)
+                speed = vmax;
+            float amax = settings.accel[a] / u;
+            if (amax < accel)
+                accel = amax;
+        }
+    }
+    /* the step timer cannot run slower than MIN_STEP_RATE */
+    float vmin = MIN_STEP_RATE * b->mm / (float)events;
+    if (speed < vmin)
+        speed = vmin;
+    b->nominal_sqr = speed * speed;
+    b->accel = accel;
+    b->accel_dist2 = 2.0f * accel * b->mm;
+
+    float junction = 0.0f;
+    if (count) {
+        float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
+        if (cos_theta < STRAIGHT_COS) {
+            junction = 1.0e18f;
+        } else if (cos_theta < REVERSAL_COS) {
+            /* circle of radius r through the corner, deviating junction_deviation
+             * from it: r = jd * sin(t/2) / (1 - sin(t/2)), v^2 = a * r */
+            float sin_half = sqrtf(0.5f * (1.0f - cos_theta));
+            junction = accel * settings.junction_deviation * sin_half / (1.0f - sin_half);
+        }
+        if (junction > prev_nominal_sqr)
+            junction = prev_nominal_sqr;
+        if (junction > b->nominal_sqr)
+            junction = b->nominal_sqr;
+    }
+    b->max_entry_sqr = junction;
+    b->entry_sqr = 0.0f;
+
+    memcpy(prev_unit, unit, sizeof(unit));
+    prev_nominal_sqr = b->nominal_sqr;
+    memcpy(position, cart, sizeof(cart));
+    head = next_index(head);
+    if (count++ == 0)
+        exec_exit_limit = b->accel_dist2; /* starts from rest */
+    recalculate();
+    return 1;
+}

@@ -1,0 +1,41 @@
+/* Look-ahead motion planner: a ring of straight moves in motor steps with
+ * junction speeds from the junction-deviation rule and entry speeds that let
+ * every block still stop by the end of the queue. Pure (main loop only). */
+#ifndef PLANNER_H
+#define PLANNER_H
+#include <stdint.h>
+#include "config.h"
+
+#define PB_RAPID 0x01
+#define PB_JOG 0x02
+
+typedef struct {
+    int32_t steps[N_AXIS];  /* signed motor steps */
+    uint32_t events;        /* step events: the largest |steps| */
+    float mm;               /* length in mm */
+    float nominal_sqr;      /* cruise speed squared, (mm/s)^2 */
+    float accel;            /* mm/s^2 along the move */
+    float accel_dist2;      /* 2 * accel * mm: speed^2 gained over the block */
+    float entry_sqr;        /* planned entry speed squared */
+    float max_entry_sqr;    /* junction limit squared */
+    uint8_t flags;
+} plan_block_t;
+
+void plan_reset(void);
+/* Planner position in cartesian steps, e.g. after homing or an abort. */
+void plan_set_position(const int32_t *steps);
+void plan_get_position(int32_t *steps);
+uint8_t plan_free(void);
+uint8_t plan_count(void);
+/* Queue a move to target (machine mm) at feed (mm/min; ignored with PB_RAPID).
+ * The caller makes sure plan_free() > 0. Returns 0 for a move too short for a step. */
+uint8_t plan_line(const float *target, float feed, uint8_t flags);
+plan_block_t *plan_current(void);    /* oldest block, or 0 */
+float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
+void plan_discard_current(void);
+/* Highest exit speed^2 the executing block can still reach (segment preparer). */
+void plan_set_exec_exit_limit(float v_sqr);
+/* Motor steps for cartesian steps (CoreXY: A = X + Y, B = X - Y). */
+void plan_motor_steps(const int32_t *cart, int32_t *motor);
+void plan_cart_from_motor(const int32_t *motor, int32_t *cart);
+#endif

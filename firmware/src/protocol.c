@@ -1,0 +1,116 @@
+#include <avr/interrupt.h>
+#include <avr/sleep.h>
+#include "dollar.h"
+#include "gcode.h"
+#include "inputs.h"
+#include "linebuf.h"
+#include "machine.h"
+#include "planner.h"
+#include "protocol.h"
+#include "realtime.h"
+#include "report.h"
+#include "segment.h"
+#include "serial.h"
+#include "servo.h"
+#include "settings.h"
+#include "status.h"
+#include "stepper.h"
+
+static linebuf_t lb;
+
+static uint8_t execute_gcode(const char *line)
+{
+    if (mach.alarm)
+        return ERR_LOCKED;
+    if (mach.jog && machine_moving())
+        return ERR_NOT_IDLE;
+    gc_state_t before = gc;
+    gc_block_t blk;
+    uint8_t e = gc_parse(line, &gc, &blk, 0);
+    if (e)
+        return e;
+    if (machine_check_limits(&blk)) {
+        gc = before;
+        machine_resync();
+        return ERR_LOCKED;
+    }
+    return machine_execute(&blk);
+}
+
+static uint8_t execute_line(const char *line)
+{
+    if (line[0] == 0)
+        return STATUS_OK;
+    if (line[0] == '$')
+        return dollar_execute(line);
+    return execute_gcode(line);
+}
+
+/* Soft reset: motion is already stopped (in the interrupt that saw 0x18);
+ * everything queued is forgotten, the position is kept. */
+static void soft_reset(void)
+{
+    stepper_halt();
+    serial_rx_flush();
+    linebuf_reset(&lb);
+    uint8_t alarm = mach.alarm;
+    uint8_t homed = mach.homed;
+    uint8_t pen = mach.pen_down;
+    machine_init();
+    mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
+    mach.dwelling = 0;
+    seg_hold(0);
+    mach.alarm = alarm;
+    mach.homed = homed;
+    if (pen)
+        machine_pen(0);
+    report_banner();
+    if (mach.alarm)
+        report_unlock_hint();
+}
+
+static void idle_sleep(void)
+{
+    set_sleep_mode(SLEEP_MODE_IDLE);
+    cli();
+    if (!rt_flags && serial_tx_idle()) {
+        sleep_enable();
+        sei();
+        sleep_cpu();
+        sleep_disable();
+    }
+    sei();
+}
+
+void protocol_run(void)
+{
+    linebuf_reset(&lb);
+    for (;;) {
+        machine_poll();
+        if (mach.reset) {
+            soft_reset();
+            continue;
+        }
+        if (mach.abort && !machine_moving())
+            mach.abort = 0;
+        uint16_t c = serial_read();
+        if (c == SERIAL_NO_DATA) {
+            if (!machine_moving())
+                idle_sleep();
+            continue;
+        }
+        uint8_t r = linebuf_feed(&lb, (uint8_t)c);
+        if (r == LB_NONE)
+            continue;
+        uint8_t e;
+        if (r == LB_OVERFLOW)
+            e = ERR_OVERFLOW;
+        else if (r == LB_BAD_BYTE)
+            e = ERR_EXPECTED_LETTER;
+        else
+            e = execute_line(lb.text);
+        if (mach.reset)
+            continue; /* a reset flushed the line: no acknowledgement */
+        report_status_code(e);
+    }
+}

@@ -1,0 +1,217 @@
+#include <math.h>
+#include "planner.h"
+#include "ring.h"
+#include "segment.h"
+
+segment_t seg_ring[SEG_SIZE];
+step_block_t step_blocks[SEG_SIZE];
+volatile uint8_t seg_head, seg_tail;
+
+static struct {
+    uint8_t active;      /* preparing plan_current() */
+    uint8_t block;       /* its step_blocks index */
+    uint8_t first;       /* next segment is the block's first */
+    uint8_t hold, stopped;
+    uint32_t done;       /* events prepared */
+    float s;             /* mm prepared */
+    float v;             /* speed at s, mm/s */
+    float events_per_mm;
+} prep;
+
+void seg_reset(void)
+{
+    seg_head = seg_tail = 0;
+    prep.active = prep.hold = prep.stopped = 0;
+    prep.v = 0.0f;
+}
+
+void seg_hold(uint8_t on)
+{
+    prep.hold = on;
+    if (!on)
+        prep.stopped = 0;
+}
+
+uint8_t seg_hold_reached(void) { return prep.hold && prep.stopped; }
+float seg_speed(void) { return prep.v; }
+
+void seg_drop_block(void)
+{
+    if (prep.active)
+        plan_discard_current();
+    prep.active = 0;
+    prep.v = 0.0f;
+}
+
+/* Advance (s, v) along the block for up to dt seconds. The profile is
+ * rebuilt from the present state each time: accelerate toward the cruise
+ * speed, cruise, decelerate to the exit speed, so a planner that raised
+ * the exit speed meanwhile is followed at once. Returns the time used
+ * (less than dt when the block or a hold ends first). */
+static float advance(const plan_block_t *b, float dt)
+{
+    float remaining = b->mm - prep.s;
+    float a = b->accel;
+    float v = prep.v;
+    float t = 0.0f;
+    if (prep.hold) {
+        float t_stop = v / a;
+        float d_stop = 0.5f * v * t_stop;
+        float tt = dt < t_stop ? dt : t_stop;
+        float ds = v * tt - 0.5f * a * tt * tt;
+        if (ds >= remaining) { /* block ends before the stop: time to cover the rest */
+            float vend2 = v * v - 2.0f * a * remaining;
+            float vend = vend2 > 0.0f ? sqrtf(vend2) : 0.0f;
+            prep.s = b->mm;
+            prep.v = vend;
+            return (v - vend) / a;
+        }
+        prep.s += ds;
+        prep.v = v - a * tt;
+        if (tt >= t_stop || d_stop <= ds) {
+            prep.v = 0.0f;
+            prep.stopped = 1;
+        }
+        return tt;
+    }
+    float ve2 = plan_next_entry_sqr();
+    float vn2 = b->nominal_sqr;
+    float peak2 = 0.5f * (v * v + ve2) + a * remaining;
+    if (peak2 > vn2)
+        peak2 = vn2;
+    if (peak2 < v * v)
+        peak2 = v * v;
+    float vp = sqrtf(peak2);
+    float d_acc = (peak2 - v * v) / (2.0f * a);
+    float d_dec = (peak2 - ve2) / (2.0f * a);
+    if (d_dec < 0.0f)
+        d_dec = 0.0f;
+    float d_cru = remaining - d_acc - d_dec;
+    if (d_cru < 0.0f)
+        d_cru = 0.0f;
+    float s = 0.0f;
+    /* acceleration */
+    if (d_acc > 0.0f) {
+        float ta = (vp - v) / a;
+        if (ta >= dt) {
+            prep.s += v * dt + 0.5f * a * dt * dt;
+            prep.v = v + a * dt;
+            return dt;
+        }
+        t += ta;
+        s += d_acc;
+        v = vp;
+    }
+    /* cruise */
+    if (d_cru > 0.0f && v > 0.0f) {
+        float tc = d_cru / v;
+        if (t + tc >= dt) {
+            prep.s += s + v * (dt - t);
+            prep.v = v;
+            return dt;
+        }
+        t += tc;
+        s += d_cru;
+    }
+    /* deceleration to the exit speed (or as close as the distance allows) */
+    float left = remaining - s;
+    float vend2 = v * v - 2.0f * a * left;
+    float vend = vend2 > ve2 ? sqrtf(vend2) : sqrtf(ve2);
+    float td = (v - vend) / a;
+    if (td > 0.0f && t + td > dt) {
+        float tt = dt - t;
+        prep.s += s + v * tt - 0.5f * a * tt * tt;
+        prep.v = v - a * tt;
+        return dt;
+    }
+    if (td <= 0.0f && left > 0.0f && v > 0.0f) {  /* rounding left a sliver at constant speed */
+        float tc = left / v;
+        if (t + tc > dt) {
+            prep.s += s + v * (dt - t);
+            return dt;
+        }
+        td = tc;
+    }
+    prep.s = b->mm;
+    prep.v = vend;
+    return t + (td > 0.0f ? td : 0.0f);
+}
+
+static void start_block(const plan_block_t *b)
+{
+    prep.block = (uint8_t)((prep.block + 1) & (SEG_SIZE - 1));
+    step_block_t *sb = &step_blocks[prep.block];
+    sb->events = b->events;
+    sb->dir_negative = 0;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        int32_t st = b->steps[a];
+        sb->steps[a] = (uint32_t)(st < 0 ? -st : st);
+        if (st < 0)
+            sb->dir_negative |= (uint8_t)(1 << a);
+    }
+    prep.active = 1;
+    prep.first = 1;
+    prep.s = 0.0f;
+    prep.done = 0;
+    prep.events_per_mm = (float)b->events / b->mm;
+}
+
+uint8_t seg_fill(void)
+{
+    uint8_t added = 0;
+    /* one slot fewer than the ring so a step block is never reused while a
+     * queued segment still points at it */
+    while (ring_count(seg_head, seg_tail) < SEG_SIZE - 1) {
+        if (prep.hold && prep.stopped)
+            break;
+        plan_block_t *b = plan_current();
+        if (!b) {
+            prep.v = 0.0f;
+            break;
+        }
+        if (!prep.active)
+            start_block(b);
+        float time = 0.0f;
+        uint32_t target;
+        uint8_t ended;
+        uint8_t rounds = 0;
+        do {
+            time += advance(b, SEGMENT_S);
+            ended = prep.s >= b->mm;
+            float e = prep.s * prep.events_per_mm;
+            target = ended ? b->events : (uint32_t)e;
+            if (target > b->events)
+                target = b->events;
+        } while (target == prep.done && !ended && !(prep.hold && prep.stopped) && ++rounds < 8);
+        if (target == prep.done && !ended && !(prep.hold && prep.stopped))
+            target = prep.done + 1; /* slower than the timer can time: one step anyway */
+        if (target - prep.done > 60000u) { /* absurd rates: keep a segment within 16 bits */
+            target = prep.done + 60000u;
+            ended = 0;
+        }
+        uint32_t n = target - prep.done;
+        if (n > 0) {
+            float period = time * (float)STEP_TIMER_HZ / (float)n;
+            if (period < STEP_PERIOD_MIN)
+                period = STEP_PERIOD_MIN;
+            if (period > 65535.0f)
+                period = 65535.0f;
+            segment_t *seg = &seg_ring[ring_slot(seg_head, SEG_SIZE)];
+            seg->events = (uint16_t)n;
+            seg->period = (uint16_t)period;
+            seg->block = prep.block;
+            seg->flags = prep.first ? SEG_FIRST : 0;
+            prep.first = 0;
+            prep.done = target;
+            seg_head++; /* publish after the segment is complete */
+            added = 1;
+        }
+        if (target >= b->events) {
+            plan_discard_current();
+            prep.active = 0;
+        } else {
+            plan_set_exec_exit_limit(prep.v * prep.v + 2.0f * b->accel * (b->mm - prep.s));
+        }
+    }
+    return added;
+}

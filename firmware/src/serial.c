@@ -1,0 +1,73 @@
+#include <avr/interrupt.h>
+#include <avr/io.h>
+#include <avr/wdt.h>
+#include "config.h"
+#include "realtime.h"
+#include "ring.h"
+#include "serial.h"
+
+static uint8_t rx_buf[RX_SIZE];
+static volatile uint8_t rx_head, rx_tail;
+static uint8_t tx_buf[TX_SIZE];
+static volatile uint8_t tx_head, tx_tail;
+
+void serial_init(void)
+{
+    /* U2X: 115200 from 16 MHz is 2.1% off without it, -0.8% with it. */
+    UCSR0A = (1 << U2X0);
+    UBRR0 = (F_CPU / (8UL * 115200UL)) - 1;
+    UCSR0B = (1 << RXEN0) | (1 << TXEN0) | (1 << RXCIE0);
+    UCSR0C = (1 << UCSZ01) | (1 << UCSZ00);
+}
+
+ISR(USART_RX_vect)
+{
+    uint8_t c = UDR0;
+    if (realtime_byte(c))
+        return;
+    if (ring_count(rx_head, rx_tail) < RX_SIZE) {
+        rx_buf[ring_slot(rx_head, RX_SIZE)] = c;
+        rx_head++;
+    } /* a full ring drops the byte: a sender that counts never gets here */
+}
+
+uint16_t serial_read(void)
+{
+    if (rx_head == rx_tail)
+        return SERIAL_NO_DATA;
+    uint8_t c = rx_buf[ring_slot(rx_tail, RX_SIZE)];
+    rx_tail++;
+    return c;
+}
+
+uint8_t serial_rx_free(void) { return ring_free(rx_head, rx_tail, RX_SIZE); }
+
+void serial_rx_flush(void)
+{
+    cli();
+    rx_tail = rx_head;
+    sei();
+}
+
+ISR(USART_UDRE_vect)
+{
+    if (tx_tail == tx_head) { /* main may re-enable after the ring drained */
+        UCSR0B &= ~(1 << UDRIE0);
+        return;
+    }
+    UDR0 = tx_buf[ring_slot(tx_tail, TX_SIZE)];
+    tx_tail++;
+    if (tx_tail == tx_head)
+        UCSR0B &= ~(1 << UDRIE0);
+}
+
+void serial_write(uint8_t c)
+{
+    while (ring_count(tx_head, tx_tail) >= TX_SIZE)
+        wdt_reset();
+    tx_buf[ring_slot(tx_head, TX_SIZE)] = c;
+    tx_head++;
+    UCSR0B |= (1 << UDRIE0);
+}
+
+uint8_t serial_tx_idle(void) { return tx_head == tx_tail; }
