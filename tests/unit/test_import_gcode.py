@@ -139,3 +139,21 @@ def test_nothing_to_draw_is_refused(tmp_path):
     with pytest.raises(ImportFailed) as e:
         run_import(tmp_path, "G0 X10 Y10\nG0 X20 Y20\n")
     assert "nothing to draw" in e.value.errors[0]["message"]
+
+
+@pytest.mark.parametrize("line", [
+    "G2 X10 Y10 I99999999 J0 F100",          # full circle of enormous radius
+    "G1 X999999999999999999999999999 F100",
+    "G3 X20 Y10 R99999999999999999999999999999999999999999999999999999999999999 F100",
+])
+def test_absurd_numbers_are_refused_quickly(tmp_path, line):
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, f"G0 X10 Y10\nM3\n{line}\nG1 X20 Y20\n")
+    assert e.value.errors[0]["line"] == 3
+
+
+def test_utf16_and_binary_get_clear_messages(tmp_path):
+    with pytest.raises(ImportFailed) as e:
+        run_import(tmp_path, "G0 X1 Y1\n".encode("utf-16"))
+    assert e.value.status == 415
+    assert "UTF-16" in e.value.errors[0]["message"]

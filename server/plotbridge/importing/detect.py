@@ -28,6 +28,9 @@ def check_text(path: Path) -> str:
     blank = True
     table = bytes.maketrans(b"", b"")
     with path.open("rb") as f:
+        if f.read(4)[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+            raise ImportFailed.one(415, "UTF-16 text is not accepted: save the file as UTF-8")
+        f.seek(0)
         offset = 0
         while chunk := f.read(_CHUNK):
             if chunk.translate(table, _BINARY) != chunk:

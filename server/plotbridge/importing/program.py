@@ -62,12 +62,15 @@ class ProgramWriter:
             self.out.write("\n")
             self._buf = []
 
-    def _check(self, src_line: int | None, x: float, y: float) -> None:
+    def _check(self, src_line: int | None, x: float, y: float) -> bool:
+        """Within the work area? Reports the source line when not."""
         a = self._area
-        if not (a[0] <= x <= a[2] and a[1] <= y <= a[3]):
-            p = self.profile
-            self.errors.add(src_line, f"move to X{x:.3f} Y{y:.3f} is outside the work area "
-                                      f"(0..{p.width:g} x 0..{p.height:g} mm)")
+        if a[0] <= x <= a[2] and a[1] <= y <= a[3]:
+            return True
+        p = self.profile
+        self.errors.add(src_line, f"move to X{x:.3f} Y{y:.3f} is outside the work area "
+                                  f"(0..{p.width:g} x 0..{p.height:g} mm)")
+        return False
 
     def _grow(self, x0: float, y0: float, x1: float, y1: float) -> None:
         b = self.bounds
@@ -114,7 +117,9 @@ class ProgramWriter:
         x0, y0 = self.x, self.y
         if x == x0 and y == y0:
             return
-        self._check(src_line, x, y)
+        if not self._check(src_line, x, y):
+            self.x, self.y = x, y     # the import fails; only keep finding errors
+            return
         if feed is None:
             self._write(f"G0 X{x:.3f} Y{y:.3f}")
         else:
@@ -140,8 +145,9 @@ class ProgramWriter:
         x, y = round(x, 3), round(y, 3)
         i, j = round(cx - x0, 3), round(cy - y0, 3)
         ext = arc_extent(x0, y0, x, y, i, j, cw)
-        self._check(src_line, ext[0], ext[1])
-        self._check(src_line, ext[2], ext[3])
+        if not (self._check(src_line, ext[0], ext[1]) and self._check(src_line, ext[2], ext[3])):
+            self.x, self.y = x, y     # the import fails; do not simulate a huge arc
+            return
         self._write(f"{'G2' if cw else 'G3'} X{x:.3f} Y{y:.3f} I{i:.3f} J{j:.3f} F{_feed(feed)}")
         self.planner.arc(self.line, x, y, i, j, feed, cw)
         px, py = x0, y0
