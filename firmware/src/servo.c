@@ -1,11 +1,15 @@
-/* Timer2 counts at 250 kHz (4 us resolution); one overflow is 1.024 ms and a
- * frame is 20 overflows (20.48 ms, 48.8 Hz, which hobby servos accept).
- * Both pulse edges are made by the compare-output hardware ("set OC2A on
- * match", then "clear OC2A on match"), so the width does not depend on when
- * an interrupt runs: the interrupts only arm the next edge, and each edge is
- * placed at least 32 ticks (128 us) away from the overflow that arms it, far
- * more than the longest step interrupt. simavr 1.6 drives the pin from the
- * compare unit too (checked with a libsimavr harness watching PB3). */
+/* Timer2 in CTC mode at 250 kHz (4 us resolution). A 20 ms frame is a high
+ * part (the pulse) and a low part, each cut into compare intervals of at most
+ * 250 ticks. Every pulse edge is made by the compare-output hardware at a
+ * compare match ("set OC2A on match" for the interval that ends in the rising
+ * edge, "clear on match" for the one ending in the falling edge; the opposite,
+ * no-op, mode in between), so the width has no interrupt jitter on the chip:
+ * the interrupt only loads the next interval right after a match, and every
+ * interval is at least 64 ticks, far longer than any interrupt latency.
+ * simavr drives PB3 from the compare unit too, but it restarts the counter on
+ * every OCR2A/TCCR2A write, so in the simulator each interval is stretched by
+ * the interrupt latency (a few us per edge); the chip has no such error.
+ * The same interrupt keeps the millisecond timebase. */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <util/atomic.h>
@@ -13,37 +17,47 @@
 #include "servo.h"
 
 #define TICK_US 4
-#define FRAME_OVERFLOWS 20
-#define START_EARLY 64  /* tick of the rising edge, chosen so the falling */
-#define START_LATE 160  /* edge lands away from an overflow too */
+#define FRAME_TICKS 5000  /* 20 ms */
+#define MAX_INTERVAL 250
+#define MIN_INTERVAL 64
+#define COM_SET ((1 << COM2A1) | (1 << COM2A0))
+#define COM_CLEAR (1 << COM2A1)
 
 static volatile uint16_t pulse_ticks;
 static uint16_t width_us;
-static uint8_t frame_ovf;           /* overflows since the frame began */
-static uint8_t fall_ovf, fall_tick; /* where this frame's falling edge is */
-
-static void arm_rise(void)
-{
-    uint16_t w = pulse_ticks;
-    uint8_t start = START_EARLY;
-    uint8_t end = (uint8_t)((START_EARLY + w) & 0xFF);
-    if (end < 32 || end > 224)
-        start = START_LATE;
-    uint16_t fall = (uint16_t)(start + w);
-    fall_ovf = (uint8_t)(fall >> 8);
-    fall_tick = (uint8_t)(fall & 0xFF);
-    OCR2A = start;
-    TCCR2A = (1 << COM2A1) | (1 << COM2A0); /* set on match */
-}
-
-static void arm_fall(void)
-{
-    OCR2A = fall_tick;
-    TCCR2A = 1 << COM2A1; /* clear on match */
-}
-
+static uint8_t high;          /* level after the current interval's match */
+static uint16_t remaining;    /* ticks left in the current part, including the current interval */
+static uint8_t interval;      /* ticks of the interval now running */
 static volatile uint32_t ms;
-static uint16_t ms_frac; /* thousandths of a ms: an overflow is 1.024 ms */
+static uint16_t us_frac;
+
+/* choose the next interval and the output mode for its match */
+static void load_next(void)
+{
+    uint16_t next = remaining;
+    if (next > MAX_INTERVAL)
+        next = next >= MAX_INTERVAL + MIN_INTERVAL ? MAX_INTERVAL : next / 2;
+    interval = (uint8_t)next;
+    uint8_t edge = next == remaining;  /* the part ends with this match */
+    uint8_t set = edge ? !high : high; /* edge: change level; otherwise keep it */
+    OCR2A = (uint8_t)(next - 1);
+    TCCR2A = (uint8_t)((1 << WGM21) | (set ? COM_SET : COM_CLEAR));
+}
+
+ISR(TIMER2_COMPA_vect)
+{
+    us_frac += (uint16_t)interval * TICK_US;
+    while (us_frac >= 1000) {
+        us_frac -= 1000;
+        ms++;
+    }
+    remaining -= interval;
+    if (remaining == 0) {  /* the edge just happened in hardware */
+        high = !high;
+        remaining = high ? pulse_ticks : (uint16_t)(FRAME_TICKS - pulse_ticks);
+    }
+    load_next();
+}
 
 uint32_t timebase_ms(void)
 {
@@ -52,37 +66,16 @@ uint32_t timebase_ms(void)
     return v;
 }
 
-ISR(TIMER2_OVF_vect)
-{
-    ms++;
-    ms_frac += 24;
-    if (ms_frac >= 1000) {
-        ms_frac -= 1000;
-        ms++;
-    }
-    if (++frame_ovf >= FRAME_OVERFLOWS)
-        frame_ovf = 0;
-    if (frame_ovf == 0)
-        arm_rise();
-    else if (frame_ovf == fall_ovf)
-        arm_fall();
-}
-
-/* the rising edge has passed; a falling edge in the same overflow is armed now */
-ISR(TIMER2_COMPA_vect)
-{
-    if (frame_ovf == 0 && fall_ovf == 0 && (TCCR2A & (1 << COM2A0)))
-        arm_fall();
-}
-
 void servo_init(void)
 {
     DDRB |= 1 << SERVO_BIT;
+    PORTB &= ~(1 << SERVO_BIT);
     servo_set_us(1000);
-    TCCR2A = 1 << COM2A1; /* idle low */
-    OCR2A = START_EARLY;
-    TIMSK2 = (1 << TOIE2) | (1 << OCIE2A);
-    TCCR2B = 1 << CS22;  /* clk/64 */
+    high = 0;
+    remaining = 1000; /* a short low part first */
+    load_next();
+    TIMSK2 = 1 << OCIE2A;
+    TCCR2B = 1 << CS22; /* clk/64 */
 }
 
 void servo_set_us(uint16_t us)

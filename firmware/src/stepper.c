@@ -32,7 +32,7 @@ void stepper_apply_settings(void)
         if (settings.dir_invert & (1 << a))
             dir_invert |= dir_bit[a];
     }
-    pulse_ticks = (uint8_t)(settings.pulse_us * 2);
+    pulse_ticks = (uint8_t)(settings.pulse_us * 2 + 1); /* +1: the first tick may be partly gone */
     PORTD = (uint8_t)((PORTD & ~STEP_MASK) | step_invert);
     stepper_enable(enabled);
 }
@@ -122,7 +122,7 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
 {
     uint8_t dirs = 0, steps = 0;
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        if (dir_negative & (1 << a))
+        if (!(dir_negative & (1 << a)))
             dirs |= dir_bit[a];
         if (mask & (1 << a)) {
             steps |= step_bit[a];
@@ -169,10 +169,11 @@ ISR(TIMER1_COMPA_vect)
         if (seg->flags & SEG_FIRST) {
             blk = &step_blocks[seg->block];
             counter[0] = counter[1] = blk->events >> 1;
+            /* direction pin high: positive (the virtual plotter's convention; $3 inverts) */
             uint8_t d = 0;
-            if (blk->dir_negative & 1)
+            if (!(blk->dir_negative & 1))
                 d |= 1 << X_DIR_BIT;
-            if (blk->dir_negative & 2)
+            if (!(blk->dir_negative & 2))
                 d |= 1 << Y_DIR_BIT;
             new_dir = 1;
             dir_bits = d;
@@ -184,18 +185,18 @@ ISR(TIMER1_COMPA_vect)
         counter[0] -= blk->events;
         steps |= 1 << X_STEP_BIT;
         if (dir_bits & (1 << X_DIR_BIT))
-            position[0]--;
-        else
             position[0]++;
+        else
+            position[0]--;
     }
     counter[1] += blk->steps[1];
     if (counter[1] >= blk->events) {
         counter[1] -= blk->events;
         steps |= 1 << Y_STEP_BIT;
         if (dir_bits & (1 << Y_DIR_BIT))
-            position[1]--;
-        else
             position[1]++;
+        else
+            position[1]--;
     }
     pending_steps = steps;
     if (--seg_left == 0)
