@@ -27,6 +27,7 @@ import serial_asyncio
 
 from .grbl import (
     FEED_HOLD,
+    RX_BUFFER_SIZE,
     SOFT_RESET,
     STATUS_QUERY,
     CharCounter,
@@ -183,8 +184,12 @@ class Link:
         self._send_lock = asyncio.Lock()
         self._wake = asyncio.Event()
         self._alive = asyncio.Event()
+        # Cleared after a soft reset (until the banner) or an alarm (until the board
+        # reports an empty receive buffer): late answers to lines from before must
+        # not be taken for answers to new ones.
         self._settled = asyncio.Event()
         self._settled.set()
+        self._await_banner = False
         self._stream: _Stream | None = None
         self._lost: asyncio.Future[str] | None = None
         self._last_rx = 0.0
@@ -373,6 +378,7 @@ class Link:
         except LinkDown:
             log.error("soft reset could not be written: link down")
         self._settled.clear()
+        self._await_banner = True
         if self._stream is not None:
             # A stream cancelled before the reset stays "cancelled".
             self._stream.fail(reason, message="soft reset")
@@ -380,15 +386,14 @@ class Link:
         self._emit(LinkEvent("log", direction="tx", line="0x18 (soft reset)"))
 
     async def _wait_settled(self) -> None:
-        """After a soft reset, wait for the board's banner: answers still in
-        flight from before the reset must not be taken for new ones."""
         if not self._settled.is_set():
             try:
                 async with asyncio.timeout(self.reset_settle):
                     await self._settled.wait()
             except TimeoutError:
-                log.warning("no banner after soft reset; continuing")
+                log.warning("board did not settle after a reset or alarm; continuing")
                 self._settled.set()
+                self._await_banner = False
 
     def _flush_outstanding(self, reason: str, down: bool = False) -> None:
         for tag in self._counter.clear():
@@ -443,7 +448,7 @@ class Link:
         try:
             tag = self._counter.ack()
         except LookupError:
-            log.warning("board sent %r with nothing outstanding; ignored", line)
+            log.info("board sent %r with nothing outstanding; ignored", line)
             return
         self._wake.set()
         if isinstance(tag, _Command):
@@ -476,8 +481,10 @@ class Link:
         self.status.state = "Alarm"
         if self._stream is not None:
             self._stream.fail("alarm", message=message)
-        # GRBL empties its buffers on an alarm: nothing outstanding will be answered.
+        # GRBL empties its buffers on an alarm, so nothing outstanding will be
+        # answered; other firmware answers the leftovers with error:9 instead.
         self._flush_outstanding(reason=message)
+        self._settled.clear()
         self._emit(LinkEvent("alarm", code=code, message=message))
         self._emit_status()
 
@@ -486,6 +493,7 @@ class Link:
         self._alive.set()
         expected = not self._settled.is_set()
         self._settled.set()
+        self._await_banner = False
         if self._ready and not expected:
             log.warning("the board reset by itself (banner %s)", version)
             if self._stream is not None:
@@ -516,6 +524,9 @@ class Link:
         s.updated_at = time.time()
         if report.state != "Alarm":
             s.alarm = None
+        if (not self._settled.is_set() and not self._await_banner
+                and report.rx_free == RX_BUFFER_SIZE and not self._counter.outstanding):
+            self._settled.set()     # every line from before the alarm has been answered
         self._emit_status()
 
     # --- the session ------------------------------------------------------
@@ -645,6 +656,7 @@ class Link:
             self._stream.fail("disconnected", message=reason)
         self._flush_outstanding(reason=reason, down=True)
         self._settled.set()
+        self._await_banner = False
         firmware = self.status.firmware
         self.status = MachineStatus(firmware=firmware, updated_at=time.time())
         if was_ready:

@@ -386,6 +386,39 @@ async def test_alarm_mid_stream_aborts_and_shows_alarm():
         assert link.status.alarm is None
 
 
+async def test_alarm_leftovers_answered_with_error_are_not_taken_for_a_command():
+    # Firmware that does not empty its buffer on an alarm answers the lines
+    # left in it with error:9; those answers must not reach the next command.
+    board = FakeBoard(auto=False)
+
+    def limit(line: str) -> list[str] | None:
+        if board.state == "Alarm" and not line.startswith("$"):
+            return ["error:9"]
+        if line.startswith("G1 X10.000 "):
+            board.state = "Alarm"
+            return ["ALARM:1"]
+        return None
+
+    board.on_line = limit
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(100)), lambda n: None))
+        await until(lambda: len(board.rx) > 90)
+        while board.state != "Alarm":     # run up to the alarm; leftovers stay
+            board.execute(1)
+            await asyncio.sleep(0.001)
+        assert board.rx.count(b"\n") >= 2
+        with pytest.raises(StreamAborted):
+            await asyncio.wait_for(task, 1)
+        unlock = asyncio.create_task(link.command("$X"))
+        await asyncio.sleep(0.05)
+        assert "$X" not in board.lines
+        board.state = "Idle"
+        board.on_line = lambda line: None if line == "$X" else limit(line)
+        board.auto = True
+        board.execute()                   # leftovers answered: error:9 ...
+        assert await asyncio.wait_for(unlock, 1) == []
+
+
 async def test_stream_rejects_unsendable_line():
     board = FakeBoard()
     async with running(board) as link:
