@@ -13,6 +13,7 @@ import argparse
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -87,6 +88,14 @@ def send(port: serial.Serial, line: str) -> str:
             return answer
 
 
+def feed_moves(port: serial.Serial, stop: threading.Event) -> None:
+    """Keeps the planner full of long fast X moves until told to stop."""
+    x = 290
+    while not stop.is_set():
+        send(port, f"G1 X{x} Y0 F{FAST_FEED}")
+        x = 300 - x
+
+
 def bench_firmware(seconds: float, workdir: Path) -> None:
     if not FIRMWARE_ELF.exists():
         print(f"firmware: {FIRMWARE_ELF.relative_to(REPO)} not built, not measured")
@@ -102,11 +111,17 @@ def bench_firmware(seconds: float, workdir: Path) -> None:
                 if answer != "ok":
                     print(f"firmware: {line!r} answered {answer!r}")
             report("firmware, idle", measure(p, min(seconds, 1.0)))
-            # queue enough back-and-forth moves to keep it stepping while we measure
-            for _ in range(20):
-                send(port, f"G1 X290 Y0 F{FAST_FEED}")
-                send(port, f"G1 X10 Y0 F{FAST_FEED}")
-            report("firmware, G1 X moves at 22500 mm/min", measure(p, seconds))
+            stop = threading.Event()
+            feeder = threading.Thread(target=feed_moves, args=(port, stop))
+            feeder.start()
+            try:
+                time.sleep(0.5)  # planner filled, moving
+                p.clear()
+                report(f"firmware, G1 X moves at {FAST_FEED} mm/min", measure(p, seconds))
+                print(f"  violations: {p.trace()['violations']}")
+            finally:
+                stop.set()
+                feeder.join(timeout=30)
     finally:
         p.cleanup()
 
