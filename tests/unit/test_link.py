@@ -411,12 +411,18 @@ async def test_alarm_leftovers_answered_with_error_are_not_taken_for_a_command()
             await asyncio.wait_for(task, 1)
         unlock = asyncio.create_task(link.command("$X"))
         await asyncio.sleep(0.05)
-        assert "$X" not in board.lines
-        board.state = "Idle"
-        board.on_line = lambda line: None if line == "$X" else limit(line)
+        assert b"$X\n" not in board.writes    # held back while leftovers are unanswered
+        def unlock_or_refuse(line: str) -> list[str] | None:
+            if line == "$X":
+                board.state = "Idle"
+                return ["ok"]
+            return limit(line)
+
+        board.on_line = unlock_or_refuse
         board.auto = True
         board.execute()                   # leftovers answered: error:9 ...
         assert await asyncio.wait_for(unlock, 1) == []
+        assert board.lines[-1] == "$X" and board.state == "Idle"
 
 
 async def test_stream_rejects_unsendable_line():
