@@ -123,7 +123,7 @@ uint8_t dollar_execute(const char *line)
             /* leaving the dry run resets, as GRBL does, so no parsed state lingers */
             mach.check = 0;
             report_msg(PSTR("Disabled"));
-            mach.reset = 1;
+            mach.reset = RESET_AFTER_ACK;
             mach.abort = 1;
         } else {
             mach.check = 1;

@@ -57,7 +57,7 @@ static uint8_t move_until(uint8_t mask, uint8_t toward, uint8_t want_closed, flo
     float rate = rate_mm_min / 60.0f * spm;
     uint16_t period = rate > 50.0f ? (uint16_t)(1.0e6f / rate) : 20000;
     for (uint8_t a = 0; a < N_AXIS; a++)
-        max_steps[a] = (uint32_t)(max_mm * settings.steps_per_mm[a]);
+        max_steps[a] = (uint32_t)(max_mm * settings.steps_per_mm[a] + 0.5f);
     while (mask) {
         machine_poll();
         if (mach.abort)
@@ -80,19 +80,6 @@ static uint8_t move_until(uint8_t mask, uint8_t toward, uint8_t want_closed, flo
     return 0;
 }
 
-/* Position after homing: trip point is 0 (or max travel), pulled off inward. */
-static void set_home_position(void)
-{
-    int32_t cart[N_AXIS], motor[N_AXIS];
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        uint8_t to_min = (settings.homing_dir_mask >> a) & 1;
-        float mm = to_min ? settings.homing_pulloff : settings.max_travel[a] - settings.homing_pulloff;
-        cart[a] = (int32_t)(mm * settings.steps_per_mm[a] + 0.5f);
-    }
-    plan_motor_steps(cart, motor);
-    stepper_set_position(motor);
-}
-
 uint8_t homing_run(void)
 {
     const uint8_t both = (1 << N_AXIS) - 1;
@@ -112,13 +99,22 @@ uint8_t homing_run(void)
     else if ((settle(), move_until(both, 1, 1, settings.homing_feed, pull * 5.0f)))
         code = ALARM_HOMING_NOT_FOUND;
     if (!code) {
-        /* trip point found: machine zero here, then pull off */
-        int32_t zero[N_AXIS] = {0, 0};
-        stepper_set_position(zero);
+        /* The switch closed on the last step: the trip point (machine 0, or
+         * the maximum travel) lies between this step and the one before, and
+         * we call the last open position the trip point. */
+        int32_t cart[N_AXIS], motor[N_AXIS];
+        for (uint8_t a = 0; a < N_AXIS; a++) {
+            uint8_t to_min = (settings.homing_dir_mask >> a) & 1;
+            int32_t edge = to_min ? 0 : (int32_t)(settings.max_travel[a] * settings.steps_per_mm[a] + 0.5f);
+            cart[a] = to_min ? edge - 1 : edge + 1;
+        }
+        plan_motor_steps(cart, motor);
+        stepper_set_position(motor);
         settle();
         /* want_closed = 2 never matches: travel exactly the pull-off */
         move_until(both, 0, 2, settings.homing_feed, settings.homing_pulloff);
-        set_home_position();
+        for (uint8_t a = 0; a < N_AXIS; a++) /* plus the step from the trip point back to its edge */
+            cart_step(a, !((settings.homing_dir_mask >> a) & 1));
     }
     mach.homing = 0;
     inputs_homing(0);

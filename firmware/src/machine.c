@@ -141,7 +141,7 @@ void machine_poll(void)
             mach.homed = 0;
     }
     if (f & RT_RESET) {
-        mach.reset = 1;
+        mach.reset = RESET_NOW;
         mach.abort = 1;
     }
     if (f & RT_STATUS)

@@ -6,6 +6,8 @@
 #include <stdint.h>
 #include "gcode.h"
 
+#define RESET_NOW 1       /* 0x18: the line being executed gets no acknowledgement */
+#define RESET_AFTER_ACK 2 /* leaving check mode */
 #define ALARM_LOCKED 0xFF /* power-up with homing enabled: locked, no ALARM:N printed */
 
 typedef struct {
@@ -13,7 +15,7 @@ typedef struct {
     uint8_t check;         /* $C dry run */
     uint8_t homing;
     uint8_t abort;         /* unwind the line being executed */
-    uint8_t reset;         /* soft reset requested */
+    uint8_t reset;         /* soft reset requested: RESET_NOW or RESET_AFTER_ACK */
     uint8_t hold;          /* feed hold active */
     uint8_t jog;           /* the queued motion is a jog */
     uint8_t jog_cancel;

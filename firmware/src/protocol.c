@@ -109,7 +109,7 @@ void protocol_run(void)
             e = ERR_EXPECTED_LETTER;
         else
             e = execute_line(lb.text);
-        if (mach.reset)
+        if (mach.reset == RESET_NOW)
             continue; /* a reset flushed the line: no acknowledgement */
         report_status_code(e);
     }

@@ -95,6 +95,11 @@ uint8_t stepper_halt(void)
         PORTD = (uint8_t)((PORTD & ~STEP_MASK) | step_invert);
         was = running;
         running = 0;
+        /* steps counted but never pulsed: take them back so the position stays true */
+        if (pending_steps & (1 << X_STEP_BIT))
+            position[0] += (dir_bits & (1 << X_DIR_BIT)) ? -1 : 1;
+        if (pending_steps & (1 << Y_STEP_BIT))
+            position[1] += (dir_bits & (1 << Y_DIR_BIT)) ? -1 : 1;
         pending_steps = 0;
     }
     return was;
