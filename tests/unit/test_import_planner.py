@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import pytest
-
 from plotbridge.importing import MachineProfile, eta
 from plotbridge.importing.planner import Planner, Timeline, trapezoid_time
 
@@ -107,3 +106,25 @@ def test_eta_interpolates():
     assert eta(timeline, 20.0, 15) == pytest.approx(10.0)
     assert eta(timeline, 20.0, 30) == 0.0
     assert eta([], 12.0, 3) == 12.0
+
+
+def test_serial_line_bounds_dense_short_moves():
+    # 0.05 mm moves take ~1.3 ms each at the speed the look-ahead allows; their 23 bytes
+    # take 2 ms at 115200 baud: the line sets the pace.
+    lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
+    fast = Planner(MachineProfile(baud=0))
+    slow = Planner(MachineProfile())
+    for pl in (fast, slow):
+        for n, text in enumerate(lines, 1):
+            pl.receive(len(text) + 1)
+            pl.move(n, 0.05 * n, 0.0, 6000)
+        pl.flush()
+    serial = sum(len(t) + 1 for t in lines) * 10 / 115200
+    assert fast.time < serial
+    assert slow.time == pytest.approx(serial, rel=0.06)
+    # Long moves are not limited by the line: 100 mm takes 2 s, its 26 bytes 2.3 ms.
+    pl = Planner(MachineProfile())
+    pl.receive(26)
+    pl.move(1, 100, 0, 3000)
+    pl.flush()
+    assert pl.time == pytest.approx(run([(100, 0, 3000)]) + 26 * 10 / 115200)

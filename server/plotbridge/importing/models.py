@@ -22,6 +22,7 @@ class MachineProfile:
     steps_per_mm: tuple[float, float] = (80.0, 80.0)
     corexy: bool = False
     planner_blocks: int = 16
+    baud: int = 115200  # serial speed: bounds how fast lines reach the planner (0: no bound)
 
     @classmethod
     def from_settings(cls, settings: dict[int, float]) -> MachineProfile:

@@ -7,18 +7,21 @@ chords by the arc tolerance. The planner only sees the blocks in its buffer
 (`profile.planner_blocks`): while block k executes, the buffer holds k .. k+N-1 and
 the last of them must be able to stop, so long chains of short moves run slower
 than an unlimited look-ahead would allow. New blocks enter as old ones finish,
-because the sender keeps the buffer full. M3/M5 wait for motion to stop, then hold
-for the pen settle time; G4 likewise for its dwell.
+because the sender keeps the buffer full, but a line cannot arrive faster than the
+serial line carries it (`profile.baud`), so dense short moves can starve the planner.
+M3/M5 wait for motion to stop, then hold for the pen settle time; G4 likewise.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 
 from .models import MachineProfile
 from .ops import arc_sweep
 
 _STRAIGHT = 1e30
+RX_LINES = 4    # lines of a plot that wait in the 128-byte receive buffer, about
 
 
 class Timeline:
@@ -40,11 +43,12 @@ class Timeline:
             self.stride *= 2
 
     def finish(self, line: int, t: float) -> list[tuple[int, float]]:
-        if not self.samples or self.samples[-1][0] != line:
-            if len(self.samples) >= self.limit:
-                self.samples.pop()
-            self.samples.append((line, t))
-        return self.samples
+        """The samples, ending with (line, t), times rounded to milliseconds."""
+        samples = [(n, round(x, 3)) for n, x in self.samples if n < line]
+        if len(samples) >= self.limit:
+            samples.pop()
+        samples.append((line, round(t, 3)))
+        return samples
 
 
 def _axis_limit(limits: tuple[float, float], ux: float, uy: float) -> float:
@@ -78,11 +82,23 @@ class Planner:
         self.x, self.y = start
         self.time = 0.0
         self.timeline = Timeline()
-        # pending blocks: [length, accel, nominal², max entry², line]
+        # pending blocks: [length, accel, nominal², max entry², line, arrival time]
         self.pending: list[list] = []
+        # The serial line: a line arrives `bytes · 10 / baud` after the one before it,
+        # and not before the planner and the receive buffer have room for it.
+        self.byte_time = 10.0 / profile.baud if profile.baud else 0.0
+        self.arrival = 0.0
+        self.ends: deque[float] = deque(maxlen=self.depth + RX_LINES)
         self.v2 = 0.0           # squared speed at the end of the last finished block
         self.prev_u: tuple[float, float] | None = None
         self.prev_nom2 = 0.0
+
+    def receive(self, nbytes: int) -> None:
+        """The next program line, `nbytes` long with its newline, is sent."""
+        if self.byte_time:
+            full = len(self.ends) == self.ends.maxlen
+            room = self.ends[0] if full else 0.0
+            self.arrival = max(self.arrival, room) + nbytes * self.byte_time
 
     def move(self, line: int, x: float, y: float, feed: float | None) -> None:
         """A straight move to (x, y); feed in mm/min, None for a rapid."""
@@ -115,7 +131,7 @@ class Planner:
                 entry2 = min(j2, nom2, self.prev_nom2)
         self.prev_u = (ux, uy)
         self.prev_nom2 = nom2
-        self.pending.append([length, acc, nom2, entry2, line])
+        self.pending.append([length, acc, nom2, entry2, line, self.arrival])
         if len(self.pending) >= self.depth:
             self._finish_first()
 
@@ -135,7 +151,7 @@ class Planner:
     def stop(self, line: int, seconds: float) -> None:
         """Wait for motion to end, then hold still for `seconds`."""
         self.flush()
-        self.time += seconds
+        self.time = max(self.time, self.arrival) + seconds
         self.timeline.record(line, self.time)
 
     def flush(self) -> None:
@@ -146,23 +162,31 @@ class Planner:
 
     def _finish_first(self) -> None:
         pending = self.pending
-        length, acc, nom2, _, line = pending[0]
+        length, acc, nom2, _, line, arrival = pending[0]
+        if arrival > self.time:
+            self.time = arrival      # the machine waited for this line (and stood still)
+        start = self.time
         # Highest exit speed the rest of the buffer allows: every later block must be
-        # able to slow down to its own entry limit, and the last one to a stop.
+        # able to slow down to its own entry limit, and the last one to a stop. Lines
+        # still on their way over the serial line are not in the buffer yet.
         exit2 = _STRAIGHT
         s = 0.0
         for blk in pending[1:]:
             if s >= exit2:
+                break
+            if blk[5] > start:
+                exit2 = min(exit2, s)
                 break
             limit = blk[3] + s
             if limit < exit2:
                 exit2 = limit
             s += 2 * blk[1] * blk[0]
         else:
-            exit2 = min(exit2, s) if len(pending) > 1 else 0.0
+            exit2 = min(exit2, s)
         v2 = self.v2
         exit2 = min(exit2, v2 + 2 * acc * length, nom2)
         self.time += trapezoid_time(math.sqrt(v2), math.sqrt(exit2), math.sqrt(nom2), acc, length)
         self.v2 = exit2
         del pending[0]
+        self.ends.append(self.time)
         self.timeline.record(line, self.time)

@@ -52,6 +52,7 @@ class ProgramWriter:
     def _write(self, text: str) -> None:
         self.last = text
         self.line += 1
+        self.planner.receive(len(text) + 1)
         self._buf.append(text)
         if len(self._buf) >= 4096:
             self.flush()
