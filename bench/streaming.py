@@ -90,11 +90,15 @@ async def run(args: argparse.Namespace) -> dict:
             await task
         await plotter.stop()
 
-    # The body: from the first acknowledged G1 until the last line is acknowledged.
-    body = [s for s in samples if s[4] >= first_motion and s[0] <= all_acked]
+    # The body: from the first acknowledged G1 while motion lines are still to be
+    # acknowledged (after that the planner drains by design).
+    last_motion = len(program) - 1
+    body = [s for s in samples if first_motion <= s[4] < last_motion and s[0] <= all_acked]
     planner = [s[2] for s in body]
     rx = [s[3] for s in body]
     starved = [s for s in body if s[2] == 0 or s[1] not in ("Run", "Hold")]
+    for t, state, fill, used, line in starved:
+        print(f"starved: t={t - started:6.2f} s {state} planner {fill} rx {used} acked {line}")
     path_mm = args.segments * args.seg_mm
     result = {
         "segments": args.segments, "segment_mm": args.seg_mm, "feed_mm_min": args.feed,
