@@ -30,10 +30,10 @@ def test_triangle_profile():
 
 
 def test_right_angle_junction():
-    # Corner at 90°: sin(θ/2) = √½, the junction acceleration along (-1,1)/√2 is limited
-    # by either axis to 1000·√2, so v² = 1000·√2 · 0.02 · √½ / (1 - √½).
+    # Corner at 90°: sin(θ/2) = √½; the firmware takes the acceleration of the block
+    # entered (1000 mm/s² along Y), so v² = 1000 · 0.02 · √½ / (1 - √½).
     s = math.sqrt(0.5)
-    vj = math.sqrt(1000 * math.sqrt(2) * 0.02 * s / (1 - s))
+    vj = math.sqrt(1000 * 0.02 * s / (1 - s))
     v = 10.0
     half = (v / 1000                     # accelerate from rest
             + (v - vj) / 1000            # slow to the corner speed
@@ -62,21 +62,22 @@ def test_short_segments_are_limited_by_the_buffer_depth():
     segs = [(0.1 * k, 0, 6000) for k in range(1, 1001)]
     deep = run(segs, MachineProfile(planner_blocks=100000))
     assert deep == pytest.approx(run([(100, 0, 6000)]), rel=1e-6)
-    # With 16 blocks the last 15 (1.5 mm) must suffice to stop: v² = 2·1000·1.5.
-    v = math.sqrt(2 * 1000 * 1.5)
+    # With 17 blocks the last 16 (1.6 mm) must suffice to stop: v² = 2·1000·1.6.
+    v = math.sqrt(2 * 1000 * 1.6)
     shallow = run(segs)
     assert shallow == pytest.approx(100 / v + v / 1000, rel=0.01)
 
 
 def test_arcs_are_cut_by_the_arc_tolerance():
-    # Half circle r=2 at 100 mm/s: floor(π·r / chord) chords, chord = 2·sqrt(tol·(2r - tol)).
+    # Half circle r=2 at 100 mm/s: the fewest equal angles whose chords keep the sagitta
+    # r(1 - cos(a/2)) within 0.002 mm, as the firmware cuts it.
     pl = Planner(P, start=(2.0, 0.0))
     pl.arc(1, -2.0, 0.0, -2.0, 0.0, 6000, False)
     pl.flush()
-    n = int(math.pi * 2 / (2 * math.sqrt(0.002 * (4 - 0.002))))
+    n = math.ceil(math.pi / (2 * math.acos(1 - 0.002 / 2)))
     chords = [(2 * math.cos(math.pi * k / n), 2 * math.sin(math.pi * k / n), 6000)
               for k in range(1, n + 1)]
-    assert n == 35
+    assert n == 36
     assert pl.time == pytest.approx(run(chords, start=(2.0, 0.0)))
     assert pl.time > math.pi * 2 / 100 * 1.2   # the corners between chords slow it down
 

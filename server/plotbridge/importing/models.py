@@ -21,7 +21,7 @@ class MachineProfile:
     pen_settle_s: float = 0.15
     steps_per_mm: tuple[float, float] = (80.0, 80.0)
     corexy: bool = False
-    planner_blocks: int = 16
+    planner_blocks: int = 17   # the firmware's planner ring holds 17 blocks
     baud: int = 115200  # serial speed: bounds how fast lines reach the planner (0: no bound)
 
     @classmethod

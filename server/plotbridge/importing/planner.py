@@ -1,9 +1,10 @@
 """Plot time estimate: a simulation of the firmware's motion planner.
 
-The model is GRBL's: every move is a block with a trapezoidal speed profile; the
-speed through the corner between two blocks is limited by the junction deviation;
-each axis is held to its own maximum rate and acceleration; arcs are cut into
-chords by the arc tolerance. The planner only sees the blocks in its buffer
+The model is our firmware's (firmware/src/planner.c, segment.c, arc.c), which is
+GRBL's: every move is a block with a trapezoidal speed profile; the speed through
+the corner between two blocks is limited by the junction deviation; each axis is
+held to its own maximum rate and acceleration; arcs are cut into chords by the arc
+tolerance. The planner only sees the blocks in its buffer
 (`profile.planner_blocks`): while block k executes, the buffer holds k .. k+N-1 and
 the last of them must be able to stop, so long chains of short moves run slower
 than an unlimited look-ahead would allow. New blocks enter as old ones finish,
@@ -21,6 +22,7 @@ from .models import MachineProfile
 from .ops import arc_sweep
 
 _STRAIGHT = 1e30
+ARC_MAX_SEGMENTS = 20000
 RX_LINES = 4    # lines of a plot that wait in the 128-byte receive buffer, about
 
 
@@ -123,11 +125,10 @@ class Planner:
                 if cos_t < -0.999999:
                     j2 = _STRAIGHT
                 else:
-                    jx, jy = ux - prev[0], uy - prev[1]
-                    jl = math.hypot(jx, jy)
-                    ja = _axis_limit(self.accel, jx / jl, jy / jl)
+                    # The firmware takes the acceleration of the block entered, along
+                    # its own direction (GRBL 1.1 uses the junction vector instead).
                     s = math.sqrt(0.5 * (1.0 - cos_t))
-                    j2 = ja * self.p.junction_deviation * s / (1.0 - s)
+                    j2 = acc * self.p.junction_deviation * s / (1.0 - s)
                 entry2 = min(j2, nom2, self.prev_nom2)
         self.prev_u = (ux, uy)
         self.prev_nom2 = nom2
@@ -137,15 +138,21 @@ class Planner:
 
     def arc(self, line: int, x: float, y: float, i: float, j: float, feed: float,
             cw: bool) -> None:
-        """An arc cut into chords the way the firmware does it."""
-        cx, cy, r, sweep = arc_sweep(self.x, self.y, x, y, i, j, cw)
+        """An arc cut into chords the way the firmware does it: the fewest equal angles
+        whose chords stay within the arc tolerance, the radius blended from start to end."""
+        sx, sy = self.x, self.y
+        cx, cy, r0, sweep = arc_sweep(sx, sy, x, y, i, j, cw)
+        r1 = math.hypot(x - cx, y - cy)
+        r = max(r0, r1)
         tol = self.p.arc_tolerance
-        chord = 2 * math.sqrt(max(tol * (2 * r - tol), 1e-12))
-        n = int(abs(sweep) * r / chord)
-        a0 = math.atan2(self.y - cy, self.x - cx)
+        max_angle = math.pi if tol >= r else 2 * math.acos(1 - tol / r)
+        n = min(max(math.ceil(abs(sweep) / max_angle), 1), ARC_MAX_SEGMENTS)
+        a0 = math.atan2(sy - cy, sx - cx)
         for k in range(1, n):
-            a = a0 + sweep * k / n
-            self.move(line, cx + r * math.cos(a), cy + r * math.sin(a), feed)
+            f = k / n
+            a = a0 + sweep * f
+            rk = r0 + (r1 - r0) * f
+            self.move(line, cx + rk * math.cos(a), cy + rk * math.sin(a), feed)
         self.move(line, x, y, feed)
 
     def stop(self, line: int, seconds: float) -> None:

@@ -46,8 +46,9 @@ class ProgramWriter:
         self.last = ""
         for text in HEADER:
             self._write(text)
-        self.planner.stop(2, 0.0)
-        self.planner.stop(3, profile.pen_settle_s)
+        # The pen is up when a job starts: the firmware skips the settle time of a pen
+        # command that does not move the pen (it still waits for motion to stop).
+        self.planner.stop(3, 0.0)
 
     def _write(self, text: str) -> None:
         self.last = text
@@ -171,7 +172,7 @@ class ProgramWriter:
             self.pen(None, False)
         elif self.last != "M5":
             self._write("M5")
-            self.planner.stop(self.line, self.profile.pen_settle_s)
+            self.planner.stop(self.line, 0.0)
         self.planner.flush()
         self.flush()
 
