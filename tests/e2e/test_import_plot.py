@@ -75,6 +75,7 @@ class Board:
     def __init__(self, port: str) -> None:
         self.ser = serial.Serial(port, 115200, timeout=0.05)
         self._rx = b""
+        self.ser.write(b"\x18")   # soft reset: a fresh banner (the boot one was before us)
         deadline = time.monotonic() + 10
         while not any(ln.startswith("Grbl") for ln in self.lines(until=deadline, stop="Grbl")):
             if time.monotonic() > deadline:
