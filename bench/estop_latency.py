@@ -145,9 +145,11 @@ class Bench:
         await self.until(idle, 10, "Idle")
 
     async def moving(self) -> bool:
-        first = (await self.trace())["steps"]
+        """Drawing: pen down and steps advancing (not travelling or settling the pen)."""
+        first = await self.trace()
         await asyncio.sleep(0.05)
-        return (await self.trace())["steps"] != first
+        second = await self.trace()
+        return first["pen"] == second["pen"] == "down" and second["steps"] != first["steps"]
 
     async def job_state(self, job_id: str) -> str:
         return (await self.http.get(f"/api/jobs/{job_id}")).json()["state"]
