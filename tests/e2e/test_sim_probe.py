@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import subprocess
 import sys
 import time
@@ -363,3 +364,16 @@ def test_plotsim_dies_with_the_test_process(sim_build: SimBuild, tmp_path: Path)
             break
         assert time.monotonic() < deadline, "plotsim outlived the process that started it"
         time.sleep(0.05)
+
+
+def test_control_socket_pipelined_and_oversized_lines(probe: Plotter) -> None:
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+        sock.settimeout(5)
+        sock.connect(str(probe.control_path))
+        sock.sendall(b"press pause\r\nrelease pause\nclear\n")
+        reader = sock.makefile("rb")
+        assert [reader.readline() for _ in range(3)] == [b"ok\n"] * 3
+        sock.sendall(b"x" * 5000 + b"\n")
+        assert reader.readline() == b"error: line too long\n"
+        sock.sendall(b"release estop\n")  # the connection goes on after the long line
+        assert reader.readline() == b"ok\n"

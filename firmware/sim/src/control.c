@@ -105,7 +105,10 @@ static void service_client(struct control_client *cl, control_handler handler, v
 		char *start = cl->buf, *nl;
 		while (cl->fd >= 0 && (nl = memchr(start, '\n', cl->len - (size_t)(start - cl->buf)))) {
 			*nl = 0;
-			run_line(cl, start, handler, ctx);
+			if (cl->skipping)
+				cl->skipping = 0; /* the end of the over-long line */
+			else
+				run_line(cl, start, handler, ctx);
 			start = nl + 1;
 		}
 		if (cl->fd < 0)
@@ -113,11 +116,15 @@ static void service_client(struct control_client *cl, control_handler handler, v
 		cl->len -= (size_t)(start - cl->buf);
 		memmove(cl->buf, start, cl->len);
 		if (cl->len == sizeof cl->buf - 1) {
-			static const char msg[] = "error: line too long\n";
-			send_all(cl, msg, sizeof msg - 1);
-			if (cl->fd >= 0)
-				drop(cl);
-			return;
+			/* answer once, then ignore the line up to its newline */
+			if (!cl->skipping) {
+				static const char msg[] = "error: line too long\n";
+				send_all(cl, msg, sizeof msg - 1);
+				if (cl->fd < 0)
+					return;
+			}
+			cl->skipping = 1;
+			cl->len = 0;
 		}
 	}
 }
@@ -142,6 +149,7 @@ void control_service(struct control *c, control_handler handler, void *ctx)
 		}
 		c->client[slot].fd = fd;
 		c->client[slot].len = 0;
+		c->client[slot].skipping = 0;
 	}
 	for (int i = 0; i < CONTROL_MAX_CLIENTS; i++)
 		if (c->client[i].fd >= 0)

@@ -15,6 +15,7 @@ struct control_client {
 	int fd;
 	char buf[CONTROL_LINE_MAX];
 	size_t len;
+	int skipping;            /* dropping the rest of an over-long line */
 };
 
 struct control {
