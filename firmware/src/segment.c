@@ -179,19 +179,29 @@ uint8_t seg_fill(void)
             time += advance(b, SEGMENT_S);
             ended = prep.s >= b->mm;
             float e = prep.s * prep.events_per_mm;
-            target = ended ? b->events : (uint32_t)e;
+            target = ended ? b->events : (uint32_t)(e + 0.5f); /* a step is due half way */
             if (target > b->events)
                 target = b->events;
         } while (target == prep.done && !ended && !(prep.hold && prep.stopped) && ++rounds < 8);
         if (target == prep.done && !ended && !(prep.hold && prep.stopped))
             target = prep.done + 1; /* slower than the timer can time: one step anyway */
+        if (!ended && prep.v > 0.0f) {
+            /* end the segment exactly on its last step, so its rate is exact;
+             * the distance to that step is moved over to the next segment */
+            float extra = prep.s - (float)target / prep.events_per_mm;
+            float back = extra / prep.v;
+            if (fabsf(back) < 0.25f * time) { /* when slow, v is too rough an estimate */
+                time -= back;
+                prep.s -= extra;
+            }
+        }
         if (target - prep.done > 60000u) { /* absurd rates: keep a segment within 16 bits */
             target = prep.done + 60000u;
             ended = 0;
         }
         uint32_t n = target - prep.done;
         if (n > 0) {
-            float period = time * (float)STEP_TIMER_HZ / (float)n;
+            float period = time * (float)STEP_TIMER_HZ / (float)n + 0.5f;
             if (period < STEP_PERIOD_MIN)
                 period = STEP_PERIOD_MIN;
             if (period > 65535.0f)

@@ -1,0 +1,135 @@
+/* G-code parser: valid lines, every error path we promise, arcs, pen words. */
+#include <math.h>
+#include <string.h>
+#include "check.h"
+#include "gcode.h"
+#include "status.h"
+#include "tests.h"
+
+static gc_state_t st;
+static gc_block_t blk;
+
+static uint8_t parse(const char *line) { return gc_parse(line, &st, &blk, 0); }
+
+void test_gcode_valid(void)
+{
+    gc_init(&st);
+    CHECK(parse("G21G90") == STATUS_OK && blk.action == ACT_NONE);
+    CHECK(parse("G0X10Y5") == STATUS_OK && blk.action == ACT_RAPID);
+    CHECK_NEAR(blk.target[0], 10, 1e-6);
+    CHECK_NEAR(blk.target[1], 5, 1e-6);
+    CHECK(parse("G1X20F3000") == STATUS_OK && blk.action == ACT_LINE);
+    CHECK_NEAR(blk.feed, 3000, 1e-3);
+    CHECK_NEAR(blk.target[1], 5, 1e-6);
+    /* modal G1 and feed carry over */
+    CHECK(parse("Y7") == STATUS_OK && blk.action == ACT_LINE && blk.feed == 3000.0f);
+    /* incremental */
+    CHECK(parse("G91X1Y-1") == STATUS_OK);
+    CHECK_NEAR(blk.target[0], 21, 1e-5);
+    CHECK_NEAR(blk.target[1], 6, 1e-5);
+    CHECK(parse("G90") == STATUS_OK);
+    /* inches */
+    CHECK(parse("G20G0X1") == STATUS_OK);
+    CHECK_NEAR(blk.target[0], 25.4, 1e-4);
+    CHECK(parse("G21") == STATUS_OK);
+    /* G92: work coordinates shift, machine targets follow */
+    CHECK(parse("G92X0Y0") == STATUS_OK && blk.action == ACT_NONE);
+    CHECK(parse("G0X10") == STATUS_OK);
+    CHECK_NEAR(blk.target[0], 35.4, 1e-4);
+    /* G53 moves in machine coordinates */
+    CHECK(parse("G53G0X1Y1") == STATUS_OK);
+    CHECK_NEAR(blk.target[0], 1, 1e-6);
+    /* dwell, G28, line numbers, comments already stripped */
+    CHECK(parse("G4P0.5") == STATUS_OK && blk.action == ACT_DWELL);
+    CHECK_NEAR(blk.dwell_s, 0.5, 1e-6);
+    CHECK(parse("N120G28") == STATUS_OK && blk.action == ACT_G28 && !blk.has_via);
+    CHECK(parse("G28X5") == STATUS_OK && blk.has_via);
+    CHECK(parse("M17") == STATUS_OK && blk.motors == MOTORS_ON);
+    CHECK(parse("M18") == STATUS_OK && blk.motors == MOTORS_OFF);
+    CHECK(parse("M84") == STATUS_OK && blk.motors == MOTORS_OFF);
+    CHECK(parse("G17G94G54") == STATUS_OK);
+    CHECK(parse("M2") == STATUS_OK && blk.program_end);
+    CHECK(st.motion == MOTION_G1 && !st.incremental);
+    CHECK(parse("") == STATUS_OK && blk.action == ACT_NONE);
+    CHECK(parse("G1") == STATUS_OK && blk.action == ACT_NONE); /* mode only */
+}
+
+void test_gcode_errors(void)
+{
+    gc_init(&st);
+    CHECK(parse("G1X1") == ERR_UNDEFINED_FEED);
+    CHECK(parse("X") == ERR_BAD_NUMBER);
+    CHECK(parse("1") == ERR_EXPECTED_LETTER);
+    CHECK(parse("G1X1.2.3") == ERR_EXPECTED_LETTER);
+    CHECK(parse("G0X1X2") == ERR_WORD_REPEATED);
+    CHECK(parse("G0G1X1") == ERR_MODAL_CONFLICT);
+    CHECK(parse("M3M5") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G20G21") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G5") == ERR_UNSUPPORTED);
+    CHECK(parse("G1.5") == ERR_UNSUPPORTED);
+    CHECK(parse("G38.2") == ERR_UNSUPPORTED);
+    CHECK(parse("M6") == ERR_UNSUPPORTED);
+    CHECK(parse("T1") == ERR_UNSUPPORTED);
+    CHECK(parse("A5") == ERR_UNSUPPORTED);
+    CHECK(parse("G4") == ERR_VALUE_WORD_MISSING);
+    CHECK(parse("G4P-1") == ERR_NEGATIVE);
+    CHECK(parse("G1F-5") == ERR_NEGATIVE);
+    CHECK(parse("G0X1P1") == ERR_UNUSED_WORDS);
+    CHECK(parse("G0X1I1") == ERR_UNUSED_WORDS);
+    CHECK(parse("G92") == ERR_NO_AXIS_WORDS);
+    CHECK(parse("G4P1X1") == ERR_AXIS_COMMAND_CONFLICT);
+    CHECK(parse("M300") == ERR_VALUE_WORD_MISSING);
+    CHECK(parse("G0X1234567890") == ERR_BAD_NUMBER);
+    CHECK(parse("G0X200000") == ERR_INVALID_TARGET);
+    CHECK(parse("G1X1F1e5") == ERR_EXPECTED_LETTER); /* no exponents in G-code: 'e' is not a word here */
+    CHECK(parse("N-1") == ERR_BAD_NUMBER);
+    /* a failed line changes nothing */
+    gc_state_t before = st;
+    CHECK(parse("G91G1X1") == ERR_UNDEFINED_FEED);
+    CHECK(memcmp(&before, &st, sizeof(st)) == 0);
+    /* jog rules */
+    gc_block_t j;
+    CHECK(gc_parse("G91X10F1000", &st, &j, 1) == STATUS_OK && j.action == ACT_LINE);
+    CHECK(gc_parse("X10", &st, &j, 1) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G0X10F100", &st, &j, 1) == ERR_INVALID_JOG);
+    CHECK(gc_parse("M3X1F100", &st, &j, 1) == ERR_INVALID_JOG);
+}
+
+void test_gcode_arcs(void)
+{
+    gc_init(&st);
+    CHECK(parse("G0X10Y10") == STATUS_OK);
+    CHECK(parse("G2X20Y10I5J0F1000") == STATUS_OK && blk.action == ACT_ARC && blk.clockwise);
+    CHECK_NEAR(blk.center[0], 15, 1e-5);
+    CHECK_NEAR(blk.center[1], 10, 1e-5);
+    /* R form: a quarter circle of radius 10, centre on the right side for G2 */
+    CHECK(parse("G0X0Y0") == STATUS_OK);
+    CHECK(parse("G2X10Y10R10F1000") == STATUS_OK);
+    CHECK_NEAR(blk.center[0], 10, 1e-4);
+    CHECK_NEAR(blk.center[1], 0, 1e-4);
+    CHECK(parse("G0X0Y0") == STATUS_OK);
+    CHECK(parse("G3X10Y10R10") == STATUS_OK);
+    CHECK_NEAR(blk.center[0], 0, 1e-4);
+    CHECK_NEAR(blk.center[1], 10, 1e-4);
+    /* errors */
+    CHECK(parse("G2X5Y5") == ERR_NO_OFFSETS);
+    CHECK(parse("G2I5") == ERR_NO_AXIS_WORDS);
+    CHECK(parse("G2X50Y0R1") == ERR_INVALID_TARGET);          /* radius too small for the chord */
+    CHECK(parse("G2X20Y0I5J0") == ERR_INVALID_TARGET);        /* end not on the circle */
+    CHECK(parse("G2X10Y10R10I1") == ERR_UNUSED_WORDS);
+}
+
+void test_gcode_pen(void)
+{
+    gc_init(&st);
+    CHECK(parse("M3") == STATUS_OK && blk.pen == PEN_DOWN);
+    CHECK(parse("M5") == STATUS_OK && blk.pen == PEN_UP);
+    CHECK(parse("M300S30") == STATUS_OK && blk.pen == PEN_DOWN);
+    CHECK(parse("M300S50") == STATUS_OK && blk.pen == PEN_UP);
+    CHECK(parse("G1Z-1F100") == STATUS_OK && blk.pen == PEN_DOWN && blk.action == ACT_NONE);
+    CHECK(parse("G0Z5") == STATUS_OK && blk.pen == PEN_UP);
+    CHECK(parse("G0Z0") == STATUS_OK && blk.pen == PEN_DOWN);
+    CHECK(parse("G0X1Z2") == STATUS_OK && blk.pen == PEN_UP && blk.action == ACT_RAPID);
+    CHECK(parse("M5Z-1") == STATUS_OK && blk.pen == PEN_UP); /* the explicit M word wins */
+    CHECK(parse("G0X2") == STATUS_OK && blk.pen == PEN_KEEP);
+}

@@ -1,0 +1,269 @@
+/* Arc chords, planner junctions and exact steps, segment profiles. */
+#include <math.h>
+#include <string.h>
+#include "arc.h"
+#include "check.h"
+#include "planner.h"
+#include "segment.h"
+#include "settings.h"
+#include "status.h"
+#include "tests.h"
+
+void test_arc_segments(void)
+{
+    arc_t arc;
+    float s[2] = {10, 0}, t[2] = {0, 10}, c[2] = {0, 0};
+    CHECK(arc_init(&arc, s, t, c, 0, 0.002f) == STATUS_OK);
+    CHECK_NEAR(arc.sweep, M_PI / 2, 1e-5);
+    /* every chord's sagitta within the tolerance, every vertex on the circle */
+    float prev[2] = {10, 0};
+    double worst = 0;
+    for (uint16_t k = 1; k <= arc.segments; k++) {
+        float p[2];
+        arc_point(&arc, k, p);
+        CHECK_NEAR(hypot(p[0], p[1]), 10, 1e-4);
+        double mx = (prev[0] + p[0]) / 2.0, my = (prev[1] + p[1]) / 2.0;
+        double sag = 10.0 - hypot(mx, my);
+        if (sag > worst)
+            worst = sag;
+        memcpy(prev, p, sizeof(p));
+    }
+    CHECK(worst <= 0.002 + 1e-5);
+    CHECK(worst > 0.0005); /* and not absurdly many chords */
+    CHECK(prev[0] == 0.0f && prev[1] == 10.0f); /* the last point is the exact target */
+    /* clockwise the long way round */
+    CHECK(arc_init(&arc, s, t, c, 1, 0.002f) == STATUS_OK);
+    CHECK_NEAR(arc.sweep, -1.5 * M_PI, 1e-5);
+    /* degenerate */
+    CHECK(arc_init(&arc, c, t, c, 0, 0.002f) == ERR_INVALID_TARGET);
+    /* huge radius: bounded count, no infinite loop */
+    float big_s[2] = {0, 0}, big_t[2] = {1, 0}, big_c[2] = {0.5f, -90000};
+    CHECK(arc_init(&arc, big_s, big_t, big_c, 1, 0.002f) == STATUS_OK);
+    CHECK(arc.segments >= 1 && arc.segments <= ARC_MAX_SEGMENTS);
+}
+
+void test_arc_full_circle(void)
+{
+    arc_t arc;
+    float s[2] = {20, 10}, c[2] = {10, 10};
+    CHECK(arc_init(&arc, s, s, c, 1, 0.01f) == STATUS_OK);
+    CHECK_NEAR(arc.sweep, -2 * M_PI, 1e-5);
+    for (uint16_t k = 1; k < arc.segments; k += 7) {
+        float p[2];
+        double ang = -2 * M_PI * k / arc.segments;
+        arc_point(&arc, k, p);
+        CHECK_NEAR(p[0], 10 + 10 * cos(ang), 1e-3);
+        CHECK_NEAR(p[1], 10 + 10 * sin(ang), 1e-3);
+    }
+}
+
+static void fresh_planner(void)
+{
+    settings_defaults(&settings);
+    plan_reset();
+    seg_reset();
+    int32_t zero[2] = {0, 0};
+    plan_set_position(zero);
+}
+
+void test_planner_junctions(void)
+{
+    fresh_planner();
+    float a[2] = {10, 0}, b[2] = {20, 0}, c[2] = {20, 10}, d[2] = {10, 10};
+    CHECK(plan_line(a, 3000, 0));
+    CHECK(plan_line(b, 3000, 0));
+    CHECK(plan_line(c, 3000, 0));
+    CHECK(plan_line(d, 3000, 0));
+    plan_block_t *first = plan_current();
+    CHECK(first && plan_count() == 4);
+    /* straight continuation: junction limited only by the nominal speed */
+    CHECK_NEAR(first[1].max_entry_sqr, 50.0 * 50.0, 1);
+    /* a 90 degree corner: v^2 = a * jd * sin(t/2) / (1 - sin(t/2)) */
+    double sh = sqrt(0.5);
+    CHECK_NEAR(first[2].max_entry_sqr, 1000.0 * 0.02 * sh / (1 - sh), 0.01);
+    /* a full reversal stops */
+    fresh_planner();
+    CHECK(plan_line(a, 3000, 0));
+    float back[2] = {0, 0};
+    CHECK(plan_line(back, 3000, 0));
+    CHECK(plan_current()[1].max_entry_sqr == 0.0f);
+    /* the last block can always stop: backward pass bound */
+    fresh_planner();
+    float tiny1[2] = {0.5f, 0}, tiny2[2] = {1.0f, 0};
+    plan_line(tiny1, 6000, 0);
+    plan_line(tiny2, 6000, 0);
+    plan_block_t *t = plan_current();
+    CHECK(t[1].entry_sqr <= 2 * 1000 * 0.5 + 1e-3);
+    /* zero-length moves queue nothing */
+    CHECK(plan_line(tiny2, 6000, 0) == 0);
+    /* rapid uses the axis maximum */
+    fresh_planner();
+    plan_line(a, 0, PB_RAPID);
+    CHECK_NEAR(sqrt(plan_current()->nominal_sqr), 100, 0.01);
+    /* diagonal: acceleration and speed limited per axis */
+    fresh_planner();
+    settings.max_rate[1] = 600;
+    float diag[2] = {10, 10};
+    plan_line(diag, 100000, 0);
+    CHECK_NEAR(sqrt(plan_current()->nominal_sqr), 10 * sqrt(2), 0.01);
+    settings_defaults(&settings);
+}
+
+/* Run the segment preparer to the end, as the step interrupt would consume it. */
+typedef struct {
+    uint32_t events, segments;
+    double time, max_speed, max_accel, last_speed, last_dt;
+    int64_t steps[2];
+} run_t;
+
+static uint8_t last_block = 0xFF;
+static void drain(run_t *r, double mm_per_event)
+{
+    while (seg_tail != seg_head) {
+        segment_t *s = &seg_ring[seg_tail & (SEG_SIZE - 1)];
+        step_block_t *b = &step_blocks[s->block];
+        if (s->flags & SEG_FIRST) {
+            for (int a = 0; a < 2; a++)
+                r->steps[a] += (b->dir_negative & (1 << a)) ? -(int64_t)b->steps[a] : (int64_t)b->steps[a];
+            last_block = s->block;
+        }
+        double dt = (double)s->events * s->period / STEP_TIMER_HZ;
+        double v = s->events * mm_per_event / dt;
+        /* each segment's rate is its average: compare midpoints */
+        double gap = 0.5 * (dt + r->last_dt);
+        if (r->segments && fabs(v - r->last_speed) / gap > r->max_accel)
+            r->max_accel = fabs(v - r->last_speed) / gap;
+        r->last_dt = dt;
+        if (v > r->max_speed)
+            r->max_speed = v;
+        r->last_speed = v;
+        r->time += dt;
+        r->events += s->events;
+        r->segments++;
+        seg_tail++;
+    }
+}
+
+void test_planner_exact_steps(void)
+{
+    /* thousands of short segments along a spiral: the prepared steps add up
+     * exactly to the rounded target, with no drift */
+    fresh_planner();
+    run_t r;
+    memset(&r, 0, sizeof(r));
+    float p[2] = {0, 0};
+    for (int i = 1; i <= 3000; i++) {
+        float ang = i * 0.01f;
+        p[0] = 150 + (10 + i * 0.01f) * cosf(ang);
+        p[1] = 110 + (10 + i * 0.01f) * sinf(ang);
+        while (!plan_free()) {
+            seg_fill();
+            drain(&r, 1.0 / 80.0);
+        }
+        plan_line(p, 3000, 0);
+    }
+    for (int guard = 0; guard < 100000 && (plan_count() || seg_head != seg_tail); guard++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(plan_count() == 0);
+    CHECK(r.steps[0] == lroundf(p[0] * 80));
+    CHECK(r.steps[1] == lroundf(p[1] * 80));
+    /* and the planner's own position agrees */
+    int32_t pos[2];
+    plan_get_position(pos);
+    CHECK(pos[0] == r.steps[0] && pos[1] == r.steps[1]);
+}
+
+void test_segments_profile(void)
+{
+    /* one 100 mm move at 3000 mm/min, a = 1000: trapezoid time is
+     * L / v + v / a = 2 + 0.05 s */
+    fresh_planner();
+    float t[2] = {100, 0};
+    plan_line(t, 3000, 0);
+    run_t r;
+    memset(&r, 0, sizeof(r));
+    for (int guard = 0; guard < 10000 && (plan_count() || seg_head != seg_tail); guard++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(r.events == 8000);
+    CHECK(r.steps[0] == 8000 && r.steps[1] == 0);
+    CHECK_NEAR(r.time, 2.05, 2.05 * 0.02);
+    CHECK(r.max_speed <= 50 * 1.02);
+    /* segment to segment speed changes stay near the configured acceleration
+     * (each segment's rate is its average, so allow for the quantization) */
+    CHECK(r.max_accel <= 1000 * 1.6);
+    /* a triangle: too short to reach the cruise speed: t = 2 sqrt(L / a) */
+    fresh_planner();
+    float s[2] = {1, 0};
+    plan_line(s, 6000, 0);
+    memset(&r, 0, sizeof(r));
+    for (int guard = 0; guard < 10000 && (plan_count() || seg_head != seg_tail); guard++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(r.events == 80);
+    CHECK_NEAR(r.time, 2 * sqrt(1.0 / 1000), 0.003);
+}
+
+void test_segments_hold(void)
+{
+    fresh_planner();
+    float t[2] = {100, 0};
+    plan_line(t, 3000, 0);
+    run_t r;
+    memset(&r, 0, sizeof(r));
+    for (int i = 0; i < 10; i++) { /* get up to speed: 10 x 7 segments of 8 ms */
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    uint32_t at_hold = r.events;
+    seg_hold(1);
+    for (int guard = 0; guard < 1000 && !seg_hold_reached(); guard++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(seg_hold_reached());
+    /* stopping from 50 mm/s at 1000 mm/s^2 takes 1.25 mm (100 steps) */
+    CHECK(r.events - at_hold >= 90 && r.events - at_hold <= 115);
+    CHECK(r.events < 8000);
+    seg_fill();
+    CHECK(seg_head == seg_tail); /* nothing more while held */
+    seg_hold(0);
+    for (int guard = 0; guard < 10000 && (plan_count() || seg_head != seg_tail); guard++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(r.events == 8000);
+}
+
+void test_settings(void)
+{
+    settings_t s;
+    settings_defaults(&s);
+    float v;
+    CHECK(settings_get(&s, 100, &v) && v == 80.0f);
+    CHECK(settings_get(&s, 131, &v) && v == 220.0f);
+    CHECK(settings_get(&s, 62, &v) && v == 150.0f);
+    CHECK(settings_get(&s, 11, &v) && fabsf(v - 0.02f) < 1e-7f);
+    CHECK(!settings_get(&s, 7, &v));
+    CHECK(settings_set(&s, 110, 5000) == STATUS_OK && s.max_rate[0] == 5000.0f);
+    CHECK(settings_set(&s, 110, -1) == ERR_NEGATIVE);
+    CHECK(settings_set(&s, 100, 0) == ERR_INVALID_DOLLAR);
+    CHECK(settings_set(&s, 0, 2) == ERR_STEP_PULSE);
+    CHECK(settings_set(&s, 20, 0.5f) == ERR_NOT_INTEGER);
+    CHECK(settings_set(&s, 20, 2) == ERR_INVALID_DOLLAR);
+    CHECK(settings_set(&s, 60, 3000) == ERR_INVALID_DOLLAR);
+    CHECK(settings_set(&s, 61, 2100) == STATUS_OK && s.pen_down_us == 2100);
+    CHECK(settings_set(&s, 99, 1) == ERR_INVALID_DOLLAR);
+    CHECK(settings_set(&s, 63, 1) == STATUS_OK && s.corexy == 1);
+    /* every listed id reads back */
+    for (uint8_t i = 0; i < settings_count; i++)
+        CHECK(settings_get(&s, settings_ids[i], &v));
+    /* the checksum sees a changed byte and swapped bytes */
+    uint8_t data[4] = {1, 2, 3, 4}, swapped[4] = {2, 1, 3, 4}, changed[4] = {1, 2, 3, 5};
+    CHECK(settings_checksum(data, 4) != settings_checksum(swapped, 4));
+    CHECK(settings_checksum(data, 4) != settings_checksum(changed, 4));
+}
