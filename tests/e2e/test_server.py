@@ -216,12 +216,14 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     status_interval = 1 / 8 * max(sim_rate, 1.0)  # simulated seconds between reports
     allowance = FEED / 60 * status_interval + 2 * math.pi * 15 / 72 + 1.0
     redrawn = before["draw_mm"] + after["draw_mm"] - stroke_length(expected)
+    print(f"resumed at line {interrupted['resume_line']} of {interrupted['lines_done']} acked;"
+          f" {redrawn:.2f} mm drawn twice (allowed {allowance:.1f})")
     assert redrawn <= allowance, f"{redrawn:.1f} mm drawn twice (allowed {allowance:.1f})"
 
 
 def test_server_killed_mid_job_keeps_queue(server, plotter):
     home(server)
-    job = submit(server, drawing(circles=4))
+    job = submit(server, drawing(circles=15))
     waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
     moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
     assert moved.status_code == 200
