@@ -140,3 +140,16 @@ def test_homing_ends_pull_off_from_the_switches(plotter_factory: PlotterFactory)
     for axis in "xy":
         assert trace["position"][axis] == pytest.approx(1.0, abs=2 / 80)
     assert trace["limits"] == {"x": False, "y": False}
+
+
+def test_corexy_drawing_matches(plotter_factory: PlotterFactory) -> None:
+    p = plotter_factory(args=["--corexy"])
+    grbl = unlocked(p)
+    grbl.send("$63=1")  # the firmware's kinematics setting, as the machine is built
+    for line in ["G21 G90", "G0 X10 Y10", "M3", "G1 X30 Y10 F3000", "G1 X30 Y25", "M5"]:
+        grbl.send(line)
+    grbl.wait_idle()
+    trace = p.trace()
+    strokes = [[(round(x, 3), round(y, 3)) for x, y, _t in s] for s in trace["strokes"]]
+    assert strokes == [[(10, 10), (30, 10), (30, 25)]]
+    assert sum(trace["violations"].values()) == 0
