@@ -153,3 +153,22 @@ def test_corexy_drawing_matches(plotter_factory: PlotterFactory) -> None:
     strokes = [[(round(x, 3), round(y, 3)) for x, y, _t in s] for s in trace["strokes"]]
     assert strokes == [[(10, 10), (30, 10), (30, 25)]]
     assert sum(trace["violations"].values()) == 0
+
+
+def test_stop_button_halts_the_steppers(plotter: Plotter) -> None:
+    grbl = unlocked(plotter)
+    grbl.send("G1 X290 F3000")
+    plotter.wait_trace(lambda t: t["position"]["x"] > 5)
+    plotter.press("estop")
+    pressed = time.monotonic()
+    time.sleep(0.3)
+    first = plotter.trace()
+    time.sleep(0.3)
+    later = plotter.trace()
+    assert later["position"] == first["position"]  # nothing moves any more
+    assert first["position"]["x"] < 280
+    # the last step came right after the press (the model runs several times
+    # faster than real time, so this bounds the reaction in simulated time too)
+    assert first["last_step_monotonic"] < pressed + 0.2
+    assert grbl.status().startswith("<Alarm")
+    plotter.release("estop")
