@@ -18,7 +18,9 @@ const char options_usage[] =
 	"  --corexy               CoreXY kinematics\n"
 	"  --start X,Y            carriage position at start, mm (default 0,0)\n"
 	"  --pen-up-us N --pen-down-us N  servo pulse widths (default 1000 2000)\n"
-	"  --max-step-rate HZ     overspeed threshold (default 40000)\n";
+	"  --max-step-rate HZ     overspeed threshold (default 40000)\n"
+	"Control socket commands, one a line: press NAME, release NAME (estop, pause,\n"
+	"resume), trace, svg PATH, clear, quit. See docs/INTERNALS.md.\n";
 
 enum {
 	OPT_PTY = 256, OPT_SPEED, OPT_TRACE, OPT_CONTROL, OPT_EEPROM, OPT_WIDTH, OPT_HEIGHT,
