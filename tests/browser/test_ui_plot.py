@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from tests.browser.conftest import PHONE, login, record, screenshot
+from tests.browser.conftest import DESKTOP, PHONE, login, record, screenshot
 
 pytestmark = pytest.mark.browser
 
@@ -41,7 +41,9 @@ ARM_STOP_TIMER = """(eventName) => {
         const check = () => {
             if (t0 !== null && !panel.hidden && panel.dataset.phase === 'stopped') {
                 observer.disconnect();
-                resolve(performance.now() - t0);
+                const now = performance.now();
+                // ms from the input; and the input's wall-clock time (epoch seconds)
+                resolve([now - t0, (performance.timeOrigin + t0) / 1000]);
             }
         };
         const observer = new MutationObserver(check);
@@ -100,10 +102,20 @@ def preview_pixels(page) -> dict[str, int]:
 
 
 def plot_stop_unlock_next(
-    page, server, viewport, prefix: str, press_stop, clear_from_banner: bool = False
-) -> float:
-    """The main story; returns the stop-to-stopped time in ms."""
+    page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False
+) -> tuple[float, float]:
+    """The main story; returns the ms from the stop input to 'Machine stopped' shown, and
+    to the plotter's last step pulse."""
     long_name, next_name = f"{prefix}-circles.svg", f"{prefix}-square.svg"
+    # with homing enabled the board starts in Alarm: the banner offers Home
+    page.wait_for_function(
+        "() => ['Idle', 'Alarm'].includes(document.querySelector('#sum-state').textContent)"
+    )
+    if page.locator("#sum-state").text_content() == "Alarm":
+        page.locator("#banners button[data-action=home]").click()
+        page.wait_for_function(
+            "() => document.querySelector('#sum-state').textContent === 'Idle'", timeout=60_000
+        )
     upload(page, long_name, circles_svg(30))
     wait_job_state(page, long_name, ("queued",))
     page.wait_for_function("() => (window.plotbridge.preview.geom?.strokes.count ?? 0) > 100")
@@ -135,15 +147,22 @@ def plot_stop_unlock_next(
 
     page.evaluate(ARM_STOP_TIMER, "pointerdown")
     press_stop()
-    elapsed = page.evaluate("window.__stopped")
+    elapsed, input_epoch = page.evaluate("window.__stopped")
+    clicked_at = input_epoch - (time.time() - time.monotonic())  # on the monotonic clock
     assert elapsed < 1000, f"stopped shown after {elapsed:.0f} ms"
     assert page.locator("#estop-title").text_content() == "Machine stopped"
     # the server agrees: the job is stopped and the carriage stands still
     assert server.wait_job(job_id(page, long_name), "stopped", timeout=5)["state"] == "stopped"
     wait_job_state(page, long_name, ("stopped",))
-    before = server.machine()["position"]
+    # the simulated carriage stands still, and its last step came soon after the click
     time.sleep(0.3)
-    assert server.machine()["position"] == before
+    first = plotter.trace()
+    time.sleep(0.3)
+    second = plotter.trace()
+    assert second["steps"] == first["steps"]
+    last_step_ms = (second["last_step_monotonic"] - clicked_at) * 1000
+    # the page never claims "stopped" while the carriage still moves (5 ms: clock reads)
+    assert last_step_ms < elapsed + 5, (last_step_ms, elapsed)
     screenshot(page, f"{prefix}-stopped")
 
     if clear_from_banner:
@@ -164,7 +183,7 @@ def plot_stop_unlock_next(
     wait_job_state(page, next_name, ("done",), timeout=60_000)
     assert server.job(job_id(page, next_name))["state"] == "done"
     screenshot(page, f"{prefix}-next-done")
-    return elapsed
+    return elapsed, last_step_ms
 
 
 def job_id(page, name: str) -> str:
@@ -173,7 +192,7 @@ def job_id(page, name: str) -> str:
     )
 
 
-def test_desktop_plot_stop_unlock_next(desktop, server, capsys):
+def test_desktop_plot_stop_unlock_next(desktop, server, plotter, capsys):
     page, _ = desktop
     page.goto(server.url + "/")
     page.wait_for_selector("#login-view:not([hidden])")
@@ -184,8 +203,8 @@ def test_desktop_plot_stop_unlock_next(desktop, server, capsys):
     assert page.locator("#login-error").text_content() == "Wrong token."
     login(page, server.url, server.token)
 
-    elapsed = plot_stop_unlock_next(
-        page, server, {"width": 1280, "height": 800}, "desktop", lambda: page.click("#estop")
+    elapsed, last_step = plot_stop_unlock_next(
+        page, server, plotter, DESKTOP, "desktop", lambda: page.click("#estop")
     )
     for tab in ("control", "settings", "console"):
         page.click(f".tab[data-tab={tab}]")
@@ -193,12 +212,15 @@ def test_desktop_plot_stop_unlock_next(desktop, server, capsys):
         if tab == "settings":
             page.wait_for_selector("#settings-body tr")
         screenshot(page, f"desktop-{tab}")
-    record("stop_desktop_click", {"ms": round(elapsed, 1)})
+    record("stop_desktop_click", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
-        print(f"\n[ui] desktop: click on stop -> 'Machine stopped' shown: {elapsed:.0f} ms")
+        print(
+            f"\n[ui] desktop: click on stop -> 'Machine stopped' shown: {elapsed:.0f} ms; "
+            f"last step pulse {last_step:.0f} ms after the click"
+        )
 
 
-def test_phone_plot_stop_unlock_next(phone, server, capsys):
+def test_phone_plot_stop_unlock_next(phone, server, plotter, capsys):
     page, _ = phone
     # the link printed on the console logs in directly
     page.goto(f"{server.url}/login?token={server.token}")
@@ -214,12 +236,15 @@ def test_phone_plot_stop_unlock_next(phone, server, capsys):
         page.evaluate("window.scrollTo(0, 0)")
     page.click(".tab[data-tab=plot]")
 
-    elapsed = plot_stop_unlock_next(
-        page, server, PHONE, "phone", lambda: page.tap("#estop"), clear_from_banner=True
+    elapsed, last_step = plot_stop_unlock_next(
+        page, server, plotter, PHONE, "phone", lambda: page.tap("#estop"), clear_from_banner=True
     )
-    record("stop_phone_tap", {"ms": round(elapsed, 1)})
+    record("stop_phone_tap", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
-        print(f"\n[ui] phone: tap on stop -> 'Machine stopped' shown: {elapsed:.0f} ms")
+        print(
+            f"\n[ui] phone: tap on stop -> 'Machine stopped' shown: {elapsed:.0f} ms; "
+            f"last step pulse {last_step:.0f} ms after the tap"
+        )
 
 
 def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys):
@@ -269,7 +294,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     # Escape is the stop key, from anywhere on the page, also with the machine idle
     page.evaluate(ARM_STOP_TIMER, "keydown")
     page.keyboard.press("Escape")
-    elapsed = page.evaluate("window.__stopped")
+    elapsed = page.evaluate("window.__stopped")[0]
     assert elapsed < 1000
     record("stop_idle_escape", {"ms": round(elapsed, 1)})
     with capsys.disabled():
@@ -288,7 +313,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
             lambda r: r.method == "POST" and r.url.endswith("/api/machine/estop")
         ):
             page.keyboard.press("Escape")
-        elapsed = page.evaluate("window.__stopped")
+        elapsed = page.evaluate("window.__stopped")[0]
         assert fallback_ms <= elapsed < fallback_ms + 700, elapsed
         page.evaluate("() => { WebSocket.prototype.send = window.__send; }")
 

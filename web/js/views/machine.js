@@ -120,7 +120,7 @@ function renderEstop(state) {
   } else {
     setText($("#estop-title"), "Machine stopped");
     setText($("#estop-text"), m && m.state === "Alarm"
-      ? "Motion was cut, so the position may be lost. Home the machine (recommended), or unlock it to continue from here. The job was stopped; start it again from the queue."
+      ? "Motion was cut, so the position may be lost. Home the machine (recommended), or unlock it to continue from here. The stopped job can be resumed from the queue."
       : "Everything queued was dropped. You can start a job again, or home the machine first.");
   }
   setText($("#estop-error"), e.error || "");
