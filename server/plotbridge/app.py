@@ -173,8 +173,9 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
 
         try:
             return await link.command(line, timeout=wait)
-        except CommandError as exc:
-            raise JobError(422, f"the board refused {line!r}: {exc}") from exc
+        except CommandError as exc:  # error:9 is GRBL's "not in this state" (Alarm, Jog)
+            status = 409 if exc.code == 9 else 422
+            raise JobError(status, f"the board refused {line!r}: {exc}") from exc
         except LinkDown as exc:
             raise JobError(409, "the plotter is not connected") from exc
         except TimeoutError as exc:
