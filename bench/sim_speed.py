@@ -88,12 +88,32 @@ def send(port: serial.Serial, line: str) -> str:
             return answer
 
 
-def feed_moves(port: serial.Serial, stop: threading.Event) -> None:
-    """Keeps the planner full of long fast X moves until told to stop."""
-    x = 290
+def feed_moves(port: serial.Serial, stop: threading.Event, feed: int, diagonal: bool) -> None:
+    """Keeps the planner full of long moves (X only, or diagonal) until told to stop."""
+    x = 200
     while not stop.is_set():
-        send(port, f"G1 X{x} Y0 F{FAST_FEED}")
-        x = 300 - x
+        send(port, f"G1 X{x} Y{x if diagonal else 0} F{feed}")
+        x = 210 - x
+
+
+def measure_moving(p: Plotter, port: serial.Serial, seconds: float, feed: int,
+                   diagonal: bool) -> None:
+    stop = threading.Event()
+    feeder = threading.Thread(target=feed_moves, args=(port, stop, feed, diagonal))
+    feeder.start()
+    try:
+        time.sleep(0.5)  # planner filled, moving
+        p.clear()
+        name = f"firmware, G1 {'XY' if diagonal else 'X'} moves at {feed} mm/min"
+        report(name, measure(p, seconds))
+        print(f"  violations: {p.trace()['violations']}")
+    finally:
+        stop.set()
+        feeder.join(timeout=30)
+    port.write(b"\x18")  # soft reset: drop the queued moves before the next figure
+    time.sleep(0.3)
+    port.reset_input_buffer()
+    send(port, "$X")
 
 
 def bench_firmware(seconds: float, workdir: Path) -> None:
@@ -111,17 +131,8 @@ def bench_firmware(seconds: float, workdir: Path) -> None:
                 if answer != "ok":
                     print(f"firmware: {line!r} answered {answer!r}")
             report("firmware, idle", measure(p, min(seconds, 1.0)))
-            stop = threading.Event()
-            feeder = threading.Thread(target=feed_moves, args=(port, stop))
-            feeder.start()
-            try:
-                time.sleep(0.5)  # planner filled, moving
-                p.clear()
-                report(f"firmware, G1 X moves at {FAST_FEED} mm/min", measure(p, seconds))
-                print(f"  violations: {p.trace()['violations']}")
-            finally:
-                stop.set()
-                feeder.join(timeout=30)
+            measure_moving(p, port, seconds, FAST_FEED, diagonal=False)
+            measure_moving(p, port, seconds, 3000, diagonal=True)
     finally:
         p.cleanup()
 
