@@ -2,8 +2,9 @@
 
 Two workloads, each measured over a few wall seconds with `--speed 0`:
   - probe: the probe test firmware stepping X at 30 kHz from a timer interrupt;
-  - firmware: the real firmware running long fast G1 moves (~30 kHz steps),
-    when firmware/build/plotbridge.elf exists.
+  - firmware: the real firmware idle, running long fast G1 moves (~30 kHz
+    steps), and at a typical drawing feed, when firmware/build/plotbridge.elf
+    exists. The trace's violation counters are printed with each figure.
 Run from the repository root: `.venv/bin/python bench/sim_speed.py [--seconds S]`.
 """
 
