@@ -194,6 +194,7 @@ class Bench:
         return after["last_step_monotonic"] - sent
 
     async def run(self) -> dict:
+        load_before = os.getloadavg()[0]
         await self.start_server()
         ready, count = asyncio.Event(), [0]
         watchers = [asyncio.create_task(self.watcher(ready, count))
@@ -221,6 +222,9 @@ class Bench:
             "ws_worst_ms": round(max((v * 1000 for k, v in latencies if k == "websocket"),
                                      default=float("nan")), 2),
             "ws_messages_received": self.received, **load,
+            # other processes on the machine skew the worst case: say how busy it was
+            "load_avg_1min_before_after": [round(load_before, 2), round(os.getloadavg()[0], 2)],
+            "cpus": os.cpu_count(),
         }
 
     async def drain(self, ws: websockets.ClientConnection) -> None:

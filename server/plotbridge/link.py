@@ -89,12 +89,6 @@ class MachineStatus:
     line: int | None = None
     updated_at: float = 0.0
 
-    def machine(self) -> dict[str, Any]:
-        """The DESIGN.md machine object."""
-        return {"connected": self.connected, "state": self.state,
-                "position": {"x": self.x, "y": self.y}, "pen": self.pen,
-                "firmware": self.firmware}
-
 
 @dataclass(frozen=True)
 class LinkEvent:
@@ -218,19 +212,22 @@ class Link:
         delay = self.backoff_min
         failures = 0
         while True:
+            reason = "link stopped"
             try:
                 reason = await self._session()
                 log.warning("link to %s lost: %s", self.device, reason)
                 delay, failures = self.backoff_min, 0
             except (OSError, serial.SerialException, LinkDown, TimeoutError) as exc:
+                reason = f"cannot connect: {exc}"
                 failures += 1
                 level = logging.WARNING if failures == 1 else logging.DEBUG
                 log.log(level, "cannot connect to %s: %s (retrying)", self.device, exc)
-            except Exception:
+            except Exception as exc:
+                reason = f"link failed: {exc}"
                 failures += 1
                 log.exception("link to %s failed unexpectedly (retrying)", self.device)
             finally:
-                self._end_session("link stopped")
+                self._end_session(reason)
             await asyncio.sleep(delay)
             delay = min(delay * 2, self.backoff_max) if failures else delay
 
@@ -552,6 +549,7 @@ class Link:
     async def _session(self) -> str:
         """One connection: open, identify, read settings, poll until lost."""
         loop = asyncio.get_running_loop()
+        self._flush_outstanding("new connection", down=True)  # a write that failed last time
         self._splitter = LineSplitter()
         self._alive.clear()
         self._settled.set()
