@@ -144,6 +144,11 @@ def plot_stop_unlock_next(
     assert preview_pixels(page)["done"] > 0  # the drawn part in its own colour
     assert_stop_on_screen(page, viewport)
     screenshot(page, f"{prefix}-running")
+    # manual control is locked while the job runs
+    page.click(".tab[data-tab=control]")
+    assert page.locator("#control-lock").text_content().startswith("Disabled while a job")
+    assert all(b.is_disabled() for b in page.locator("#tab-control button").all())
+    page.click(".tab[data-tab=plot]")
 
     page.evaluate(ARM_STOP_TIMER, "pointerdown")
     press_stop()
@@ -192,6 +197,42 @@ def job_id(page, name: str) -> str:
     )
 
 
+def manual_control_settings_console(page, server) -> None:
+    """Jog and pen from the Control tab, a $ setting saved to the board, a raw command."""
+    page.click(".tab[data-tab=control]")
+    x0 = server.machine()["position"]["x"]
+    page.check("input[name=step][value='10']")
+    page.click(".jog[data-dx='1'][data-dy='0']")
+    server.wait_machine(lambda m: abs(m["position"]["x"] - x0 - 10) < 0.05 and m["state"] == "Idle")
+    page.wait_for_function(
+        "(x) => window.plotbridge.store.state.machine.position.x.toFixed(2) === x",
+        arg=f"{x0 + 10:.2f}",
+    )
+    page.click("#ctl-pen-down")
+    page.wait_for_function("() => document.querySelector('#m-pen').textContent === 'down'")
+    page.click("#ctl-pen-up")
+    page.wait_for_function("() => document.querySelector('#m-pen').textContent === 'up'")
+    screenshot(page, "desktop-control")
+
+    page.click(".tab[data-tab=settings]")
+    page.wait_for_selector("#settings-body tr")
+    page.fill("#setting-110", "5000")
+    assert page.locator("#settings-save").text_content() == "Save 1 change"
+    page.click("#settings-save")
+    page.wait_for_function(
+        "() => document.querySelector('#settings-message').textContent.startsWith('Saved 1')"
+    )
+    assert page.locator("#setting-110").input_value() == "5000"
+    assert page.locator("#server-info").text_content() != ""
+    screenshot(page, "desktop-settings")
+
+    page.click(".tab[data-tab=console]")
+    page.fill("#command-line", "$$")
+    page.press("#command-line", "Enter")
+    page.locator("#log li.rx", has_text="$110=5000").wait_for()  # read back from the board
+    screenshot(page, "desktop-console")
+
+
 def test_desktop_plot_stop_unlock_next(desktop, server, plotter, capsys):
     page, _ = desktop
     page.goto(server.url + "/")
@@ -206,12 +247,7 @@ def test_desktop_plot_stop_unlock_next(desktop, server, plotter, capsys):
     elapsed, last_step = plot_stop_unlock_next(
         page, server, plotter, DESKTOP, "desktop", lambda: page.click("#estop")
     )
-    for tab in ("control", "settings", "console"):
-        page.click(f".tab[data-tab={tab}]")
-        page.wait_for_selector(f"#tab-{tab}:not([hidden])")
-        if tab == "settings":
-            page.wait_for_selector("#settings-body tr")
-        screenshot(page, f"desktop-{tab}")
+    manual_control_settings_console(page, server)
     record("stop_desktop_click", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
         print(

@@ -481,8 +481,14 @@ export function createActions(store, socket, estop) {
       });
       try {
         await api.put("/api/machine/settings", { settings: body });
-        await loadSettings();
+        // The board acknowledged every line. Show those values rather than re-reading:
+        // the server's copy of the settings is only refreshed on (re)connect for now.
         store.update((st) => {
+          for (const entry of st.settings.list || []) {
+            if (String(entry.id) in body) entry.value = body[String(entry.id)];
+          }
+          st.settings.edits = {};
+          st.settings.busy = false;
           st.settings.message = `Saved ${Object.keys(body).length} setting(s) to the board.`;
         });
       } catch (err) {
