@@ -143,7 +143,9 @@ def plot_stop_unlock_next(
     )
     assert preview_pixels(page)["done"] > 0  # the drawn part in its own colour
     assert_stop_on_screen(page, viewport)
+    page.locator("#preview").scroll_into_view_if_needed()
     screenshot(page, f"{prefix}-running")
+    page.locator("#queue").scroll_into_view_if_needed()  # where a phone user pressed Start
     # manual control is locked while the job runs
     page.click(".tab[data-tab=control]")
     assert page.locator("#control-lock").text_content().startswith("Disabled while a job")
@@ -156,6 +158,8 @@ def plot_stop_unlock_next(
     clicked_at = input_epoch - (time.time() - time.monotonic())  # on the monotonic clock
     assert elapsed < 1000, f"stopped shown after {elapsed:.0f} ms"
     assert page.locator("#estop-title").text_content() == "Machine stopped"
+    panel = page.locator("#estop-panel").bounding_box()
+    assert panel and panel["y"] >= 0 and panel["y"] < viewport["height"] / 2, panel  # in view
     # the server agrees: the job is stopped and the carriage stands still
     assert server.wait_job(job_id(page, long_name), "stopped", timeout=5)["state"] == "stopped"
     wait_job_state(page, long_name, ("stopped",))

@@ -104,7 +104,10 @@ export function renderMachine(state) {
 function renderEstop(state) {
   const e = state.estop;
   const panel = $("#estop-panel");
+  const appearing = Boolean(e) && panel.hidden;
   setHidden(panel, !e);
+  // Wherever the page was scrolled to, the stopped state and what to do next show up.
+  if (appearing) panel.scrollIntoView({ block: "nearest" });
   $("#estop").classList.toggle("fired", Boolean(e));
   if (!e) return;
   const confirmed = estopConfirmed(state);
