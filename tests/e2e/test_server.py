@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import math
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -145,6 +146,25 @@ def test_estop_rest_mid_job(server, plotter):
     other = submit(server, drawing(), start=False)
     refused = server.client.post(f"/api/jobs/{other['id']}/start")
     assert refused.status_code == 409 and "$H" in refused.json()["detail"]
+
+
+def test_estop_does_not_wait_for_an_import(server, plotter):
+    home(server)
+    job = submit(server, drawing(circles=6))
+    wait_progress(server, job["id"], 20)
+    big = drawing(circles=1).encode() * 1000  # ~3 MB of G-code: seconds of import work
+    with ThreadPoolExecutor(1) as pool:
+        uploading = pool.submit(
+            server.client.post, "/api/jobs", files={"file": ("big.gcode", big)}
+        )
+        time.sleep(0.5)  # the upload is received and being imported
+        assert not uploading.done()
+        sent_at = time.monotonic()
+        response = server.client.post("/api/machine/estop")
+        answered = time.monotonic() - sent_at
+        assert response.status_code == 202 and answered < 0.2
+        _assert_stopped(server, plotter, job["id"], sent_at)
+        assert uploading.result().status_code in (201, 422)
 
 
 def test_estop_websocket_mid_job(server, plotter):
