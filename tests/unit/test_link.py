@@ -571,3 +571,18 @@ async def test_subscriber_errors_do_not_break_the_link():
         assert await link.command("G0 X1") == []
         unsubscribe()
         assert link.connected
+
+
+async def test_stock_grbl_work_position_reports_without_buffer_field():
+    # A stock board with $10=0: WPos, WCO only every few reports, no Bf.
+    board = FakeBoard(banner_on_connect=True)
+    reports = iter(["<Idle|WPos:5.000,7.000,0.000|FS:0,0|WCO:10.000,20.000,0.000>"]
+                   + ["<Run|WPos:6.000,8.000,0.000|FS:500,0>"] * 1000)
+    board.status_line = lambda: next(reports)
+    async with running(board) as link:
+        await until(lambda: link.status.state == "Run")
+        assert (link.status.x, link.status.y) == (16.0, 28.0)
+        assert link.status.rx_free is None and link.status.feed == 500
+        acked: list[int] = []
+        await link.stream(iter(program(60)), acked.append)
+        assert acked == list(range(1, 61))
