@@ -22,6 +22,7 @@ from plotbridge.auth import COOKIE, Auth, origin_allowed
 from plotbridge.config import Config
 from plotbridge.jobs import JobError, JobManager, public
 from plotbridge.models import (
+    ERROR_RESPONSES,
     CommandBody,
     Job,
     JogBody,
@@ -75,8 +76,10 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
                 await link_task
             store.close()
 
-    app = FastAPI(title="plotbridge", version=__version__, lifespan=lifespan, docs_url=None,
-                  redoc_url=None, openapi_url="/api/openapi.json")  # fmt: skip
+    app = FastAPI(
+        title="plotbridge", version=__version__, lifespan=lifespan, docs_url="/docs",
+        redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
+    )  # fmt: skip
     app.state.manager = manager
     app.state.hub = hub
     app.state.link = link

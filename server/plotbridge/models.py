@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
@@ -108,3 +108,22 @@ class Job(BaseModel):
     resume_line: int | None = None
     started_at: float | None = None
     finished_at: float | None = None
+
+
+class ErrorBody(BaseModel):
+    """Every error answer: `detail` is a message, or `{"errors": [{"line", "message"}]}`."""
+
+    detail: Any
+
+
+ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
+    status: {"model": ErrorBody, "description": text}
+    for status, text in {
+        401: "missing or wrong token",
+        404: "no such job, or not available in this mode",
+        409: "not allowed in the current machine or job state",
+        413: "upload too large",
+        415: "file format not accepted",
+        422: "invalid request or invalid drawing (errors with line numbers)",
+    }.items()
+}
