@@ -85,7 +85,7 @@ static uint16_t *word_field(settings_t *s, uint8_t id)
     }
 }
 
-uint8_t settings_is_integer(uint8_t id) { return float_field(0, id) == 0; }
+uint8_t settings_is_integer(uint8_t id) { return float_field(&settings, id) == 0; }
 
 uint8_t settings_set(settings_t *s, uint8_t id, float value)
 {

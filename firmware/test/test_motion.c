@@ -259,6 +259,7 @@ void test_settings(void)
     CHECK(settings_set(&s, 61, 2100) == STATUS_OK && s.pen_down_us == 2100);
     CHECK(settings_set(&s, 99, 1) == ERR_INVALID_DOLLAR);
     CHECK(settings_set(&s, 63, 1) == STATUS_OK && s.corexy == 1);
+    CHECK(!settings_is_integer(100) && !settings_is_integer(11) && settings_is_integer(22) && settings_is_integer(62));
     /* every listed id reads back */
     for (uint8_t i = 0; i < settings_count; i++)
         CHECK(settings_get(&s, settings_ids[i], &v));

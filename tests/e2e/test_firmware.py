@@ -1,0 +1,393 @@
+"""The real firmware in the virtual plotter, spoken to as GRBL 1.1 over its pty.
+
+Each test drives plotsim's serial port with pyserial and compares what the
+pen drew (plotsim's trace, decoded from the step/dir/servo pins) with what
+was commanded.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+import time
+from collections.abc import Iterator
+
+import pytest
+import serial
+
+pytestmark = pytest.mark.e2e
+
+STEP_MM = 1 / 80
+TOL = 0.02  # mm: a step and a bit
+
+
+class Grbl:
+    """A minimal GRBL 1.1 client: one line at a time, all lines kept."""
+
+    def __init__(self, port: str) -> None:
+        self.ser = serial.Serial(port, 115200, timeout=0.05)
+        self.lines: list[str] = []  # everything received
+        self.queue: list[str] = []  # received, not yet looked at by wait_for
+        self.pending = ""
+
+    def read_lines(self, timeout: float) -> list[str]:
+        deadline = time.monotonic() + timeout
+        got: list[str] = []
+        while time.monotonic() < deadline:
+            data = self.ser.read(4096).decode("ascii", errors="replace")
+            if not data:
+                if got:
+                    break
+                continue
+            self.pending += data
+            while "\n" in self.pending:
+                line, self.pending = self.pending.split("\n", 1)
+                line = line.strip("\r")
+                if line:
+                    got.append(line)
+        self.lines += got
+        self.queue += got
+        return got
+
+    def wait_for(self, pattern: str, timeout: float = 20.0) -> list[str]:
+        deadline = time.monotonic() + timeout
+        seen: list[str] = []
+        while time.monotonic() < deadline:
+            if not self.queue:
+                self.read_lines(0.2)
+            while self.queue:
+                line = self.queue.pop(0)
+                seen.append(line)
+                if re.search(pattern, line):
+                    return seen
+        raise AssertionError(f"no line matching {pattern!r} within {timeout} s; got {seen}")
+
+    def send(self, line: str, timeout: float = 60.0) -> list[str]:
+        """Sends one line; returns the lines up to and including its ok/error."""
+        self.ser.write(line.encode() + b"\n")
+        return self.wait_for(r"^(ok|error:\d+)$", timeout)
+
+    def ok(self, line: str, timeout: float = 60.0) -> list[str]:
+        got = self.send(line, timeout)
+        assert got[-1] == "ok", f"{line!r} -> {got}"
+        return got
+
+    def status(self) -> str:
+        self.ser.write(b"?")
+        return self.wait_for(r"^<.*>$", 5.0)[-1]
+
+    def wait_state(self, state: str, timeout: float = 60.0) -> str:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            s = self.status()
+            if s.startswith("<" + state):
+                return s
+            time.sleep(0.05)
+        raise AssertionError(f"state {state} not reached: {s}")
+
+    def close(self) -> None:
+        self.ser.close()
+
+
+def mpos(status: str) -> tuple[float, float]:
+    m = re.search(r"MPos:([-\d.]+),([-\d.]+)", status)
+    assert m, status
+    return float(m.group(1)), float(m.group(2))
+
+
+def no_false_acks(lines: list[str]) -> None:
+    """Only acknowledgements may contain 'ok' or 'error'."""
+    for line in lines:
+        if re.fullmatch(r"ok|error:\d+", line):
+            continue
+        assert "ok" not in line and "error" not in line, line
+
+
+def clean(trace: dict) -> None:
+    assert trace["violations"] == {
+        "short_pulse": 0, "dir_setup": 0, "step_while_disabled": 0, "overspeed": 0
+    }, trace["violations"]
+
+
+@pytest.fixture
+def grbl(plotter) -> Iterator[Grbl]:
+    g = Grbl(plotter.port)
+    # the banner went out before we connected; a soft reset repeats it
+    g.ser.write(b"\x18")
+    g.wait_for(r"^Grbl 1\.1h \['\$' for help\]$", 10)
+    yield g
+    no_false_acks(g.lines)
+    g.close()
+
+
+def unlocked(g: Grbl) -> Grbl:
+    g.ok("$X")
+    return g
+
+
+def stroke_points(trace: dict) -> list[list[tuple[float, float]]]:
+    return [[(p[0], p[1]) for p in s] for s in trace["strokes"]]
+
+
+def dist_to_segment(p, a, b) -> float:
+    ax, ay = a
+    bx, by = b
+    px, py = p
+    dx, dy = bx - ax, by - ay
+    L2 = dx * dx + dy * dy
+    t = 0.0 if L2 == 0 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / L2))
+    return math.hypot(px - ax - t * dx, py - ay - t * dy)
+
+
+def test_boot_banner_status_and_defaults(grbl: Grbl) -> None:
+    status = grbl.status()
+    assert status.startswith("<Alarm|MPos:0.000,0.000,0.000|Bf:17,128|FS:0,0"), status
+    lines = grbl.ok("$$")
+    settings = dict(line[1:].split("=") for line in lines[:-1])
+    assert settings["100"] == "80.000" and settings["110"] == "6000.000"
+    assert settings["130"] == "300.000" and settings["131"] == "220.000"
+    assert settings["22"] == "1" and settings["62"] == "150" and settings["11"] == "0.020"
+    assert grbl.send("G0 X1")[-1] == "error:9"  # locked until $X or $H
+    unlocked(grbl)
+    assert grbl.status().startswith("<Idle|")
+
+
+def test_square_is_drawn_exactly(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    for line in ["G21", "G90", "G0 X10 Y10", "M3", "G1 X60 Y10 F3000", "G1 X60 Y60",
+                 "G1 X10 Y60", "G1 X10 Y10", "M5"]:
+        grbl.ok(line)
+    grbl.wait_state("Idle")
+    trace = plotter.trace()
+    clean(trace)
+    strokes = stroke_points(trace)
+    assert len(strokes) == 1, strokes
+    corners = [(10, 10), (60, 10), (60, 60), (10, 60), (10, 10)]
+    assert len(strokes[0]) == len(corners), strokes[0]
+    for got, want in zip(strokes[0], corners, strict=True):
+        assert math.dist(got, want) < TOL, (got, want)
+    assert trace["pen"] == "up" and trace["pen_lifts"] >= 1
+
+
+def test_diagonal_is_one_straight_stroke(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    for line in ["G0 X5 Y5", "M3", "G1 X205.3 Y77.7 F4000", "M5"]:
+        grbl.ok(line)
+    grbl.wait_state("Idle")
+    trace = plotter.trace()
+    clean(trace)
+    (stroke,) = stroke_points(trace)
+    # plotsim keeps a vertex only where the path bends by more than a step:
+    # a staircase (X then Y) would show up as extra vertices
+    assert len(stroke) == 2, stroke
+    assert math.dist(stroke[0], (5, 5)) < TOL and math.dist(stroke[1], (205.3, 77.7)) < TOL
+    assert mpos(grbl.status()) == (205.3, 77.7)
+    assert trace["steps"] == {"x": round(205.3 * 80), "y": round(77.7 * 80)}
+
+
+@pytest.mark.parametrize("how", ["g2", "g1"])
+def test_circle(plotter, grbl: Grbl, how: str) -> None:
+    unlocked(grbl)
+    cx, cy, r = 100.0, 100.0, 30.0
+    grbl.ok(f"G0 X{cx + r} Y{cy}")
+    grbl.ok("M3")
+    if how == "g2":
+        grbl.ok(f"G2 X{cx + r} Y{cy} I{-r} J0 F3000")
+    else:
+        n = 180
+        for k in range(1, n + 1):
+            a = 2 * math.pi * k / n
+            grbl.ok(f"G1 X{cx + r * math.cos(a):.3f} Y{cy + r * math.sin(a):.3f} F3000")
+    grbl.ok("M5")
+    grbl.wait_state("Idle")
+    trace = plotter.trace()
+    clean(trace)
+    (stroke,) = stroke_points(trace)
+    assert len(stroke) > 20
+    for p in stroke:
+        assert abs(math.dist(p, (cx, cy)) - r) < 0.05, p
+    assert math.dist(stroke[0], (cx + r, cy)) < TOL and math.dist(stroke[-1], (cx + r, cy)) < TOL
+    # the whole circumference is covered
+    angles = sorted(math.atan2(p[1] - cy, p[0] - cx) for p in stroke)
+    gaps = [b - a for a, b in itertools.pairwise(angles)]
+    assert max(gaps) < 0.2
+    assert abs(trace["draw_mm"] - 2 * math.pi * r) < 0.5
+
+
+def test_pen_sequence_and_settle(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    for i in range(3):
+        x = 20 + 20 * i
+        for line in [f"G0 X{x} Y20", "M3", f"G1 X{x + 10} Y20 F3000", "M5"]:
+            grbl.ok(line)
+    status_down = None
+    grbl.ok("M300 S30")
+    status_down = grbl.status()
+    assert "|A:S" in status_down
+    trace = plotter.trace()
+    assert trace["pen"] == "down" and trace["pen_us"] == pytest.approx(2000, abs=15)
+    grbl.ok("M300 S50")
+    assert "|A:S" not in grbl.status()
+    grbl.ok("G1 Z-1 F1000")  # Z at or below 0: pen down
+    assert plotter.trace()["pen"] == "down"
+    grbl.ok("G0 Z2")
+    grbl.wait_state("Idle")
+    trace = plotter.trace()
+    clean(trace)
+    assert trace["pen"] == "up" and trace["pen_us"] == pytest.approx(1000, abs=15)
+    strokes = [s for s in stroke_points(trace) if len(s) > 1]
+    assert len(strokes) == 3
+    for i, s in enumerate(strokes):
+        x = 20 + 20 * i
+        assert math.dist(s[0], (x, 20)) < TOL and math.dist(s[-1], (x + 10, 20)) < TOL
+    # every pen move waits for the settle time: no step within 150 ms after M3
+    times = [(p[2]) for s in trace["strokes"] for p in s]
+    assert times == sorted(times)
+
+
+def test_homing_from_anywhere(plotter_factory) -> None:
+    plotter = plotter_factory(start=(57.3, 31.9))
+    g = Grbl(plotter.port)
+    try:
+        g.ser.write(b"\x18")
+        g.wait_for(r"^Grbl 1\.1h")
+        g.ok("$H", timeout=120)
+        status = g.status()
+        assert status.startswith("<Idle|MPos:1.000,1.000,"), status
+        trace = plotter.trace()
+        assert trace["position"]["x"] == pytest.approx(1.0, abs=1e-6)
+        assert trace["position"]["y"] == pytest.approx(1.0, abs=1e-6)
+        assert trace["limits"] == {"x": False, "y": False}
+        # G28 goes to machine zero: the switch edge, still open
+        g.ok("G28")
+        g.wait_state("Idle")
+        trace = plotter.trace()
+        assert trace["position"] == {"x": 0.0, "y": 0.0}
+        assert trace["limits"] == {"x": False, "y": False}
+        clean(trace)
+        no_false_acks(g.lines)
+    finally:
+        g.close()
+
+
+def test_soft_limit_rejects_before_moving(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    grbl.ok("G0 X10 Y10")
+    got = grbl.send("G0 X301")
+    assert got[-2:] == ["ALARM:2", "error:9"], got
+    grbl.wait_state("Alarm")
+    assert plotter.trace()["position"] == {"x": 10.0, "y": 10.0}
+    unlocked(grbl)
+    # jogs outside the work area are refused with error:15
+    assert grbl.send("$J=G91 X-20 F1000")[-1] == "error:15"
+
+
+def test_hard_limit_hit(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    grbl.ok("$20=0")  # soft limits off, so the move reaches the switch
+    grbl.ok("G0 X5 Y5")
+    grbl.ser.write(b"G1 X-20 F2000\n")
+    lines = grbl.wait_for(r"^ALARM:1$", 30)
+    assert lines[0] == "ok"  # the G1 was queued before the switch closed
+    status = grbl.wait_state("Alarm")
+    assert "Pn:X" in status
+    trace = plotter.trace()
+    # stopped within a step of the switch closing (x < 0)
+    assert -2 * STEP_MM <= trace["position"]["x"] < 0
+    assert mpos(status)[0] == pytest.approx(trace["position"]["x"], abs=0.001)
+    assert grbl.send("G0 X10")[-1] == "error:9"
+    unlocked(grbl)
+    grbl.ok("G0 X10")
+    grbl.wait_state("Idle")
+    assert plotter.trace()["position"]["x"] == pytest.approx(10.0, abs=1e-3)
+
+
+def test_feed_hold_and_resume(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    grbl.ok("G0 X10 Y10")
+    grbl.ok("M3")
+    grbl.ok("G1 X210 Y10 F1500")
+    time.sleep(0.2)
+    grbl.ser.write(b"!")
+    held = grbl.wait_state("Hold:0", 30)
+    x_held = plotter.trace()["position"]["x"]
+    assert 10 < x_held < 210
+    time.sleep(0.3)
+    assert plotter.trace()["position"]["x"] == x_held  # really stopped
+    assert mpos(held)[0] == pytest.approx(x_held, abs=0.001)
+    grbl.ser.write(b"~")
+    grbl.wait_state("Run", 10)
+    grbl.ok("M5")
+    grbl.wait_state("Idle", 60)
+    trace = plotter.trace()
+    clean(trace)
+    (stroke,) = [s for s in stroke_points(trace) if len(s) > 1]
+    # one straight line, through the stop, ending exactly at the target
+    assert len(stroke) == 2 and math.dist(stroke[-1], (210, 10)) < TOL
+
+
+def test_soft_reset_mid_move(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    grbl.ser.write(b"G1 X250 Y150 F3000\n")
+    grbl.wait_state("Run", 10)
+    time.sleep(0.1)
+    grbl.ser.write(b"\x18")
+    lines = grbl.wait_for(r"^Grbl 1\.1h", 10)
+    assert "ALARM:3" in lines
+    status = grbl.wait_state("Alarm")
+    trace = plotter.trace()
+    x, y = mpos(status)
+    assert 0 < x < 250
+    # the firmware's position is the true one, to the step
+    assert trace["steps"]["x"] == round(x * 80) and trace["steps"]["y"] == round(y * 80)
+    time.sleep(0.2)
+    assert plotter.trace()["steps"] == trace["steps"]  # nothing moves after the reset
+    assert grbl.send("G0 X0")[-1] == "error:9"
+    unlocked(grbl)
+
+
+def test_estop_button(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    grbl.ser.write(b"G1 X200 F2000\n")
+    grbl.wait_state("Run", 10)
+    plotter.press("estop")
+    grbl.wait_for(r"^ALARM:10$", 5)
+    status = grbl.wait_state("Alarm")
+    assert "Pn:R" in status
+    steps = plotter.trace()["steps"]
+    time.sleep(0.2)
+    assert plotter.trace()["steps"] == steps
+    assert grbl.send("$X")[-1] == "error:9"  # not while the button is pressed
+    plotter.release("estop")
+    unlocked(grbl)
+
+
+def test_bad_input_gives_errors_and_keeps_working(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    assert grbl.send("G1 X" + "9" * 40 + " F100")[-1] == "error:2"
+    assert grbl.send("X" * 200)[-1] == "error:11"
+    grbl.ser.write(bytes([0, 1, 2, 0xFE, 0x41]) + b"\n")
+    assert grbl.wait_for(r"^(ok|error:\d+)$")[-1].startswith("error:")
+    assert grbl.send("G1 X1 Q5 F100")[-1] == "error:20"
+    assert grbl.send("G2 X10 Y0 F100")[-1] == "error:35"
+    assert grbl.send("$999=1")[-1] == "error:3"
+    assert grbl.send("G0 X1 (comment) ; trailing")[-1] == "ok"
+    grbl.ok("")
+    grbl.wait_state("Idle")
+    assert mpos(grbl.status()) == (1.0, 0.0)
+
+
+def test_check_mode_moves_nothing(plotter, grbl: Grbl) -> None:
+    unlocked(grbl)
+    grbl.ok("$C")
+    assert grbl.status().startswith("<Check|")
+    grbl.ok("G1 X50 Y50 F1000")
+    grbl.ok("M3")
+    grbl.ok("G2 X50 Y50 I10 F1000")
+    assert grbl.send("G1 X1 Q1")[-1] == "error:20"
+    got = grbl.ok("$C")
+    assert any("Disabled" in line for line in got)
+    grbl.wait_for(r"^Grbl 1\.1h")  # leaving check mode resets
+    trace = plotter.trace()
+    assert trace["steps"] == {"x": 0, "y": 0} and trace["pen"] == "up"
