@@ -102,7 +102,8 @@ def preview_pixels(page) -> dict[str, int]:
 
 
 def plot_stop_unlock_next(
-    page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False
+    page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False,
+    pause_resume: bool = False,
 ) -> tuple[float, float]:
     """The main story; returns the ms from the stop input to 'Machine stopped' shown, and
     to the plotter's last step pulse."""
@@ -146,6 +147,14 @@ def plot_stop_unlock_next(
     page.locator("#preview").scroll_into_view_if_needed()
     screenshot(page, f"{prefix}-running")
     page.locator("#queue").scroll_into_view_if_needed()  # where a phone user pressed Start
+    if pause_resume:
+        row = job_row(page, long_name)
+        row.locator("button[data-verb=pause]").click()
+        wait_job_state(page, long_name, ("paused",))
+        server.wait_machine(lambda m: m["state"] == "Hold", timeout=10)
+        row.locator("button[data-verb=resume]").click()
+        wait_job_state(page, long_name, ("running",))
+        server.wait_machine(lambda m: m["state"] == "Run", timeout=10)
     # manual control is locked while the job runs
     page.click(".tab[data-tab=control]")
     assert page.locator("#control-lock").text_content().startswith("Disabled while a job")
@@ -249,7 +258,8 @@ def test_desktop_plot_stop_unlock_next(desktop, server, plotter, capsys):
     login(page, server.url, server.token)
 
     elapsed, last_step = plot_stop_unlock_next(
-        page, server, plotter, DESKTOP, "desktop", lambda: page.click("#estop")
+        page, server, plotter, DESKTOP, "desktop", lambda: page.click("#estop"),
+        pause_resume=True,
     )
     manual_control_settings_console(page, server)
     record("stop_desktop_click", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
@@ -306,6 +316,25 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     assert page.evaluate("document.querySelectorAll('#app img').length") == 0
     assert page.evaluate("window.__pwned") is None
     assert job_row(page, evil).locator(".name").text_content() == evil
+
+    # reorder and delete in the queue
+    upload(page, "second.svg", SQUARE_SVG)
+    wait_job_state(page, "second.svg", ("queued",))
+
+    def order() -> list[str]:
+        return [j["name"] for j in server.client.get("/api/jobs").json()]
+
+    assert order() == [evil, "second.svg"]
+    job_row(page, "second.svg").locator("button[data-verb=up]").click()
+    page.wait_for_function(
+        "() => document.querySelector('#queue li.job .name').textContent === 'second.svg'"
+    )
+    assert order() == ["second.svg", evil]
+    assert job_row(page, "second.svg").locator("button[data-verb=up]").is_disabled()
+    job_row(page, "second.svg").locator("button[data-verb=delete]").click()
+    job_row(page, "second.svg").wait_for(state="detached")
+    assert order() == [evil]
+    job_row(page, evil).locator(".name").click()  # show it again
 
     # placement: changing it re-imports the queued job and reloads its preview
     before = page.evaluate("() => window.plotbridge.preview.geom.bounds")
