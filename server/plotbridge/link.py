@@ -338,7 +338,24 @@ class Link:
         self._write(text.encode("ascii") + b"\n")
         self._emit(LinkEvent("log", direction="tx", line=text))
         # Shielded: on timeout the entry stays queued to absorb its late answer.
-        return await asyncio.wait_for(asyncio.shield(cmd.future), limit_s)
+        responses = await asyncio.wait_for(asyncio.shield(cmd.future), limit_s)
+        self._note_settings(text, responses)
+        return responses
+
+    def _note_settings(self, line: str, responses: list[str]) -> None:
+        """Keep `settings` current: a `$$` answer replaces it, an accepted `$N=V` updates it."""
+        if line == "$$":
+            settings = {}
+            for response in responses:
+                kind, payload = classify(response)
+                if kind == "setting":
+                    settings[payload[0]] = payload[1]
+            self.settings = settings
+            self._settings_stale = False
+        else:
+            kind, payload = classify(line)
+            if kind == "setting":
+                self.settings[payload[0]] = payload[1]
 
     def _write(self, data: bytes, urgent: bool = False) -> None:
         """Write to the port without awaiting.
@@ -600,18 +617,10 @@ class Link:
 
     async def _read_settings(self) -> None:
         try:
-            lines = await self._exchange_or_lost("$$", 3.0)
+            await self._exchange_or_lost("$$", 3.0)
         except (CommandError, TimeoutError) as exc:
             log.warning("could not read settings ($$): %s; will retry when idle", exc)
             self._settings_stale = True
-            return
-        settings: dict[int, float] = {}
-        for line in lines:
-            kind, payload = classify(line)
-            if kind == "setting":
-                settings[payload[0]] = payload[1]
-        self.settings = settings
-        self._settings_stale = False
 
     async def _refresh_settings(self) -> None:
         async with self._send_lock:

@@ -586,3 +586,17 @@ async def test_stock_grbl_work_position_reports_without_buffer_field():
         acked: list[int] = []
         await link.stream(iter(program(60)), acked.append)
         assert acked == list(range(1, 61))
+
+
+async def test_settings_follow_writes_and_rereads():
+    board = FakeBoard()
+    async with running(board) as link:
+        await link.command("$110=4000")
+        assert link.settings[110] == 4000.0
+        board.script["$$"] = ["$110=4000.000", "$130=250.000", "ok"]
+        await link.command("$$")
+        assert link.settings == {110: 4000.0, 130: 250.0}
+        board.script["$111=-5"] = ["error:4"]
+        with pytest.raises(CommandError):
+            await link.command("$111=-5")
+        assert 111 not in link.settings
