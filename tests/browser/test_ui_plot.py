@@ -317,9 +317,12 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     assert page.evaluate("window.__pwned") is None
     assert job_row(page, evil).locator(".name").text_content() == evil
 
-    # reorder and delete in the queue
+    # reorder and delete in the queue; the placement form applies to uploads
+    page.select_option("#placement select[name=rotate]", "90")
     upload(page, "second.svg", SQUARE_SVG)
     wait_job_state(page, "second.svg", ("queued",))
+    second = server.job(job_id(page, "second.svg"))
+    assert second["placement"]["rotate"] == 90
 
     def order() -> list[str]:
         return [j["name"] for j in server.client.get("/api/jobs").json()]

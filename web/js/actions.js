@@ -16,14 +16,9 @@ export function placementFields(p) {
   return out;
 }
 
-/**
- * Placement as upload form fields. The server's form parsing does not accept `rotate`
- * as a string yet, so a rotation is applied afterwards with PATCH (see uploadPlaced).
- */
+/** Placement as upload form fields. */
 function appendPlacement(form, placement) {
-  for (const [k, v] of Object.entries(placementFields(placement))) {
-    if (k !== "rotate") form.append(k, String(v));
-  }
+  for (const [k, v] of Object.entries(placementFields(placement))) form.append(k, String(v));
 }
 
 /** The form's state from a job's placement. */
@@ -122,12 +117,6 @@ export function createActions(store, socket, estop) {
         st.previews[job.id] = { version, error: err.message };
       });
     }
-  }
-
-  async function rotateAfterUpload(job) {
-    const rotate = s.placement.rotate;
-    if (!rotate || !job || job.state !== "queued") return job;
-    return api.patch(`/api/jobs/${encodeURIComponent(job.id)}`, { placement: placementFields(s.placement) });
   }
 
   async function loadSettings() {
@@ -303,7 +292,7 @@ export function createActions(store, socket, estop) {
       const progress = (loaded, total) => store.update(() => {
         Object.assign(record, { loaded, total, status: loaded >= total ? "processing" : "uploading" });
       });
-      uploadJob(form, progress).then(rotateAfterUpload).then(
+      uploadJob(form, progress).then(
         (job) => {
           store.update((st) => {
             Object.assign(record, { status: "done", message: "added to the queue" });
@@ -329,7 +318,7 @@ export function createActions(store, socket, estop) {
       form.append("name", name);
       appendPlacement(form, s.placement);
       try {
-        const job = await rotateAfterUpload(await uploadJob(form, () => {}));
+        const job = await uploadJob(form, () => {});
         store.update((st) => {
           Object.assign(record, { status: "done", message: "added to the queue" });
           st.selectedJobId = job.id;
