@@ -87,7 +87,7 @@ class MachineStatus:
     feed: float | None = None
     pins: str = ""
     line: int | None = None
-    updated_at: float = 0.0
+    updated_at: float = 0.0     # time.time() of the last status report
 
 
 @dataclass(frozen=True)
