@@ -127,7 +127,7 @@ static void drain(run_t *r, double mm_per_event)
                 r->steps[a] += (b->dir_negative & (1 << a)) ? -(int64_t)b->steps[a] : (int64_t)b->steps[a];
             last_block = s->block;
         }
-        double dt = (double)s->events * s->period / STEP_TIMER_HZ;
+        double dt = (double)s->events * (s->period + 1) / STEP_TIMER_HZ;
         double v = s->events * mm_per_event / dt;
         /* each segment's rate is its average: compare midpoints */
         double gap = 0.5 * (dt + r->last_dt);

@@ -1,0 +1,205 @@
+/* Benchmark harness (bench/firmware_bench.py builds and runs it): runs a
+ * firmware ELF in libsimavr, streams a G-code file into its UART with
+ * character counting at the real byte rate, and measures in simulated
+ * cycles: when each line is acknowledged, how long the step interrupt runs
+ * (the bench build raises PC5 for the body of the step interrupt), and
+ * the step rate per axis over 5 ms windows. Prints one JSON object. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include "avr_extint.h"
+#include "avr_ioport.h"
+#include "avr_uart.h"
+#include "sim_avr.h"
+#include "sim_elf.h"
+#include "sim_irq.h"
+
+#define F_CPU 16000000ULL
+#define WINDOW (F_CPU / 200)      /* 5 ms */
+#define MAX_WINDOWS 20000
+#define MAX_LINES 20000
+#define RX_BUDGET 128
+#define IDLE_END (F_CPU / 4)      /* no step for 250 ms after the last ack: done */
+
+static avr_t *avr;
+static char *text;
+static size_t text_len, line_start[MAX_LINES];
+static size_t line_count, acked, inflight;
+static uint64_t ack_cycle[MAX_LINES];
+static unsigned errors;
+static uint64_t byte_cycles, next_byte_at;
+static char outline[256];
+static size_t outlen;
+static uint64_t isr_rise, isr_max, isr_count, isr_total;
+static uint64_t steps[2], last_step_cycle, last_rise[2], min_interval[2] = {~0ULL, ~0ULL};
+static uint32_t window_steps[MAX_WINDOWS][2];
+static int alarm_seen;
+
+static void on_uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    char c = (char)value;
+    if (c == '\n') {
+        outline[outlen] = 0;
+        if (outlen && outline[outlen - 1] == '\r')
+            outline[outlen - 1] = 0;
+        int is_ok = strcmp(outline, "ok") == 0, is_err = strncmp(outline, "error:", 6) == 0;
+        if ((is_ok || is_err) && acked < line_count) {
+            if (is_err) {
+                errors++;
+                fprintf(stderr, "line %zu: %s\n", acked + 1, outline);
+            }
+            size_t len = (acked + 1 < line_count ? line_start[acked + 1] : text_len) - line_start[acked];
+            inflight -= len;
+            ack_cycle[acked++] = avr->cycle;
+        } else if (strncmp(outline, "ALARM", 5) == 0) {
+            alarm_seen = 1;
+            fprintf(stderr, "%s\n", outline);
+        }
+        outlen = 0;
+    } else if (outlen < sizeof(outline) - 1) {
+        outline[outlen++] = c;
+    }
+}
+
+static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    int axis = (int)(intptr_t)param;
+    if (!(value & 1))
+        return;
+    uint64_t now = avr->cycle;
+    if (steps[axis] && now - last_rise[axis] < min_interval[axis])
+        min_interval[axis] = now - last_rise[axis];
+    last_rise[axis] = now;
+    steps[axis]++;
+    last_step_cycle = now;
+    uint64_t w = now / WINDOW;
+    if (w < MAX_WINDOWS)
+        window_steps[w][axis]++;
+}
+
+static void on_isr_pin(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    if (value & 1) {
+        isr_rise = avr->cycle;
+        return;
+    }
+    if (!isr_rise)
+        return; /* the pin settling at start-up, not an interrupt */
+    uint64_t d = avr->cycle - isr_rise;
+    isr_count++;
+    isr_total += d;
+    if (d > isr_max)
+        isr_max = d;
+    if (getenv("HARNESS_ISR_DEBUG") && d > 1000)
+        fprintf(stderr, "long isr %llu cycles at %llu\n", (unsigned long long)d, (unsigned long long)isr_rise);
+}
+
+/* one byte per character time; a line starts only when all of it fits in
+ * the receive buffer next to the lines not yet acknowledged */
+static size_t next_line, pos_in_line;
+
+static size_t line_len(size_t i)
+{
+    return (i + 1 < line_count ? line_start[i + 1] : text_len) - line_start[i];
+}
+
+static avr_cycle_count_t feed(avr_t *a, avr_cycle_count_t when, void *param)
+{
+    (void)param;
+    if (next_line < line_count) {
+        if (pos_in_line == 0 && inflight + line_len(next_line) <= RX_BUDGET)
+            inflight += line_len(next_line);
+        else if (pos_in_line == 0)
+            return when + byte_cycles / 4; /* wait for an ok */
+        avr_raise_irq(avr_io_getirq(a, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT),
+                      (uint8_t)text[line_start[next_line] + pos_in_line]);
+        if (++pos_in_line == line_len(next_line)) {
+            pos_in_line = 0;
+            next_line++;
+        }
+    }
+    return when + byte_cycles;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 3) {
+        fprintf(stderr, "usage: %s FIRMWARE.elf GCODE [max_seconds]\n", argv[0]);
+        return 2;
+    }
+    double max_s = argc > 3 ? atof(argv[3]) : 120.0;
+    FILE *f = fopen(argv[2], "rb");
+    if (!f)
+        return 2;
+    text = malloc(1 << 24);
+    text_len = fread(text, 1, (1 << 24) - 1, f);
+    fclose(f);
+    for (size_t i = 0; i < text_len && line_count < MAX_LINES; i++)
+        if (i == 0 || text[i - 1] == '\n')
+            line_start[line_count++] = i;
+
+    elf_firmware_t fw;
+    memset(&fw, 0, sizeof(fw));
+    if (elf_read_firmware(argv[1], &fw))
+        return 2;
+    avr = avr_make_mcu_by_name("atmega328p");
+    avr_init(avr);
+    avr->frequency = F_CPU;
+    avr->log = 0;
+    avr_load_firmware(avr, &fw);
+    /* simavr polls INT0/INT1 (the step pins) on every cycle otherwise */
+    avr_extint_set_strict_lvl_trig(avr, 0, 0);
+    avr_extint_set_strict_lvl_trig(avr, 1, 0);
+    /* no flow control: the harness paces itself */
+    uint32_t flags = 0;
+    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
+    flags &= ~AVR_UART_FLAG_STDIO;
+    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart_out, 0);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2), on_step, (void *)0);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 3), on_step, (void *)1);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), 5), on_isr_pin, 0);
+
+    /* the firmware runs U2X with UBRR 16: 117647 baud, 10 bits a byte */
+    byte_cycles = 10ULL * 8ULL * 17ULL;
+    next_byte_at = F_CPU / 5; /* after the banner and the EEPROM defaults */
+    avr_cycle_timer_register(avr, next_byte_at, feed, 0);
+
+    uint64_t limit = (uint64_t)(max_s * F_CPU);
+    for (;;) {
+        int st = avr_run(avr);
+        if (st == cpu_Done || st == cpu_Crashed)
+            break;
+        if (avr->cycle > limit)
+            break;
+        if (acked == line_count && avr->cycle > last_step_cycle + IDLE_END &&
+            avr->cycle > ack_cycle[line_count - 1] + IDLE_END)
+            break;
+    }
+    printf("{\"cycles\": %llu, \"lines\": %zu, \"acked\": %zu, \"errors\": %u, \"alarm\": %d,\n",
+           (unsigned long long)avr->cycle, line_count, acked, errors, alarm_seen);
+    printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
+           (unsigned long long)isr_count, (unsigned long long)isr_max,
+           isr_count ? (double)isr_total / (double)isr_count : 0.0);
+    printf(" \"steps\": [%llu, %llu], \"min_interval_cycles\": [%llu, %llu],\n",
+           (unsigned long long)steps[0], (unsigned long long)steps[1],
+           (unsigned long long)(steps[0] > 1 ? min_interval[0] : 0),
+           (unsigned long long)(steps[1] > 1 ? min_interval[1] : 0));
+    printf(" \"ack_cycles\": [");
+    for (size_t i = 0; i < acked; i++)
+        printf("%s%llu", i ? "," : "", (unsigned long long)ack_cycle[i]);
+    printf("],\n \"window_cycles\": %llu, \"windows\": [", (unsigned long long)WINDOW);
+    uint64_t nw = avr->cycle / WINDOW + 1;
+    if (nw > MAX_WINDOWS)
+        nw = MAX_WINDOWS;
+    for (uint64_t w = 0; w < nw; w++)
+        printf("%s[%u,%u]", w ? "," : "", window_steps[w][0], window_steps[w][1]);
+    printf("]}\n");
+    return 0;
+}
