@@ -16,6 +16,7 @@ import argparse
 import asyncio
 import contextlib
 import json
+import multiprocessing
 import os
 import random
 import signal
@@ -26,6 +27,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx
 import websockets
@@ -112,14 +114,6 @@ class Bench:
                 raise RuntimeError(f"{what}: not within {limit} s")
             await asyncio.sleep(0.05)
 
-    async def watcher(self, ready: asyncio.Event, count: list[int]) -> None:
-        uri = f"ws://127.0.0.1:{self.port}/api/ws?token={TOKEN}"
-        async with websockets.connect(uri, max_size=None) as ws:
-            count[0] += 1
-            if count[0] == self.args.clients:
-                ready.set()
-            async for _ in ws:
-                self.received += 1
 
     async def trace(self) -> dict:
         return (await self.http.get("/api/sim/trace")).json()
@@ -196,10 +190,19 @@ class Bench:
     async def run(self) -> dict:
         load_before = os.getloadavg()[0]
         await self.start_server()
-        ready, count = asyncio.Event(), [0]
-        watchers = [asyncio.create_task(self.watcher(ready, count))
-                    for _ in range(self.args.clients)]
-        await asyncio.wait_for(ready.wait(), 30)
+        # The watching clients live in another process, so their traffic does
+        # not delay this one's stop requests (only the server's, as it should).
+        ctx = multiprocessing.get_context("spawn")
+        connected, received = ctx.Value("i", 0), ctx.Value("i", 0)
+        watchers = ctx.Process(
+            target=run_watchers, args=(self.port, self.args.clients, connected, received),
+            daemon=True)
+        watchers.start()
+
+        async def all_connected() -> bool:
+            return connected.value == self.args.clients
+
+        await self.until(all_connected, 30, "WebSocket clients connected")
         load = await self.load_sample()
         uri = f"ws://127.0.0.1:{self.port}/api/ws?token={TOKEN}"
         latencies: list[tuple[str, float]] = []
@@ -211,8 +214,8 @@ class Bench:
                 print(f"run {run + 1:2}: {latencies[-1][0]:9} {latency * 1000:7.2f} ms",
                       flush=True)
             drain.cancel()
-        for task in watchers:
-            task.cancel()
+        self.received = received.value
+        watchers.terminate()
         ms = [v * 1000 for _, v in latencies]
         return {
             "runs": len(ms), "clients": self.args.clients, "sim_speed": self.args.sim_speed,
@@ -234,6 +237,23 @@ class Bench:
     async def close(self) -> None:
         await self.http.aclose()
         await asyncio.to_thread(self.stop_server)
+
+
+async def watch(port: int, connected: Any, received: Any) -> None:
+    uri = f"ws://127.0.0.1:{port}/api/ws?token={TOKEN}"
+    async with websockets.connect(uri, max_size=None) as ws:
+        with connected.get_lock():
+            connected.value += 1
+        async for _ in ws:
+            with received.get_lock():
+                received.value += 1
+
+
+def run_watchers(port: int, count: int, connected: Any, received: Any) -> None:
+    async def main() -> None:
+        await asyncio.gather(*(watch(port, connected, received) for _ in range(count)))
+
+    asyncio.run(main())
 
 
 async def main_async(args: argparse.Namespace) -> dict:
