@@ -224,7 +224,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         line = line.strip()
         if not line or any(ch in line for ch in "?!~\x18\r\n") or not line.isprintable():
             raise JobError(422, "one printable G-code or $ line, without realtime characters")
-        return await board(line, wait=30)
+        return [*await board(line, wait=30), "ok"]  # the link keeps the ok to itself
 
     @app.get("/api/machine/settings", dependencies=guard)
     async def settings() -> dict[str, Any]:
@@ -236,9 +236,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         responses = []
         for number, value in body.settings.items():
             text = f"{value:g}" if value != int(value) else str(int(value))
-            responses += await board(f"${number}={text}")
-        with contextlib.suppress(JobError):
-            await board("$$")
+            responses += await board(f"${number}={text}")  # the link notes accepted values
         return {"responses": responses, "settings": settings_view(link.settings or {})}
 
     # ---- jobs --------------------------------------------------------------------------

@@ -265,6 +265,13 @@ def test_virtual_mode_serves_the_trace(server_virtual):
     info = server_virtual.client.get("/api/server").json()
     assert info["virtual"] is True and info["serial"] is None
     home(server_virtual)
+    changed = server_virtual.client.put("/api/machine/settings", json={"settings": {"62": 120}})
+    assert changed.status_code == 200, changed.text
+    settings = server_virtual.client.get("/api/machine/settings").json()["settings"]
+    assert {s["id"]: s["value"] for s in settings}[62] == 120
+    answer = server_virtual.client.post("/api/machine/command", json={"line": "G0 X5 Y5"})
+    assert answer.json() == {"responses": ["ok"]}
+    server_virtual.wait_machine(lambda m: m["position"] == {"x": 5.0, "y": 5.0}, 10)
     job = submit(server_virtual, drawing())
     assert server_virtual.wait_job(job["id"], ("done", "failed"), 120)["state"] == "done"
     trace = server_virtual.client.get("/api/sim/trace").json()

@@ -88,7 +88,7 @@ class FakeLink:
         self.commands.append(line)
         if line == "$X":
             self.set_state("Idle", alarm=None)
-        return ["ok"]
+        return []  # like Link.command: the lines before the ok
 
     def step(self) -> None:
         assert self._tick is not None
