@@ -187,12 +187,16 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
     @app.post("/api/machine/unlock", dependencies=guard)
     async def unlock() -> dict[str, Any]:
         idle_machine("unlock")
+        log.info("unlock ($X) requested")
         return {"responses": await board("$X")}
 
     @app.post("/api/machine/home", dependencies=guard)
     async def home() -> dict[str, Any]:
         idle_machine("home")
-        return {"responses": await board("$H", wait=120)}
+        log.info("homing ($H) requested")
+        responses = await board("$H", wait=120)
+        log.info("homing done")
+        return {"responses": responses}
 
     @app.post("/api/machine/pen", dependencies=guard)
     async def pen(body: PenBody) -> dict[str, Any]:
