@@ -160,6 +160,7 @@ class Link:
     banner_wait_serial = 2.0   # the same for a real port: DTR reset + bootloader take ~1-2 s
     handshake_timeout = 5.0    # s for the board to answer at all
     silence_timeout = 0.8      # s without a byte from the board while polling: link lost
+    silent_polls = 3           # ... and at least this many '?' sent since the last byte
     reset_settle = 2.5         # s commands wait for the banner after a soft reset
     backoff_min = 0.5
     backoff_max = 5.0
@@ -187,6 +188,7 @@ class Link:
         self._stream: _Stream | None = None
         self._lost: asyncio.Future[str] | None = None
         self._last_rx = 0.0
+        self._unanswered_polls = 0
         self._wco: tuple[float, ...] = (0.0, 0.0, 0.0)
         self._settings_stale = False
         self._tasks: set[asyncio.Task[Any]] = set()
@@ -421,6 +423,7 @@ class Link:
 
     def _on_data(self, data: bytes) -> None:
         self._last_rx = time.monotonic()
+        self._unanswered_polls = 0
         lines, problems = self._splitter.feed(data)
         for problem in problems:
             log.warning("from the board: %s", problem)
@@ -633,14 +636,18 @@ class Link:
         while not self._lost.done():
             with contextlib.suppress(LinkDown):
                 self._write(STATUS_QUERY, urgent=True)
+                self._unanswered_polls += 1
             if (self._settings_stale and not self._send_lock.locked()
                     and self.status.state in ("Idle", "Alarm")):
                 self._settings_stale = False
                 self._spawn(self._refresh_settings())
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(asyncio.shield(self._lost), interval)
+            # Time alone is not enough: if this process stalled, the answers may
+            # be waiting unread. The board must also have ignored several polls.
             silence = time.monotonic() - self._last_rx
-            if silence > self.silence_timeout and not self._slow_command_pending():
+            if (silence > self.silence_timeout and self._unanswered_polls >= self.silent_polls
+                    and not self._slow_command_pending()):
                 self._lose(f"no answer from the board for {silence:.1f} s")
         return self._lost.result()
 

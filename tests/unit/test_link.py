@@ -600,3 +600,12 @@ async def test_settings_follow_writes_and_rereads():
         with pytest.raises(CommandError):
             await link.command("$111=-5")
         assert 111 not in link.settings
+
+
+async def test_stalled_event_loop_is_not_taken_for_a_silent_board():
+    board = FakeBoard()
+    async with running(board) as link:
+        time.sleep(link.silence_timeout * 3)  # noqa: ASYNC251 - the loop stalls on purpose
+        await asyncio.sleep(0.2)
+        assert link.connected
+        assert not any(e.kind == "disconnected" for e in link.events)
