@@ -214,6 +214,16 @@ def version_from_feedback(text: str) -> str | None:
     return version or None
 
 
+def buffers_from_feedback(text: str) -> tuple[int, int] | None:
+    """(planner blocks, receive-buffer bytes) from `$I`'s `[OPT:V,15,128]`, else None."""
+    if not text.startswith("OPT:"):
+        return None
+    parts = text[4:].split(",")
+    if len(parts) < 3 or not (parts[1].isdigit() and parts[2].isdigit()):
+        return None
+    return int(parts[1]), int(parts[2])
+
+
 def line_problem(line: str) -> str | None:
     """Why `line` cannot be sent to the board as one G-code/`$` line, or None if it can.
 

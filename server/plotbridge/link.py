@@ -34,6 +34,7 @@ from .grbl import (
     LineSplitter,
     Status,
     alarm_message,
+    buffers_from_feedback,
     classify,
     cost,
     error_message,
@@ -452,11 +453,20 @@ class Link:
         else:
             if kind == "feedback" and (version := version_from_feedback(payload)):
                 self.status.firmware = version
+            elif kind == "feedback" and (sizes := buffers_from_feedback(payload)):
+                self._use_rx_buffer(sizes[1])
             elif kind == "msg" and payload.strip().lower() == "reset to continue":
                 # Stock GRBL after a limit alarm ignores everything until reset.
                 self._soft_reset("alarm")
             if isinstance(front, _Command):
                 front.responses.append(line)
+
+    def _use_rx_buffer(self, size: int) -> None:
+        """Count against the board's own receive buffer when it is smaller than GRBL's."""
+        capacity = min(size, RX_BUFFER_SIZE)
+        if capacity >= 16 and capacity != self._counter.capacity:
+            log.info("board receive buffer: %d bytes", size)
+            self._counter.capacity = capacity
 
     def _front(self) -> Any:
         return self._counter.peek()

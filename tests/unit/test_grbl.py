@@ -8,6 +8,7 @@ from plotbridge.grbl import (
     CharCounter,
     LineSplitter,
     alarm_message,
+    buffers_from_feedback,
     classify,
     cost,
     error_message,
@@ -85,6 +86,10 @@ def test_messages_and_version():
     assert "emergency" in alarm_message(10)
     assert version_from_feedback("VER:1.1h.20190825:") == "1.1h.20190825"
     assert version_from_feedback("OPT:V,15,128") is None
+    assert buffers_from_feedback("OPT:V,15,128") == (15, 128)
+    assert buffers_from_feedback("OPT:,17,64") == (17, 64)
+    assert buffers_from_feedback("OPT:V") is None
+    assert buffers_from_feedback("VER:1.1h:") is None
 
 
 def test_line_problem():

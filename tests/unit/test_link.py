@@ -609,3 +609,16 @@ async def test_stalled_event_loop_is_not_taken_for_a_silent_board():
         await asyncio.sleep(0.2)
         assert link.connected
         assert not any(e.kind == "disconnected" for e in link.events)
+
+
+async def test_smaller_receive_buffer_from_build_info_is_respected():
+    board = FakeBoard()
+    board.script["$I"] = ["[VER:1.1h.20190825:]", "[OPT:V,15,64]", "ok"]
+    board.auto = False
+    async with running(board) as link:
+        stop = asyncio.Event()
+        drainer = asyncio.create_task(feed_slowly(board, stop))
+        await link.stream(iter(program(100)), lambda n: None)
+        stop.set()
+        await drainer
+        assert 40 < board.max_rx <= 64
