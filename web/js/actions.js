@@ -107,16 +107,19 @@ export function createActions(store, socket, estop) {
     const have = s.previews[job.id];
     if (have && have.version === version) return;
     s.previews[job.id] = { version, loading: true, geom: have && have.geom }; // keep showing the old one
+    let entry;
     try {
       const data = await api.get(`/api/jobs/${encodeURIComponent(job.id)}/preview`);
-      store.update((st) => {
-        st.previews[job.id] = { version, geom: buildGeometry(data) };
-      });
+      entry = { version, geom: buildGeometry(data) };
     } catch (err) {
-      store.update((st) => {
-        st.previews[job.id] = { version, error: err.message };
-      });
+      entry = { version, error: err.message };
     }
+    store.update((st) => {
+      const current = st.previews[job.id];
+      if (current && current.version !== version) return; // a newer re-import is loading
+      // Only the shown job's preview is kept: a big one takes megabytes.
+      st.previews = { [job.id]: entry };
+    });
   }
 
   async function loadSettings() {
