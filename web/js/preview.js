@@ -88,12 +88,19 @@ function appendPath(path, set, from, to, t, minPx) {
   }
 }
 
+/** An offscreen layer; read back every build step, so kept in memory, not on a GPU. */
+function layerCanvas() {
+  const canvas = document.createElement("canvas");
+  canvas.getContext("2d", { willReadFrequently: true });
+  return canvas;
+}
+
 export class PreviewCanvas {
   constructor(canvas) {
     this.canvas = canvas;
     this.ctx = canvas.getContext("2d");
     this.front = null; // {canvas, key, view}: the last complete static layer
-    this.spare = document.createElement("canvas"); // the next one is built here
+    this.spare = layerCanvas(); // the next one is built here
     this.build = null; // {key, view, steps, next}: the rebuild in progress
     this.work = { w: 300, h: 220 };
     this.paper = null;
@@ -249,7 +256,7 @@ export class PreviewCanvas {
     }
     if (this.build && this.runBuild(t0 + FRAME_BUDGET_MS)) {
       const done = this.build;
-      this.spare = this.front ? this.front.canvas : document.createElement("canvas");
+      this.spare = this.front ? this.front.canvas : layerCanvas();
       this.front = { canvas: done.canvas, key: done.key, view: done.view };
       this.build = null;
       this.stats.fullRenders++;
