@@ -34,6 +34,9 @@ MOVING = ("Run", "Jog", "Home", "Hold")
 PROGRESS_INTERVAL = 0.2  # s between job progress messages (5 Hz)
 SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 DEFAULT_PLANNER_BLOCKS = 15  # GRBL's planner size on an ATmega328P
+# A block leaves the planner (and Bf) once it is cut into step segments, before those
+# are stepped: up to one block per segment (GRBL buffers 6 segments, our firmware 7).
+SEGMENT_BLOCKS = 8
 PUBLIC_FIELDS = (
     "id", "name", "state", "format", "created_at", "lines_total", "lines_done", "progress",
     "estimate_s", "eta_s", "bounds", "error", "stats", "placement", "resume_line",
@@ -219,7 +222,7 @@ class JobManager:
             self._planner_blocks = free
         job = self.jobs.get(self.active) if self.active else None
         if job is not None and isinstance(free, int):
-            queued = self._planner_blocks - free
+            queued = self._planner_blocks - free + SEGMENT_BLOCKS
             job["safe_line"] = first_unexecuted_line(
                 self._motion, job["lines_done"], queued, self._run_floor
             )
@@ -540,7 +543,7 @@ class JobManager:
         log.warning("EMERGENCY STOP (%s)", source)
         if self.active is not None:
             job = self.jobs[self.active]
-            job["resume_line"] = job.get("safe_line") or self._run_floor
+            job["resume_line"] = self._resume_line(job)
             self._finish(job, "stopped", "emergency stop")
         self._send_machine(force=True)
 
@@ -649,7 +652,7 @@ class JobManager:
         if reason == "disconnected":
             self._interrupt(job)
         elif reason == "estop":
-            job["resume_line"] = job.get("safe_line") or self._run_floor
+            job["resume_line"] = self._resume_line(job)
             self._finish(job, "stopped", "emergency stop")
         elif reason == "cancelled":
             self._finish(job, "cancelled", None)
@@ -661,8 +664,17 @@ class JobManager:
     def _interrupt(self, job: dict[str, Any]) -> None:
         if job["state"] not in ACTIVE:
             return
-        job["resume_line"] = job.get("safe_line") or self._run_floor
+        job["resume_line"] = self._resume_line(job)
         self._finish(job, "interrupted", "the link to the plotter was lost")
+
+    def _resume_line(self, job: dict[str, Any]) -> int:
+        """Two safe bounds, the later wins: the last status report's (acked minus the
+        blocks it still had queued) and now's (acked minus full planner and segment
+        buffers: a line is acknowledged only once it is in the planner)."""
+        full = first_unexecuted_line(
+            self._motion, job["lines_done"], self._planner_blocks + SEGMENT_BLOCKS, self._run_floor
+        )
+        return max(job.get("safe_line") or self._run_floor, full)
 
     def _finish(self, job: dict[str, Any], state: str, error: str | None) -> None:
         job["state"] = state

@@ -214,12 +214,14 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     started = time.monotonic()
     sim_start = plotter.trace()["sim_time"]
     wait_progress(server, job["id"], 150)
-    plotter.kill()
+    # SIGTERM: the simulator dies mid-move all the same, but writes its final trace
+    # (after SIGKILL the file can lag the pen by 50 ms, which would fake a gap).
+    plotter.stop()
     killed_at = time.monotonic()
     interrupted = server.wait_job(job["id"], ("interrupted",), 5)
     assert time.monotonic() - killed_at < 2.0, "link loss noticed too late"
     assert 1 <= interrupted["resume_line"] <= interrupted["lines_done"] + 1
-    before = plotter.trace()  # the trace file as the killed simulator left it
+    before = plotter.trace()  # the trace file the stopped simulator left
     sim_rate = (before["sim_time"] - sim_start) / (killed_at - started)  # sim s per wall s
     x, y = before["position"]["x"], before["position"]["y"]
     plotter.restart(start=(x, y))

@@ -405,11 +405,11 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     for _ in range(12):
         api.link.step()
         await asyncio.sleep(0.01)
-    api.link.set_state("Run", planner_free=12)  # 3 blocks still queued at 12 acked lines
+    api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
     await settle(lambda: api.manager.jobs[jid]["state"] == "interrupted")
     interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
-    assert interrupted["resume_line"] == 10  # lines 10, 11, 12 are moves not known done
+    assert interrupted["resume_line"] == 5  # the last SEGMENT_BLOCKS moves are not known done
     async def preamble(self, program, line):
         return ["M5", "G0 X6 Y0"]
 
@@ -420,7 +420,7 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     assert response.status_code == 200
     await settle(lambda: api.manager.jobs[jid]["state"] == "done")
     resumed = api.link.streamed[12:]
-    assert resumed[:2] == [(0, "M5"), (0, "G0 X6 Y0")] and resumed[2][0] == 10
+    assert resumed[:2] == [(0, "M5"), (0, "G0 X6 Y0")] and resumed[2][0] == 5
 
 
 async def test_move_and_delete(api, tmp_path):
