@@ -35,6 +35,19 @@ static uint64_t isr_rise, isr_max, isr_count, isr_total;
 static uint64_t steps[2], last_step_cycle, last_rise[2], min_interval[2] = {~0ULL, ~0ULL};
 static uint32_t window_steps[MAX_WINDOWS][2];
 static int alarm_seen;
+static uint64_t mark_rise, mark_total, mark_count; /* PC4: optional profiling mark */
+
+static void on_mark_pin(struct avr_irq_t *irq, uint32_t value, void *param)
+{
+    (void)irq;
+    (void)param;
+    if (value & 1) {
+        mark_rise = avr->cycle;
+    } else if (mark_rise) {
+        mark_total += avr->cycle - mark_rise;
+        mark_count++;
+    }
+}
 
 static void on_uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -165,9 +178,12 @@ int main(int argc, char **argv)
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2), on_step, (void *)0);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 3), on_step, (void *)1);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), 5), on_isr_pin, 0);
+    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), 4), on_mark_pin, 0);
 
-    /* the firmware runs U2X with UBRR 16: 117647 baud, 10 bits a byte */
-    byte_cycles = 10ULL * 8ULL * 17ULL;
+    /* the firmware runs U2X with UBRR 16: 117647 baud. simavr's UART takes
+     * input bytes a little slower than 10 bits each and drops what overflows
+     * its FIFO, so pace at 11 bits a byte. */
+    byte_cycles = 11ULL * 8ULL * 17ULL;
     next_byte_at = F_CPU / 5; /* after the banner and the EEPROM defaults */
     avr_cycle_timer_register(avr, next_byte_at, feed, 0);
 
@@ -187,6 +203,8 @@ int main(int argc, char **argv)
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
            (unsigned long long)isr_count, (unsigned long long)isr_max,
            isr_count ? (double)isr_total / (double)isr_count : 0.0);
+    printf(" \"mark\": {\"count\": %llu, \"total_cycles\": %llu},\n", (unsigned long long)mark_count,
+           (unsigned long long)mark_total);
     printf(" \"steps\": [%llu, %llu], \"min_interval_cycles\": [%llu, %llu],\n",
            (unsigned long long)steps[0], (unsigned long long)steps[1],
            (unsigned long long)(steps[0] > 1 ? min_interval[0] : 0),

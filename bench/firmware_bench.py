@@ -1,0 +1,160 @@
+"""Firmware benchmark in simulated cycles (exact and repeatable).
+
+Builds a bench variant of the firmware (-DBENCH_ISR_PIN: PC5 is high while
+the step interrupt's body runs) and a small libsimavr harness
+(firmware/test/bench/harness.c) that streams G-code into the UART with
+character counting at the real byte rate and records acknowledgements, step
+edges and the interrupt pin in simulated cycles. Measures:
+
+- sustained two-axis step rate (45 degree move, 40 kHz commanded per axis),
+  and whether any step came late (a 5 ms window below the commanded rate
+  during the cruise);
+- worst-case cycles of the step interrupt: the pin-measured body plus the
+  fixed entry/exit cost counted from the disassembly;
+- G-code throughput in lines per simulated second for 0.5 mm G1 segments;
+- flash and RAM use of the real build.
+
+Run: .venv/bin/python bench/firmware_bench.py
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+FW = REPO / "firmware"
+F_CPU = 16_000_000
+TARGET_STEP_HZ = 40_000
+TARGET_LINES_S = 600
+FLASH_MAX, RAM_MAX = 30_720, 1_536
+
+
+def run(cmd: list[str], **kw) -> str:
+    return subprocess.run(cmd, check=True, capture_output=True, text=True, **kw).stdout
+
+
+def build(tmp: Path) -> tuple[Path, Path]:
+    run(["make", "-s", "-C", str(FW), "all"])
+    run(["make", "-s", "-C", str(FW), "BUILD=build/bench", "EXTRA_CFLAGS=-DBENCH_ISR_PIN",
+         "build/bench/plotbridge.elf"])
+    harness = tmp / "harness"
+    cflags = run(["pkg-config", "--cflags", "simavr"]).split() if _has_pc("simavr") else []
+    run(["gcc", "-O2", "-Wall", "-Wextra", "-I/usr/include/simavr", "-I/usr/include/simavr/avr",
+         *cflags, str(FW / "test/bench/harness.c"), "-o", str(harness), "-lsimavr", "-lelf"])
+    return FW / "build/bench/plotbridge.elf", harness
+
+
+def _has_pc(name: str) -> bool:
+    return subprocess.run(["pkg-config", "--exists", name]).returncode == 0
+
+
+def simulate(harness: Path, elf: Path, lines: list[str], tmp: Path, max_s: float = 120) -> dict:
+    gcode = tmp / "in.gcode"
+    gcode.write_text("\n".join(lines) + "\n")
+    out = run([str(harness), str(elf), str(gcode), str(max_s)])
+    result = json.loads(out[out.index("{"):])
+    if result["errors"] or result["alarm"] or result["acked"] != result["lines"]:
+        summary = {k: result[k] for k in ("lines", "acked", "errors", "alarm")}
+        raise SystemExit(f"simulation went wrong: {summary}")
+    return result
+
+
+def isr_overhead_cycles(elf: Path) -> int:
+    """Entry/exit cost outside the pin-measured body: interrupt response (4),
+    vector jump (3), reti (4), and the prologue/epilogue push/pop/in/out/eor."""
+    dis = run(["avr-objdump", "-d", str(elf)])
+    body = dis[dis.index("<__vector_11>:"):]
+    body = body[: body.index("reti") + 4]
+    lines = body.splitlines()
+    cycles = 4 + 3 + 4
+    for line in lines:
+        m = re.search(r"\t(push|pop|in|out|eor|clr)\t", line)
+        if m and ("r0" in line or "r1" in line or m.group(1) in ("push", "pop")):
+            cycles += 2 if m.group(1) in ("push", "pop") else 1
+    return cycles
+
+
+def step_rate(harness: Path, elf: Path, tmp: Path) -> dict:
+    per_axis_mm_min = TARGET_STEP_HZ / 80 * 60  # 30000 mm/min at 80 steps/mm
+    feed = per_axis_mm_min * math.sqrt(2)
+    lines = ["$X", f"$110={per_axis_mm_min:.0f}", f"$111={per_axis_mm_min:.0f}", "$120=5000",
+             "$121=5000", "$131=300", f"G1 X280 Y280 F{feed:.0f}"]
+    r = simulate(harness, elf, lines, tmp)
+    per_window = r["window_cycles"] / F_CPU
+    rates = [(a / per_window, b / per_window) for a, b in r["windows"]]
+    # the cruise: windows at (near) the commanded rate; a late step shows up
+    # as a window inside the cruise that falls short
+    cruise = [i for i, (a, b) in enumerate(rates) if a >= 0.97 * TARGET_STEP_HZ]
+    inner = rates[cruise[0] + 1: cruise[-1]] if cruise else []
+    late = sum(1 for a, b in inner if min(a, b) < 0.97 * TARGET_STEP_HZ)
+    sustained = min(min(a, b) for a, b in inner) if inner else 0.0
+    return {
+        "sustained_hz_both_axes": sustained,
+        "cruise_s": len(inner) * per_window,
+        "late_windows": late,
+        "steps": r["steps"],
+        "isr_body_max_cycles": r["isr"]["max_cycles"],
+        "isr_body_mean_cycles": r["isr"]["mean_cycles"],
+        "min_step_interval_cycles": r["min_interval_cycles"],
+    }
+
+
+def line_throughput(harness: Path, elf: Path, tmp: Path, feed: float, check: bool) -> float:
+    """0.5 mm G1 segments around a circle of radius 50 mm, short modal lines."""
+    r, n = 50.0, 1500
+    per_turn = int(2 * math.pi * r / 0.5)
+    pre = ["$X", "$110=30000", "$111=30000", "$120=3000", "$121=3000",
+           "$C" if check else "G0 X150 Y110", f"G1 F{feed:.0f}"]
+    body = []
+    for k in range(1, n + 1):
+        a = 2 * math.pi * k / per_turn
+        body.append(f"X{100 + r * math.cos(a):.2f}Y{110 + r * math.sin(a):.2f}")
+    res = simulate(harness, elf, pre + body, tmp)
+    acks = res["ack_cycles"][len(pre):]
+    return (len(acks) - 1) / ((acks[-1] - acks[0]) / F_CPU)
+
+
+def sizes() -> dict:
+    out = run(["avr-size", "-A", str(FW / "build/plotbridge.elf")])
+    sec = {m.group(1): int(m.group(2)) for m in re.finditer(r"^\.(\w+)\s+(\d+)", out, re.M)}
+    return {"flash": sec["text"] + sec["data"], "ram": sec["data"] + sec["bss"]}
+
+
+def main() -> int:
+    with tempfile.TemporaryDirectory() as d:
+        tmp = Path(d)
+        elf, harness = build(tmp)
+        overhead = isr_overhead_cycles(elf)
+        sr = step_rate(harness, elf, tmp)
+        serial_bytes = 13  # "X123.45Y67.89\n"-style lines
+        serial_limit = 117_647 / 11 / serial_bytes  # the harness paces at 11 bits a byte
+        lines_run = {f: line_throughput(harness, elf, tmp, f, False) for f in (6000, 12000, 18000)}
+        lines_check = line_throughput(harness, elf, tmp, 18000, True)
+    sz = sizes()
+    worst = sr["isr_body_max_cycles"] + overhead
+    print(f"step rate, both axes at once: {sr['sustained_hz_both_axes']:.0f} Hz sustained over "
+          f"{sr['cruise_s']:.2f} s, {sr['late_windows']} late 5 ms windows "
+          f"(target {TARGET_STEP_HZ} Hz)")
+    print(f"step interrupt: body max {sr['isr_body_max_cycles']} / mean "
+          f"{sr['isr_body_mean_cycles']:.0f} cycles + {overhead} entry/exit = worst {worst} cycles "
+          f"(budget at 40 kHz: {F_CPU // TARGET_STEP_HZ})")
+    for f, v in lines_run.items():
+        print(f"0.5 mm G1 segments at F{f:.0f}: {v:.0f} lines/s (motion limit "
+              f"{f / 60 / 0.5:.0f}, serial limit {serial_limit:.0f}; target {TARGET_LINES_S})")
+    print(f"parse only ($C check mode): {lines_check:.0f} lines/s")
+    print(f"flash {sz['flash']} / {FLASH_MAX} bytes, RAM (data+bss) {sz['ram']} / {RAM_MAX} bytes")
+    ok = (sr["sustained_hz_both_axes"] >= TARGET_STEP_HZ * 0.99 and sr["late_windows"] == 0
+          and max(lines_run.values()) >= TARGET_LINES_S and sz["flash"] <= FLASH_MAX
+          and sz["ram"] <= RAM_MAX)
+    print("all targets met" if ok else "SHORTFALL: see the figures above")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
