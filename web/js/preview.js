@@ -212,7 +212,7 @@ export class PreviewCanvas {
   }
 
   cssSize() {
-    return { width: this.canvas.clientWidth || 300, height: this.canvas.clientHeight || 220 };
+    return { width: this.canvas.clientWidth, height: this.canvas.clientHeight };
   }
 
   // ---- drawing ----
@@ -227,7 +227,8 @@ export class PreviewCanvas {
 
   frame() {
     this.scheduled = false;
-    if (!this.dirty) return;
+    // Hidden (another tab is shown): stay dirty; the ResizeObserver wakes us when shown.
+    if (!this.dirty || !this.canvas.clientWidth) return;
     this.dirty = false;
     const ms = this.render();
     this.stats.frames++;
