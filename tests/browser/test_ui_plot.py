@@ -303,6 +303,15 @@ def test_phone_plot_stop_unlock_next(phone, server, plotter, capsys):
 def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys):
     page, _ = desktop
     login(page, server.url, server.token)
+    # keyboard: the stop button is the first stop in the tab order, and a real button
+    page.evaluate("() => document.activeElement.blur()")
+    page.keyboard.press("Tab")
+    assert page.evaluate("[document.activeElement.id, document.activeElement.tagName]") == [
+        "estop", "BUTTON"
+    ]
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#estop-panel[data-phase=stopped]")
+    page.click("#estop-close")
     bad = b"G21\nG90\nG1 X10 Y10 F1000\nG1 X10 E9\nFOO 12\nG1 X10 Y10 Q\n"
     upload(page, "bad.gcode", bad, "text/plain")
     item = page.locator("#uploads li.upload.failed", has_text="bad.gcode")
