@@ -518,10 +518,17 @@ def test_200k_point_preview_frame_time(desktop, server, capsys):
         }).observe(document.querySelector('#uploads'),
                    {subtree: true, childList: true, characterData: true});
     }""")
+    # a LAN-like upload speed (4 MB/s), so the upload takes a while
+    cdp = page.context.new_cdp_session(page)
+    cdp.send("Network.enable")
+    cdp.send("Network.emulateNetworkConditions", {
+        "offline": False, "latency": 5, "downloadThroughput": -1, "uploadThroughput": 4e6,
+    })  # fmt: skip
     upload(page, "big.gcode", big_gcode(), "text/plain")
     wait_job_state(page, "big.gcode", ("queued",), timeout=120_000)
     seen = page.evaluate("[...window.__seen]")
-    assert "importing…" in seen, seen  # the upload showed its progress, then the import
+    # the upload showed its progress in bytes, then the import
+    assert "bytes" in seen and "importing…" in seen, seen
     page.wait_for_function(
         "() => (window.plotbridge.preview.geom?.strokes.count ?? 0) >= 150000", timeout=60_000
     )
