@@ -65,12 +65,3 @@ SETTINGS: dict[int, SettingInfo] = {
     132: SettingInfo("Z maximum travel", "mm", "Z travel."),
 }
 
-
-def describe(settings: dict[int, float]) -> list[dict[str, object]]:
-    """The `GET /api/machine/settings` list: one entry per setting, sorted by number."""
-    out: list[dict[str, object]] = []
-    for number in sorted(settings):
-        info = SETTINGS.get(number, SettingInfo(f"${number}", "", ""))
-        out.append({"id": number, "value": settings[number], "name": info.name,
-                    "unit": info.unit, "description": info.description})
-    return out
