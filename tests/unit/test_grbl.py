@@ -166,3 +166,18 @@ def test_splitter_never_raises(data):
     lines, _ = sp.feed(data)
     for line in lines:
         assert line.isascii() and "\n" not in line
+
+
+def test_settings_metadata_covers_the_firmware_table():
+    import re
+    from pathlib import Path
+
+    from plotbridge.settings_meta import SETTINGS
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "INTERNALS.md").read_text()
+    section = doc.split("## Firmware settings", 1)[1].split("\n## ", 1)[0]
+    numbers = {int(n) for row in re.findall(r"^\| ([\d, ]+) \|", section, re.M)
+               for n in row.split(",")}
+    assert len(numbers) > 25
+    assert numbers <= set(SETTINGS), sorted(numbers - set(SETTINGS))
+    assert all(info.name and info.description for info in SETTINGS.values())
