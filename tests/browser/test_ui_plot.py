@@ -329,6 +329,34 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     assert page.evaluate("window.__pwned") is None
     assert job_row(page, evil).locator(".name").text_content() == evil
 
+    # the preview pans with a drag, zooms with the wheel and with two fingers
+    def view() -> dict:
+        return page.evaluate("() => window.plotbridge.preview.view")
+
+    box = page.locator("#preview").bounding_box()
+    cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    v0 = view()
+    page.mouse.move(cx, cy)
+    page.mouse.down()
+    page.mouse.move(cx + 50, cy + 30, steps=5)
+    page.mouse.up()
+    v1 = view()
+    assert (round(v1["ox"] - v0["ox"]), round(v1["oy"] - v0["oy"])) == (50, 30)
+    page.mouse.wheel(0, -300)
+    page.wait_for_function("(s) => window.plotbridge.preview.view.scale > s * 1.3", arg=v1["scale"])
+    v2 = view()
+    page.evaluate("""() => {
+        const c = document.querySelector('#preview');
+        const r = c.getBoundingClientRect();
+        const ev = (type, id, x) => c.dispatchEvent(new PointerEvent(type, {pointerId: id,
+            pointerType: 'touch', clientX: r.left + x, clientY: r.top + 100, bubbles: true}));
+        ev('pointerdown', 11, 100); ev('pointerdown', 12, 200);
+        ev('pointermove', 12, 300);   // fingers 100 px apart, then 200 px: twice the size
+        ev('pointerup', 11, 100); ev('pointerup', 12, 300);
+    }""")
+    assert view()["scale"] == pytest.approx(v2["scale"] * 2, rel=1e-6)
+    page.click("#zoom-fit")
+
     # reorder and delete in the queue; the placement form applies to uploads
     page.select_option("#placement select[name=rotate]", "90")
     upload(page, "second.svg", SQUARE_SVG)

@@ -392,7 +392,11 @@ export class PreviewCanvas {
       return { x: e.clientX - r.left, y: e.clientY - r.top };
     };
     c.addEventListener("pointerdown", (e) => {
-      c.setPointerCapture(e.pointerId);
+      try {
+        c.setPointerCapture(e.pointerId);
+      } catch {
+        // the pointer is already gone: nothing to capture
+      }
       this.pointers.set(e.pointerId, local(e));
     });
     c.addEventListener("pointermove", (e) => {
