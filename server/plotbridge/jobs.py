@@ -60,7 +60,8 @@ def _failed(status: int, message: str, line: int | None = None) -> JobError:
 def run_import(kind: str, source: str, filename: str, dest: str, options: dict, settings: dict):
     """Worker-process entry: import one upload or pattern; never raises.
 
-    Returns ("ok", ImportResult) or ("failed", status, errors).
+    Returns ("ok", job fields) or ("failed", status, errors), in plain Python types:
+    unpickling the importer's own classes would load its modules (numpy) into the server.
     """
     from plotbridge import importing
 
@@ -71,11 +72,24 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
             result = importing.import_pattern(source, Path(dest), opts, profile)
         else:
             result = importing.import_file(Path(source), filename, Path(dest), opts, profile)
-        return ("ok", result)
+        return ("ok", job_fields(result))
     except importing.ImportFailed as exc:
         return ("failed", exc.status, list(exc.errors)[:100])
     except Exception as exc:  # an importer bug must still answer as a refused upload
         return ("failed", 422, [{"line": None, "message": f"import failed: {exc}"}])
+
+
+def job_fields(result: Any) -> dict[str, Any]:
+    estimate = round(float(result.estimate_s), 1)
+    return {
+        "format": str(result.format),
+        "lines_total": int(result.lines_total),
+        "estimate_s": estimate,
+        "eta_s": estimate,
+        "bounds": {key: float(value) for key, value in result.bounds.items()},
+        "stats": {key: float(value) for key, value in result.stats.items()},
+        "timeline": [[int(line), float(seconds)] for line, seconds in result.timeline],
+    }
 
 
 def resume_preamble(program: str, line: int) -> list[str]:
@@ -288,7 +302,7 @@ class JobManager:
             outcome = await self._import(kind, source_arg, filename, partial, options)
             if outcome[0] != "ok":
                 raise JobError(outcome[1], {"errors": outcome[2]})
-            result = outcome[1]
+            fields = outcome[1]
             await asyncio.to_thread(partial.rename, final)
         except BaseException:
             await asyncio.to_thread(shutil.rmtree, partial, True)
@@ -297,16 +311,10 @@ class JobManager:
             "id": job_id,
             "name": name,
             "state": "queued",
-            "format": result.format,
             "created_at": time.time(),
-            "lines_total": result.lines_total,
             "lines_done": 0,
             "progress": 0.0,
-            "estimate_s": round(float(result.estimate_s), 1),
-            "eta_s": round(float(result.estimate_s), 1),
-            "bounds": dict(result.bounds),
             "error": None,
-            "stats": dict(result.stats),
             "placement": placement,
             "resume_line": None,
             "started_at": None,
@@ -316,12 +324,12 @@ class JobManager:
             "source": Path(source_arg).name if kind == "file" else source_arg,
             "filename": filename,
             "options": options,
-            "timeline": [list(sample) for sample in result.timeline],
+            **fields,
         }
         self.jobs[job_id] = job
         await asyncio.wrap_future(self._save(job))
         self._publish(job)
-        log.info("job %s (%s) queued: %d lines", job_id, name, result.lines_total)
+        log.info("job %s (%s) queued: %d lines", job_id, name, job["lines_total"])
         self._maybe_auto_start()
         return job
 
@@ -371,19 +379,8 @@ class JobManager:
             if job["state"] != "queued":  # started meanwhile: keep what runs
                 await asyncio.to_thread(shutil.rmtree, partial, True)
                 raise JobError(409, f"job {job_id} started while it was being re-imported")
-            result = outcome[1]
             await asyncio.to_thread(_swap_dirs, partial, folder)
-            job.update(
-                format=result.format,
-                lines_total=result.lines_total,
-                estimate_s=round(float(result.estimate_s), 1),
-                eta_s=round(float(result.estimate_s), 1),
-                bounds=dict(result.bounds),
-                stats=dict(result.stats),
-                timeline=[list(sample) for sample in result.timeline],
-                options=options,
-                placement={**job["placement"], **placement},
-            )
+            job.update(outcome[1], options=options, placement={**job["placement"], **placement})
         if name is not None:
             job["name"] = name
         self._changed(job)

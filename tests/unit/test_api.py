@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from plotbridge.app import create_app, parse_upload_fields
 from plotbridge.config import Config
-from plotbridge.jobs import JobManager
+from plotbridge.jobs import JobManager, job_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
@@ -123,7 +123,7 @@ async def fake_import(self, kind, source, filename, dest, options):
         bounds={"min_x": 0, "min_y": 0, "max_x": 15, "max_y": 0},
         stats={"pen_down_mm": 15.0}, timeline=[(len(program), 10.0)],
     )  # fmt: skip
-    return ("ok", result)
+    return ("ok", job_fields(result))
 
 
 def make_app(tmp_path: Path, **config: Any):
