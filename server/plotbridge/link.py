@@ -194,6 +194,8 @@ class Link:
         self._settings_stale = False
         self._tasks: set[asyncio.Task[Any]] = set()
         self._real_port = False     # a real serial device (not a pty): may reset on open
+        self._backlog = bytearray()  # bytes the OS did not take yet
+        self._backlog_timer: asyncio.TimerHandle | None = None
 
     # --- public API -------------------------------------------------------
 
@@ -361,35 +363,59 @@ class Link:
                 self.settings[payload[0]] = payload[1]
 
     def _write(self, data: bytes, urgent: bool = False) -> None:
-        """Write to the port without awaiting.
+        """Write to the port now, without awaiting.
 
-        pyserial-asyncio's transport only writes from the next loop iteration,
-        so bytes go straight to the (non-blocking) device; only a remainder the
-        OS did not take is left to the transport. Urgent bytes go to the device
-        even when such a remainder is waiting, i.e. ahead of it.
+        pyserial-asyncio's transport.write() only writes from a later loop
+        iteration, so bytes go straight to the non-blocking device. What the
+        OS does not take waits in our own backlog, flushed from the loop;
+        urgent bytes go ahead of that backlog.
         """
         transport = self._transport
         if transport is None or transport.is_closing():
             raise LinkDown("not connected")
-        if not urgent and transport.get_write_buffer_size():
-            transport.write(data)
+        if self._backlog and not urgent:
+            self._backlog += data
             return
         try:
-            written = transport.serial.write(data)
+            written = _write_some(transport.serial, data)
         except (serial.SerialException, OSError) as exc:
             self._lose(f"write failed ({exc})")
             raise LinkDown(str(exc)) from exc
-        if written is not None and written < len(data):
-            transport.write(data[written:])
+        if written < len(data):
+            rest = data[written:]
+            if urgent:
+                self._backlog[0:0] = rest
+            else:
+                self._backlog += rest
+            self._flush_backlog_soon()
+
+    def _flush_backlog_soon(self) -> None:
+        if self._backlog_timer is None:
+            loop = asyncio.get_running_loop()
+            self._backlog_timer = loop.call_later(0.002, self._flush_backlog)
+
+    def _flush_backlog(self) -> None:
+        self._backlog_timer = None
+        transport = self._transport
+        if not self._backlog or transport is None or transport.is_closing():
+            return
+        try:
+            written = _write_some(transport.serial, bytes(self._backlog))
+        except (serial.SerialException, OSError) as exc:
+            self._lose(f"write failed ({exc})")
+            return
+        del self._backlog[:written]
+        if self._backlog:
+            self._flush_backlog_soon()
 
     def _soft_reset(self, reason: str) -> None:
-        """0x18 first, bookkeeping after: nothing outstanding will be answered."""
+        """Drop untransmitted lines, write 0x18, then the bookkeeping (nothing
+        outstanding will be answered)."""
         transport = self._transport
+        # Lines not yet transmitted would reach the freshly reset board.
+        self._backlog.clear()
         with contextlib.suppress(Exception):
-            # Lines not yet transmitted would reach the freshly reset board.
             transport.serial.reset_output_buffer()
-            if transport.get_write_buffer_size():
-                transport._write_buffer.clear()
         try:
             self._write(SOFT_RESET, urgent=True)
         except LinkDown:
@@ -673,6 +699,7 @@ class Link:
     def _end_session(self, reason: str) -> None:
         transport, self._transport = self._transport, None
         was_ready, self._ready = self._ready, False
+        self._backlog.clear()
         if transport is not None:
             with contextlib.suppress(Exception):
                 transport.abort()
@@ -703,6 +730,21 @@ class Link:
                 callback(event)
             except Exception:
                 log.exception("link subscriber failed on %s event", event.kind)
+
+
+def _write_some(port: Any, data: bytes) -> int:
+    """Write what the OS takes now; returns the count (0 when its buffer is full).
+
+    pyserial's own write() retries a full non-blocking buffer in a busy loop,
+    which would freeze the event loop while a peer is not reading.
+    """
+    fd = getattr(port, "fd", None)
+    if isinstance(fd, int):
+        try:
+            return os.write(fd, data)
+        except BlockingIOError:
+            return 0
+    return port.write(data) or 0
 
 
 def _show(byte: bytes) -> str:

@@ -30,8 +30,11 @@ class FakeSerial:
         self.board = board
 
     def write(self, data: bytes) -> int:
-        self.board.receive(bytes(data))
-        return len(data)
+        limit = self.board.write_limit       # what the OS would take now
+        taken = bytes(data) if limit is None else bytes(data[:limit])
+        if taken:
+            self.board.receive(taken)
+        return len(taken)
 
     def reset_output_buffer(self) -> None:
         self.board.writes.append(b"<flush>")
@@ -74,6 +77,7 @@ class FakeBoard:
         self.pos = (0.0, 0.0)
         self.accessories = ""
         self.muted = False
+        self.write_limit: int | None = None
         self.unplugged = False
         self.connects = 0
         self.script: dict[str, list[str]] = {}      # line -> answer lines
@@ -622,3 +626,32 @@ async def test_smaller_receive_buffer_from_build_info_is_respected():
         stop.set()
         await drainer
         assert 40 < board.max_rx <= 64
+
+
+async def test_partial_writes_are_finished_in_order():
+    board = FakeBoard()
+    async with running(board) as link:
+        board.write_limit = 7
+        acked: list[int] = []
+        await link.stream(iter(program(50)), acked.append)
+        assert acked == list(range(1, 51))
+        assert board.lines[-50:] == [text.strip() for _, text in program(50)]
+        assert board.max_rx <= 128
+
+
+async def test_estop_with_full_os_buffer_discards_unsent_lines():
+    board = FakeBoard(auto=False)
+    async with running(board) as link:
+        task = asyncio.create_task(link.stream(iter(program(200)), lambda n: None))
+        await until(lambda: len(board.rx) > 60)
+        board.write_limit = 0                # the OS takes nothing for now
+        board.execute(2)
+        await asyncio.sleep(0.02)            # freed space: more lines queue up unsent
+        assert link._backlog
+        link.estop()
+        board.write_limit = None
+        with pytest.raises(StreamAborted):
+            await asyncio.wait_for(task, 1)
+        await until(lambda: b"\x18" in board.writes)
+        after = b"".join(board.writes[board.writes.index(b"\x18"):])
+        assert b"G1" not in after, "line bytes reached the board after the reset"
