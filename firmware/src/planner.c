@@ -118,24 +118,24 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->events = events;
     b->mm = sqrtf(mm2);
     float unit[N_AXIS];
-    float speed = (flags & PB_RAPID) ? 1.0e9f : feed / 60.0f;
+    float speed = (flags & PB_RAPID) ? 1.0e9f : feed * (1.0f / 60.0f);
     float accel = 1.0e9f;
+    float inv_mm = 1.0f / b->mm;
+    /* divide only where an axis limit applies: divisions cost ~500 cycles here */
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        unit[a] = d_mm[a] / b->mm;
+        unit[a] = d_mm[a] * inv_mm;
         float u = fabsf(unit[a]);
         if (u > 1.0e-6f) {
-            float vmax = settings.max_rate[a] / 60.0f / u;
-            if (vmax < speed)
-                speed = vmax;
-            float amax = settings.accel[a] / u;
-            if (amax < accel)
-                accel = amax;
+            float vmax = settings.max_rate[a] * (1.0f / 60.0f);
+            if (speed * u > vmax)
+                speed = vmax / u;
+            if (accel * u > settings.accel[a])
+                accel = settings.accel[a] / u;
         }
     }
     /* the step timer cannot run slower than MIN_STEP_RATE */
-    float vmin = MIN_STEP_RATE * b->mm / (float)events;
-    if (speed < vmin)
-        speed = vmin;
+    if (speed * (float)events < MIN_STEP_RATE * b->mm)
+        speed = MIN_STEP_RATE * b->mm / (float)events;
     b->nominal_sqr = speed * speed;
     b->accel = accel;
     b->accel_dist2 = 2.0f * accel * b->mm;

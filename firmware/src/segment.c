@@ -16,6 +16,8 @@ static struct {
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
     float events_per_mm;
+    float mm_per_event;
+    float inv_accel;     /* 1 / block acceleration: multiplications are cheaper */
 } prep;
 
 void seg_reset(void)
@@ -55,7 +57,7 @@ static float advance(const plan_block_t *b, float dt)
     float v = prep.v;
     float t = 0.0f;
     if (prep.hold) {
-        float t_stop = v / a;
+        float t_stop = v * prep.inv_accel;
         float d_stop = 0.5f * v * t_stop;
         float tt = dt < t_stop ? dt : t_stop;
         float ds = v * tt - 0.5f * a * tt * tt;
@@ -64,7 +66,7 @@ static float advance(const plan_block_t *b, float dt)
             float vend = vend2 > 0.0f ? sqrtf(vend2) : 0.0f;
             prep.s = b->mm;
             prep.v = vend;
-            return (v - vend) / a;
+            return (v - vend) * prep.inv_accel;
         }
         prep.s += ds;
         prep.v = v - a * tt;
@@ -82,8 +84,9 @@ static float advance(const plan_block_t *b, float dt)
     if (peak2 < v * v)
         peak2 = v * v;
     float vp = sqrtf(peak2);
-    float d_acc = (peak2 - v * v) / (2.0f * a);
-    float d_dec = (peak2 - ve2) / (2.0f * a);
+    float half_inv_a = 0.5f * prep.inv_accel;
+    float d_acc = (peak2 - v * v) * half_inv_a;
+    float d_dec = (peak2 - ve2) * half_inv_a;
     if (d_dec < 0.0f)
         d_dec = 0.0f;
     float d_cru = remaining - d_acc - d_dec;
@@ -92,7 +95,7 @@ static float advance(const plan_block_t *b, float dt)
     float s = 0.0f;
     /* acceleration */
     if (d_acc > 0.0f) {
-        float ta = (vp - v) / a;
+        float ta = (vp - v) * prep.inv_accel;
         if (ta >= dt) {
             prep.s += v * dt + 0.5f * a * dt * dt;
             prep.v = v + a * dt;
@@ -117,7 +120,7 @@ static float advance(const plan_block_t *b, float dt)
     float left = remaining - s;
     float vend2 = v * v - 2.0f * a * left;
     float vend = vend2 > ve2 ? sqrtf(vend2) : sqrtf(ve2);
-    float td = (v - vend) / a;
+    float td = (v - vend) * prep.inv_accel;
     if (td > 0.0f && t + td > dt) {
         float tt = dt - t;
         prep.s += s + v * tt - 0.5f * a * tt * tt;
@@ -154,6 +157,8 @@ static void start_block(const plan_block_t *b)
     prep.s = 0.0f;
     prep.done = 0;
     prep.events_per_mm = (float)b->events / b->mm;
+    prep.mm_per_event = b->mm / (float)b->events;
+    prep.inv_accel = 1.0f / b->accel;
 }
 
 uint8_t seg_fill(void)
@@ -188,7 +193,7 @@ uint8_t seg_fill(void)
         if (!ended && prep.v > 0.0f) {
             /* end the segment exactly on its last step, so its rate is exact;
              * the distance to that step is moved over to the next segment */
-            float extra = prep.s - (float)target / prep.events_per_mm;
+            float extra = prep.s - (float)target * prep.mm_per_event;
             float back = extra / prep.v;
             if (fabsf(back) < 0.25f * time) { /* when slow, v is too rough an estimate */
                 time -= back;
@@ -201,7 +206,7 @@ uint8_t seg_fill(void)
         }
         uint32_t n = target - prep.done;
         if (n > 0) {
-            float period = time * (float)STEP_TIMER_HZ / (float)n + 0.5f;
+            float period = time * (float)STEP_TIMER_HZ / (float)n + 0.5f; /* one division per segment */
             if (period < STEP_PERIOD_MIN)
                 period = STEP_PERIOD_MIN;
             if (period > 65535.0f)
