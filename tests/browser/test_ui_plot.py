@@ -103,7 +103,7 @@ def preview_pixels(page) -> dict[str, int]:
 
 def plot_stop_unlock_next(
     page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False,
-    pause_resume: bool = False,
+    pause_resume: bool = False, cancel_next: bool = False,
 ) -> tuple[float, float]:
     """The main story; returns the ms from the stop input to 'Machine stopped' shown, and
     to the plotter's last step pulse."""
@@ -197,13 +197,19 @@ def plot_stop_unlock_next(
     page.wait_for_selector("#banners .banner >> text=Alarm", state="detached")
     page.wait_for_function("() => document.querySelector('#sum-state').textContent === 'Idle'")
 
-    upload(page, next_name, SQUARE_SVG)
+    upload(page, next_name, circles_svg(10) if cancel_next else SQUARE_SVG)
     wait_job_state(page, next_name, ("queued",))
     job_row(page, next_name).locator("button[data-verb=start]").click()
-    wait_job_state(page, next_name, ("running", "done"))
-    wait_job_state(page, next_name, ("done",), timeout=60_000)
-    assert server.job(job_id(page, next_name))["state"] == "done"
-    screenshot(page, f"{prefix}-next-done")
+    if cancel_next:
+        wait_job_state(page, next_name, ("running",))
+        job_row(page, next_name).locator("button[data-verb=cancel]").click()
+        wait_job_state(page, next_name, ("cancelled",))
+        server.wait_machine(lambda m: m["state"] == "Idle" and m["pen"] == "up", timeout=10)
+    else:
+        wait_job_state(page, next_name, ("running", "done"))
+        wait_job_state(page, next_name, ("done",), timeout=60_000)
+        assert server.job(job_id(page, next_name))["state"] == "done"
+    screenshot(page, f"{prefix}-next-job")
     return elapsed, last_step_ms
 
 
@@ -290,7 +296,8 @@ def test_phone_plot_stop_unlock_next(phone, server, plotter, capsys):
     page.click(".tab[data-tab=plot]")
 
     elapsed, last_step = plot_stop_unlock_next(
-        page, server, plotter, PHONE, "phone", lambda: page.tap("#estop"), clear_from_banner=True
+        page, server, plotter, PHONE, "phone", lambda: page.tap("#estop"),
+        clear_from_banner=True, cancel_next=True,
     )
     record("stop_phone_tap", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
