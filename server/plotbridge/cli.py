@@ -123,12 +123,15 @@ async def serve(config: Config) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(prog="plotbridge", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     add_serve_arguments(commands.add_parser("serve", help="run the server"))
-    from plotbridge import submit
+    submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
+    if argv[:1] == ["submit"]:  # its client libraries (httpx, rich) stay out of the server
+        from plotbridge import submit
 
-    submit.add_arguments(commands.add_parser("submit", help="upload a drawing to a server"))
+        submit.add_arguments(submit_parser)
     args = parser.parse_args(argv)
     if args.command == "submit":
         return submit.run(args)
