@@ -190,7 +190,7 @@ def test_estop_websocket_mid_job(server, plotter):
 def test_pause_resume(server, plotter):
     home(server)
     plotter.clear()
-    job = submit(server, drawing(circles=3))
+    job = submit(server, drawing(circles=10))
     wait_progress(server, job["id"], 30)
     paused = server.client.post(f"/api/jobs/{job['id']}/pause")
     assert paused.status_code == 200 and paused.json()["state"] == "paused"
@@ -202,9 +202,30 @@ def test_pause_resume(server, plotter):
     assert server.job(job["id"])["state"] == "paused"
     resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
     assert resumed.status_code == 200 and resumed.json()["state"] == "running"
+    # the machine's own pause and resume buttons drive the job state too
+    time.sleep(0.6)
+    plotter.press("pause")
+    server.wait_job(job["id"], ("paused",), 5)
+    plotter.release("pause")
+    plotter.press("resume")
+    server.wait_job(job["id"], ("running", "done"), 5)
+    plotter.release("resume")
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
     assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
+
+
+def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
+    home(server)
+    job = submit(server, drawing(circles=6))
+    wait_progress(server, job["id"], 40)
+    plotter.press("estop")
+    failed = server.wait_job(job["id"], ("failed", "stopped", "interrupted", "done"), 5)
+    plotter.release("estop")
+    assert failed["state"] == "failed", failed
+    assert "ALARM:10" in failed["error"] and failed["error"].startswith("line ")
+    machine = server.wait_machine(lambda m: m["state"] == "Alarm", 5)
+    assert machine["alarm"] == 10
 
 
 def test_plotter_killed_mid_job_then_resumed(server, plotter):
