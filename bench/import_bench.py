@@ -24,8 +24,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 REPO = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(REPO))
 
@@ -201,9 +199,9 @@ def accuracy_drawings(tmp: Path) -> dict[str, Path]:
     # Arcs, cut into chords by the firmware.
     lines = []
     for k in range(1, 9):
-        r = 8.0 * k
+        r = 5.0 * k
         lines += [f"G0 X{100 + r:.3f} Y100", "M3",
-                  f"G3 X{100 - r:.3f} Y100 I{-r:.3f} J0 F3000",
+                  f"G3 X{100 - r:.3f} Y100 I{-r:.3f} J0 F6000",
                   f"G3 X{100 + r:.3f} Y100 I{r:.3f} J0", "M5"]
     p = tmp / "arcs.gcode"
     p.write_text("\n".join(lines) + "\n")
@@ -211,7 +209,7 @@ def accuracy_drawings(tmp: Path) -> dict[str, Path]:
     # A spiral of 0.2 mm segments: bounded by the planner's look-ahead.
     pts = []
     t = 0.0
-    while t < 60 * math.pi:
+    while t < 20 * math.pi:
         r = 2 + 0.25 * t
         pts.append(f"G1 X{100 + r * math.cos(t):.3f} Y{100 + r * math.sin(t):.3f} F6000")
         t += 0.2 / r
@@ -219,7 +217,7 @@ def accuracy_drawings(tmp: Path) -> dict[str, Path]:
     p.write_text("G0 X102 Y100\nM3\n" + "\n".join(pts) + "\nM5\n")
     out["tiny segments"] = p
     # Sharp zig-zag corners: junction deviation.
-    zz = [f"G1 X{20 + k * 2}.000 Y{60 if k % 2 else 20}.000 F5000" for k in range(80)]
+    zz = [f"G1 X{20 + k * 2}.000 Y{50 if k % 2 else 20}.000 F5000" for k in range(40)]
     p = tmp / "zigzag.gcode"
     p.write_text("G0 X20 Y20\nM3\n" + "\n".join(zz) + "\nM5\n")
     out["zig-zag"] = p
@@ -295,5 +293,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    np.seterr(all="ignore")
+    sys.stdout.reconfigure(line_buffering=True)
     sys.exit(main())

@@ -84,7 +84,7 @@ class Board:
     def lines(self, until: float, stop: str) -> list[str]:
         got: list[str] = []
         while time.monotonic() < until:
-            self._rx += self.ser.read(256)
+            self._rx += self.ser.read(self.ser.in_waiting or 1)
             while b"\n" in self._rx:
                 line, self._rx = self._rx.split(b"\n", 1)
                 text = line.decode(errors="replace").strip()

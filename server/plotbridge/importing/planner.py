@@ -90,6 +90,9 @@ class Planner:
         # and not before the planner and the receive buffer have room for it.
         self.byte_time = 10.0 / profile.baud if profile.baud else 0.0
         self.arrival = 0.0
+        # The firmware needs plan_block_s to parse and plan each block.
+        self.block_s = profile.plan_block_s
+        self.ready = 0.0
         self.ends: deque[float] = deque(maxlen=self.depth + RX_LINES)
         self.v2 = 0.0           # squared speed at the end of the last finished block
         self.prev_u: tuple[float, float] | None = None
@@ -132,7 +135,9 @@ class Planner:
                 entry2 = min(j2, nom2, self.prev_nom2)
         self.prev_u = (ux, uy)
         self.prev_nom2 = nom2
-        self.pending.append([length, acc, nom2, entry2, line, self.arrival])
+        slot = self.ends[-1] if self.ends and len(self.pending) >= self.depth - 1 else 0.0
+        self.ready = max(self.arrival, self.ready, slot) + self.block_s
+        self.pending.append([length, acc, nom2, entry2, line, self.ready])
         if len(self.pending) >= self.depth:
             self._finish_first()
 
@@ -167,33 +172,43 @@ class Planner:
         self.prev_u = None
         self.v2 = 0.0
 
-    def _finish_first(self) -> None:
-        pending = self.pending
-        length, acc, nom2, _, line, arrival = pending[0]
-        if arrival > self.time:
-            self.time = arrival      # the machine waited for this line (and stood still)
-        start = self.time
-        # Highest exit speed the rest of the buffer allows: every later block must be
-        # able to slow down to its own entry limit, and the last one to a stop. Lines
-        # still on their way over the serial line are not in the buffer yet.
+    def _exit_limit(self, horizon: float) -> float:
+        """Highest squared exit speed of the first pending block that the blocks in the
+        buffer by `horizon` allow: every later block must be able to slow down to its
+        own entry limit, and the last one to a stop."""
         exit2 = _STRAIGHT
         s = 0.0
-        for blk in pending[1:]:
+        for blk in self.pending[1:]:
             if s >= exit2:
-                break
-            if blk[5] > start:
-                exit2 = min(exit2, s)
+                return exit2
+            if blk[5] > horizon:
                 break
             limit = blk[3] + s
             if limit < exit2:
                 exit2 = limit
             s += 2 * blk[1] * blk[0]
-        else:
-            exit2 = min(exit2, s)
-        v2 = self.v2
-        exit2 = min(exit2, v2 + 2 * acc * length, nom2)
-        self.time += trapezoid_time(math.sqrt(v2), math.sqrt(exit2), math.sqrt(nom2), acc, length)
+        return min(exit2, s)
+
+    def _finish_first(self) -> None:
+        length, acc, nom2, _, line, ready = self.pending[0]
+        if ready > self.time:
+            self.time = ready        # the machine waited for this block, standing still
+            self.v2 = 0.0
+        start = self.time
+        v0, vn = math.sqrt(self.v2), math.sqrt(nom2)
+        reach = self.v2 + 2 * acc * length
+        # Blocks that reach the buffer while this one runs still raise its exit speed
+        # (the firmware replans the running block): widen the window to its end.
+        exit2 = min(self._exit_limit(start), reach, nom2)
+        took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
+        if self.block_s or self.byte_time:
+            wider = min(self._exit_limit(start + took), reach, nom2)
+            if wider > exit2:
+                took_wider = trapezoid_time(v0, math.sqrt(wider), vn, acc, length)
+                exit2 = min(self._exit_limit(start + took_wider), reach, nom2)
+                took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
+        self.time += took
         self.v2 = exit2
-        del pending[0]
+        del self.pending[0]
         self.ends.append(self.time)
         self.timeline.record(line, self.time)
