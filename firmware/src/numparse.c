@@ -46,17 +46,22 @@ uint8_t read_number(const char *line, uint8_t *pos, float *out)
     *pos = i;
     if (sig + exponent > 10)  /* more than ten integer digits: surely too big */
         return 0;
+    /* powers of ten up to 1e10 are exact in a float, so scale with one
+     * multiplication or one division (a division costs ~500 cycles here) */
     float v = (float)mantissa;
     if (exponent < -40) {
         v = 0.0f;
     } else {
-        for (; exponent > 0; exponent--)
-            v *= 10.0f;
-        /* divide in steps of 1e4 to keep the rounding error small */
-        for (; exponent <= -4; exponent += 4)
-            v /= 10000.0f;
-        for (; exponent < 0; exponent++)
-            v /= 10.0f;
+        for (; exponent < -10; exponent += 10)
+            v /= 1e10f;
+        uint8_t k = (uint8_t)(exponent < 0 ? -exponent : exponent); /* <= 10 */
+        float p = 1.0f;
+        while (k--)
+            p *= 10.0f;
+        if (exponent < 0)
+            v /= p;
+        else
+            v *= p;
     }
     if (v > MAX_MAGNITUDE)
         return 0;

@@ -69,22 +69,30 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
 
 /* Backward pass: every block must be able to slow to the next block's entry
  * (and the last to a stop). Forward pass: no block may enter faster than the
- * one before can accelerate to. Both on squared speeds: v^2 = u^2 + 2as. */
+ * one before can accelerate to. Both on squared speeds: v^2 = u^2 + 2as.
+ * The backward pass stops at a block that stays at its junction limit: the
+ * blocks before it would get the values they already have, and the forward
+ * pass resumes from there. */
 static void recalculate(void)
 {
     uint8_t i = prev_index(head);
+    uint8_t first = tail;
     float next_entry = 0.0f;
     for (uint8_t n = count; n > 1; n--) {
         plan_block_t *b = &ring[i];
         float e = next_entry + b->accel_dist2;
-        b->entry_sqr = e < b->max_entry_sqr ? e : b->max_entry_sqr;
-        next_entry = b->entry_sqr;
+        if (e > b->max_entry_sqr)
+            e = b->max_entry_sqr;
+        if (e == b->entry_sqr && e == b->max_entry_sqr) {
+            first = i;
+            break;
+        }
+        b->entry_sqr = e;
+        next_entry = e;
         i = prev_index(i);
     }
-    i = tail;
-    float reach = exec_exit_limit;
-    for (uint8_t n = count; n > 1; n--) {
-        i = next_index(i);
+    float reach = first == tail ? exec_exit_limit : ring[first].entry_sqr + ring[first].accel_dist2;
+    for (i = next_index(first); i != head; i = next_index(i)) {
         plan_block_t *b = &ring[i];
         if (b->entry_sqr > reach)
             b->entry_sqr = reach;
