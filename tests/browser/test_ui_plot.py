@@ -454,6 +454,23 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     seen = page.evaluate("[...window.__banners]")
     assert any("Lost the live connection" in text for text in seen), seen
 
+    # while the socket cannot come back, the page keeps up over REST
+    page.evaluate("""() => {
+        window.__WebSocket = window.WebSocket;
+        window.WebSocket = function () { throw new Error('blocked for the test'); };
+    }""")
+    server.restart()
+    page.locator("#banners .banner", has_text="Lost the live connection").wait_for()
+    server.wait_machine(lambda m: m["connected"] and m["state"] in ("Idle", "Alarm"))
+    server.client.post("/api/machine/unlock").raise_for_status()
+    server.client.post("/api/machine/pen", json={"down": True}).raise_for_status()
+    page.wait_for_function(
+        "() => document.querySelector('#sum-pen').textContent === 'pen down'", timeout=10_000
+    )
+    page.evaluate("() => { window.WebSocket = window.__WebSocket; }")
+    page.locator("#banners button[data-action=reconnect]").click()
+    page.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
+
     # a 401 anywhere (here: the session is gone) returns to the login view
     page.context.clear_cookies()
     page.click(".tab[data-tab=settings]")

@@ -6,6 +6,7 @@ import { LOG_LIMIT } from "./views/console.js";
 import { buildGeometry } from "./preview-data.js";
 import { previewJob } from "./store.js";
 
+const POLL_MS = 2000; // REST polling while the WebSocket is down
 const asList = (data, key) => (Array.isArray(data) ? data : (data && data[key]) || []);
 const sameId = (a, b) => String(a) === String(b);
 
@@ -63,6 +64,12 @@ export function createActions(store, socket, estop) {
   let uploadSeq = 0;
   let machineSeq = 0;
   let placementTimer = null;
+  let pollTimer = null;
+
+  function resync() {
+    api.get("/api/machine").then(setMachine).catch(() => {});
+    loadJobs().catch(() => {});
+  }
 
   const fail = (field) => (err) => {
     if (err instanceof ApiError && err.status === 401) return;
@@ -217,6 +224,7 @@ export function createActions(store, socket, estop) {
 
     leaveApp() {
       socket.stop();
+      clearInterval(pollTimer);
       store.update((st) => {
         st.view = "login";
         st.estop = null;
@@ -266,11 +274,12 @@ export function createActions(store, socket, estop) {
       store.update((st) => {
         st.socket = status;
       });
-      // Resynchronize after a reconnect: messages may have been missed.
-      if (status.status === "open" && !wasOpen) {
-        api.get("/api/machine").then(setMachine).catch(() => {});
-        loadJobs().catch(() => {});
-      }
+      const open = status.status === "open";
+      // Resynchronize after a reconnect: messages may have been missed. While the
+      // socket is down, poll over REST so the page does not show a stale state.
+      if (open && !wasOpen) resync();
+      clearInterval(pollTimer);
+      pollTimer = open ? null : setInterval(resync, POLL_MS);
     },
 
     appendLog(direction, line) {

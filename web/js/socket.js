@@ -16,7 +16,13 @@ export function createSocket({ onMessage, onStatus }) {
     timer = null;
     if (!wanted) return;
     onStatus({ status: "connecting", retryAt: 0 });
-    const socket = new WebSocket(url());
+    let socket;
+    try {
+      socket = new WebSocket(url());
+    } catch {
+      retryLater(); // e.g. blocked by the browser: try again, REST keeps the page going
+      return;
+    }
     ws = socket;
     socket.addEventListener("open", () => {
       if (ws !== socket) return;
@@ -45,11 +51,15 @@ export function createSocket({ onMessage, onStatus }) {
         onStatus({ status: "closed", retryAt: 0 });
         return;
       }
-      const delay = Math.min(10000, 500 * 2 ** attempt);
-      attempt += 1;
-      onStatus({ status: "closed", retryAt: Date.now() + delay });
-      timer = setTimeout(connect, delay);
+      retryLater();
     });
+  }
+
+  function retryLater() {
+    const delay = Math.min(10000, 500 * 2 ** attempt);
+    attempt += 1;
+    onStatus({ status: "closed", retryAt: Date.now() + delay });
+    timer = setTimeout(connect, delay);
   }
 
   return {
