@@ -153,7 +153,12 @@ class JobManager:
     # ---- lifecycle -------------------------------------------------------
 
     def load(self) -> None:
-        """Read the store; a job that was running when the server died is interrupted."""
+        """Read the store; a job that was running when the server died is interrupted.
+        What a crash left half-done (uploads, imports) is removed."""
+        for leftover in self.config.jobs_dir.glob(".*"):
+            shutil.rmtree(leftover, ignore_errors=True)
+        for leftover in (self.config.data_dir / "tmp").glob("upload-*"):
+            leftover.unlink(missing_ok=True)
         for job in self.store.load_all():
             if job["state"] in ACTIVE:
                 job["state"] = "interrupted"

@@ -684,3 +684,13 @@ def test_no_upload_gets_a_5xx_or_leaves_files(real_import_client, name, body):
     jobs_dir = real_import_client.data_dir / "jobs"
     assert not [p for p in jobs_dir.iterdir() if p.name.startswith(".")]
     assert not list((real_import_client.data_dir / "tmp").iterdir())
+
+
+def test_leftovers_of_a_crash_are_removed_at_start(tmp_path):
+    (tmp_path / "jobs" / ".abc.partial").mkdir(parents=True)
+    (tmp_path / "jobs" / ".abc.partial" / "program.gcode").write_text("G1\n")
+    (tmp_path / "tmp").mkdir()
+    (tmp_path / "tmp" / "upload-x1").write_text("half")
+    make_app(tmp_path)
+    assert list((tmp_path / "jobs").iterdir()) == []
+    assert list((tmp_path / "tmp").iterdir()) == []
