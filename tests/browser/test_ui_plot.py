@@ -120,7 +120,7 @@ def plot_stop_unlock_next(
     upload(page, long_name, circles_svg(30))
     wait_job_state(page, long_name, ("queued",))
     page.wait_for_function("() => (window.plotbridge.preview.geom?.strokes.count ?? 0) > 100")
-    page.wait_for_function("() => window.plotbridge.preview.stats.fullRenders > 0")
+    page.wait_for_function("() => window.plotbridge.preview.layersBuilt > 0")
     pixels = preview_pixels(page)
     assert pixels["todo"] > 500, pixels  # the strokes are on the canvas
     screenshot(page, f"{prefix}-preview")

@@ -113,7 +113,7 @@ export function createActions(store, socket, estop) {
     const version = previewVersion(job);
     const have = s.previews[job.id];
     if (have && have.version === version) return;
-    s.previews[job.id] = { version, loading: true, geom: have && have.geom }; // keep showing the old one
+    s.previews[job.id] = { version, geom: have && have.geom }; // the old one shows meanwhile
     let entry;
     try {
       const data = await api.get(`/api/jobs/${encodeURIComponent(job.id)}/preview`);

@@ -5,7 +5,7 @@
 import { api } from "./api.js";
 import { MOVING_STATES, jobActive } from "./store.js";
 
-export const ACK_TIMEOUT_MS = 300;
+const ACK_TIMEOUT_MS = 300;
 
 export function createEstop({ socket, store }) {
   function acknowledge(record, via) {

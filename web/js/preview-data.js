@@ -4,7 +4,7 @@
 /** Points per cached Path2D chunk: the partially drawn chunk is rebuilt per frame. */
 export const CHUNK = 4096;
 
-export const PAPER_MM = {
+const PAPER_MM = {
   A6: [105, 148],
   A5: [148, 210],
   A4: [210, 297],
@@ -17,7 +17,7 @@ function polylines(list) {
 }
 
 /** Flatten polylines [[[x, y], ...], ...] into {coords: Float32Array, starts: Uint32Array}. */
-export function flatten(list) {
+function flatten(list) {
   const lines = polylines(list);
   let total = 0;
   for (const line of lines) total += line.length;

@@ -15,7 +15,7 @@ export function createSocket({ onMessage, onStatus }) {
     clearTimeout(timer);
     timer = null;
     if (!wanted) return;
-    onStatus({ status: "connecting", retryAt: 0 });
+    onStatus({ status: "connecting" });
     let socket;
     try {
       socket = new WebSocket(url());
@@ -27,7 +27,7 @@ export function createSocket({ onMessage, onStatus }) {
     socket.addEventListener("open", () => {
       if (ws !== socket) return;
       attempt = 0;
-      onStatus({ status: "open", retryAt: 0 });
+      onStatus({ status: "open" });
     });
     socket.addEventListener("message", (event) => {
       let msg;
@@ -44,11 +44,11 @@ export function createSocket({ onMessage, onStatus }) {
       if (event.code === 4401) {
         // not logged in (any more): no point retrying
         wanted = false;
-        onStatus({ status: "closed", retryAt: 0, code: 4401 });
+        onStatus({ status: "closed", code: 4401 });
         return;
       }
       if (!wanted) {
-        onStatus({ status: "closed", retryAt: 0 });
+        onStatus({ status: "closed" });
         return;
       }
       retryLater();
@@ -58,7 +58,7 @@ export function createSocket({ onMessage, onStatus }) {
   function retryLater() {
     const delay = Math.min(10000, 500 * 2 ** attempt);
     attempt += 1;
-    onStatus({ status: "closed", retryAt: Date.now() + delay });
+    onStatus({ status: "closed" });
     timer = setTimeout(connect, delay);
   }
 

@@ -9,7 +9,7 @@ export function initialState() {
     view: "login",            // "login" | "app"
     tab: "plot",              // "plot" | "control" | "settings" | "console"
     login: { busy: false, error: "" },
-    socket: { status: "closed", retryAt: 0 },   // "open" | "connecting" | "closed"
+    socket: { status: "closed" },   // "open" | "connecting" | "closed"
     machine: null,            // the machine object from the server
     server: null,             // GET /api/server
     jobs: [],                 // queue order

@@ -4,7 +4,7 @@ import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../do
 import { ALARMS, mm } from "../format.js";
 import { estopConfirmed } from "../store.js";
 
-export function machineLabel(m) {
+function machineLabel(m) {
   if (!m) return "…";
   if (!m.connected) return "Disconnected";
   return m.state || "Unknown";
