@@ -172,22 +172,25 @@ class Planner:
         self.prev_u = None
         self.v2 = 0.0
 
-    def _exit_limit(self, horizon: float) -> float:
+    def _exit_limit(self, horizon: float) -> tuple[float, bool]:
         """Highest squared exit speed of the first pending block that the blocks in the
-        buffer by `horizon` allow: every later block must be able to slow down to its
-        own entry limit, and the last one to a stop."""
+        buffer by `horizon` allow (every later block must be able to slow down to its
+        own entry limit, and the last one to a stop), and whether a block not yet in
+        the buffer cut the window short."""
+        pending = self.pending
         exit2 = _STRAIGHT
         s = 0.0
-        for blk in self.pending[1:]:
+        for k in range(1, len(pending)):
             if s >= exit2:
-                return exit2
+                return exit2, False
+            blk = pending[k]
             if blk[5] > horizon:
-                break
+                return min(exit2, s), True
             limit = blk[3] + s
             if limit < exit2:
                 exit2 = limit
             s += 2 * blk[1] * blk[0]
-        return min(exit2, s)
+        return min(exit2, s), False
 
     def _finish_first(self) -> None:
         length, acc, nom2, _, line, ready = self.pending[0]
@@ -199,13 +202,14 @@ class Planner:
         reach = self.v2 + 2 * acc * length
         # Blocks that reach the buffer while this one runs still raise its exit speed
         # (the firmware replans the running block): widen the window to its end.
-        exit2 = min(self._exit_limit(start), reach, nom2)
+        limit, cut = self._exit_limit(start)
+        exit2 = min(limit, reach, nom2)
         took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
-        if self.block_s or self.byte_time:
-            wider = min(self._exit_limit(start + took), reach, nom2)
+        if cut:
+            wider = min(self._exit_limit(start + took)[0], reach, nom2)
             if wider > exit2:
                 took_wider = trapezoid_time(v0, math.sqrt(wider), vn, acc, length)
-                exit2 = min(self._exit_limit(start + took_wider), reach, nom2)
+                exit2 = min(self._exit_limit(start + took_wider)[0], reach, nom2)
                 took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
         self.time += took
         self.v2 = exit2
