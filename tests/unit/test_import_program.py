@@ -89,3 +89,14 @@ def test_estimate_counts_pen_settle(tmp_path):
     # Two more pen moves (0.15 s each) and a stop in the middle of the line.
     assert two.estimate_s > one.estimate_s + 0.3
     assert one.timeline[-1] == (one.lines_total, pytest.approx(one.estimate_s))
+
+
+def test_results_and_failures_cross_process_boundaries(tmp_path):
+    import pickle
+
+    from plotbridge.importing import ImportFailed
+
+    r = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\n")
+    assert pickle.loads(pickle.dumps(r)) == r
+    e = pickle.loads(pickle.dumps(ImportFailed(422, [{"line": 3, "message": "bad"}])))
+    assert (e.status, e.errors) == (422, [{"line": 3, "message": "bad"}])

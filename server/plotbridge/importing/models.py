@@ -86,6 +86,9 @@ class ImportFailed(Exception):
         more = f" (+{len(errors) - 1} more)" if len(errors) > 1 else ""
         super().__init__(f"{status}: {first}{more}")
 
+    def __reduce__(self):   # picklable across the server's worker processes
+        return (type(self), (self.status, self.errors))
+
     @classmethod
     def one(cls, status: int, message: str, line: int | None = None) -> ImportFailed:
         return cls(status, [{"line": line, "message": message}])
