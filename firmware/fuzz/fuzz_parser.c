@@ -24,12 +24,25 @@ static void drain_segments(void)
     seg_tail = seg_head; /* the step interrupt would consume them */
 }
 
-static void queue_line(const float *p, float feed, uint8_t flags)
+/* as the firmware's line_to: long moves in pieces the step counters can hold */
+static void queue_line(const float *target, float feed, uint8_t flags)
 {
-    while (!plan_free())
+    uint16_t pieces = plan_pieces(target);
+    if (pieces > 64)
+        pieces = 64; /* longer ones are refused by plan_line: also worth exercising */
+    int32_t from_steps[N_AXIS];
+    plan_get_position(from_steps);
+    for (uint16_t k = 1; k <= pieces; k++) {
+        float p[N_AXIS];
+        for (uint8_t a = 0; a < N_AXIS; a++) {
+            float from = (float)from_steps[a] / settings.steps_per_mm[a];
+            p[a] = k == pieces ? target[a] : from + (target[a] - from) * (float)k / (float)pieces;
+        }
+        while (!plan_free())
+            drain_segments();
+        plan_line(p, feed, flags);
         drain_segments();
-    plan_line(p, feed, flags);
-    drain_segments();
+    }
 }
 
 static void run_block(const gc_block_t *b)

@@ -42,6 +42,20 @@ void plan_discard_current(void)
     exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0.0f;
 }
 
+uint16_t plan_pieces(const float *target)
+{
+    float span = 0.0f;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        float st = fabsf(target[a] * settings.steps_per_mm[a] - (float)position[a]);
+        if (st > span)
+            span = st;
+    }
+    if (settings.corexy)
+        span *= 2.0f;
+    /* with a margin for rounding: no piece may come out above the limit */
+    return (uint16_t)(span / (PLAN_MAX_EVENTS * 0.9f)) + 1;
+}
+
 void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = v_sqr; }
 
 void plan_motor_steps(const int32_t *cart, int32_t *motor)
@@ -117,7 +131,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         if (m > events)
             events = m;
     }
-    if (events == 0)
+    if (events == 0 || events > PLAN_MAX_EVENTS)
         return 0;
 
     plan_block_t *b = &ring[head];

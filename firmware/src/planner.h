@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include "config.h"
 
+#define PLAN_MAX_EVENTS 30000 /* the step interrupt counts in 16 bits: longer moves are split */
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
@@ -28,11 +29,15 @@ void plan_get_position(int32_t *steps);
 uint8_t plan_free(void);
 uint8_t plan_count(void);
 /* Queue a move to target (machine mm) at feed (mm/min; ignored with PB_RAPID).
- * The caller makes sure plan_free() > 0. Returns 0 for a move too short for a step. */
+ * The caller makes sure plan_free() > 0 and splits moves so that none needs
+ * more than PLAN_MAX_EVENTS step events (plan_pieces). Returns 0 for a move too
+ * short for a step, or one that would need too many step events. */
 uint8_t plan_line(const float *target, float feed, uint8_t flags);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
+/* Into how many equal pieces a move to target must be cut (see plan_line). */
+uint16_t plan_pieces(const float *target);
 /* Highest exit speed^2 the executing block can still reach (segment preparer). */
 void plan_set_exec_exit_limit(float v_sqr);
 /* Motor steps for cartesian steps (CoreXY: A = X + Y, B = X - Y). */

@@ -144,11 +144,11 @@ static void start_block(const plan_block_t *b)
 {
     prep.block = (uint8_t)((prep.block + 1) & (SEG_SIZE - 1));
     step_block_t *sb = &step_blocks[prep.block];
-    sb->events = b->events;
+    sb->events = (int16_t)b->events;
     sb->dir_negative = 0;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         int32_t st = b->steps[a];
-        sb->steps[a] = (uint32_t)(st < 0 ? -st : st);
+        sb->steps[a] = (int16_t)(st < 0 ? -st : st);
         if (st < 0)
             sb->dir_negative |= (uint8_t)(1 << a);
     }

@@ -9,8 +9,8 @@
 #define SEG_FIRST 0x01      /* first segment of a block: reset Bresenham, set direction */
 
 typedef struct {
-    uint32_t steps[N_AXIS]; /* |motor steps| */
-    uint32_t events;
+    int16_t steps[N_AXIS];  /* |motor steps|, at most PLAN_MAX_EVENTS */
+    int16_t events;
     uint8_t dir_negative;   /* bit per motor */
 } step_block_t;
 

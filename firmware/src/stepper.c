@@ -21,7 +21,7 @@ static uint8_t pending_steps;   /* port bits to pulse at the next tick */
 static uint8_t dir_bits;        /* port bits of the current block's direction */
 static uint16_t seg_left;
 static step_block_t *blk;
-static uint32_t counter[N_AXIS];
+static int16_t counter[N_AXIS]; /* Bresenham: 16-bit, blocks are at most PLAN_MAX_EVENTS */
 
 void stepper_apply_settings(void)
 {
@@ -173,7 +173,7 @@ ISR(TIMER1_COMPA_vect)
         seg_left = seg->events;
         if (seg->flags & SEG_FIRST) {
             blk = &step_blocks[seg->block];
-            counter[0] = counter[1] = blk->events >> 1;
+            counter[0] = counter[1] = (int16_t)(blk->events >> 1);
             /* direction pin high: positive (the virtual plotter's convention; $3 inverts) */
             uint8_t d = 0;
             if (!(blk->dir_negative & 1))
@@ -185,18 +185,18 @@ ISR(TIMER1_COMPA_vect)
         }
     }
     uint8_t steps = 0;
-    counter[0] += blk->steps[0];
-    if (counter[0] >= blk->events) {
-        counter[0] -= blk->events;
+    counter[0] -= blk->steps[0];
+    if (counter[0] < 0) {
+        counter[0] += blk->events;
         steps |= 1 << X_STEP_BIT;
         if (dir_bits & (1 << X_DIR_BIT))
             position[0]++;
         else
             position[0]--;
     }
-    counter[1] += blk->steps[1];
-    if (counter[1] >= blk->events) {
-        counter[1] -= blk->events;
+    counter[1] -= blk->steps[1];
+    if (counter[1] < 0) {
+        counter[1] += blk->events;
         steps |= 1 << Y_STEP_BIT;
         if (dir_bits & (1 << Y_DIR_BIT))
             position[1]++;

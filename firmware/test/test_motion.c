@@ -96,6 +96,16 @@ void test_planner_junctions(void)
     CHECK(t[1].entry_sqr <= 2 * 1000 * 0.5 + 1e-3);
     /* zero-length moves queue nothing */
     CHECK(plan_line(tiny2, 6000, 0) == 0);
+    /* moves beyond the 16-bit step counters are refused, and cut by plan_pieces */
+    fresh_planner();
+    float far[2] = {300, 220};
+    CHECK(plan_pieces(far) == 1);
+    settings.steps_per_mm[0] = 400;
+    CHECK(plan_pieces(far) == 5);
+    CHECK(plan_line(far, 3000, 0) == 0 && plan_count() == 0);
+    float fifth[2] = {60, 44};
+    CHECK(plan_line(fifth, 3000, 0) == 1);
+    settings_defaults(&settings);
     /* rapid uses the axis maximum */
     fresh_planner();
     plan_line(a, 0, PB_RAPID);
