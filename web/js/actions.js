@@ -82,9 +82,12 @@ export function createActions(store, socket, estop) {
   });
 
   function setMachine(m) {
+    const wasConnected = Boolean(s.machine && s.machine.connected);
     store.update((st) => {
       st.machine = { ...m, seq: ++machineSeq };
     });
+    // the board's settings (and the work area) are read again when it (re)connects
+    if (m.connected && !wasConnected && s.view === "app") loadSettings();
   }
 
   function upsertJob(job) {
@@ -178,15 +181,15 @@ export function createActions(store, socket, estop) {
     loadJobs,
     loadSettings,
 
-    async loadAll() {
-      const results = await Promise.allSettled([
-        api.get("/api/machine").then(setMachine),
-        loadJobs(),
-        api.get("/api/server").then((d) => store.update((st) => { st.server = d; })),
-        api.get("/api/patterns").then((d) => store.update((st) => { st.patterns = asList(d, "patterns"); })),
-        loadSettings(),
-      ]);
-      return results;
+    loadAll() {
+      api.get("/api/machine").then(setMachine).catch(() => {});
+      loadJobs().catch(() => {});
+      api.get("/api/server").then((d) => store.update((st) => {
+        st.server = d;
+      })).catch(() => {});
+      api.get("/api/patterns").then((d) => store.update((st) => {
+        st.patterns = asList(d, "patterns");
+      })).catch(() => {});
     },
 
     async login(token) {

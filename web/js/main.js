@@ -140,7 +140,10 @@ function bind() {
 
   $("#login-form").addEventListener("submit", (e) => {
     e.preventDefault();
-    actions.login($("#login-token").value.trim());
+    const input = $("#login-token");
+    const token = input.value.trim();
+    input.value = ""; // not left in the page once sent
+    actions.login(token);
   });
   $("#logout").addEventListener("click", () => actions.logout());
   for (const button of document.querySelectorAll(".tab")) {
