@@ -157,3 +157,18 @@ def test_utf16_and_binary_get_clear_messages(tmp_path):
         run_import(tmp_path, "G0 X1 Y1\n".encode("utf-16"))
     assert e.value.status == 415
     assert "UTF-16" in e.value.errors[0]["message"]
+
+
+def test_auto_dialect_treats_m3_as_spindle_when_z_moves(tmp_path):
+    # gcodetools style: M3 starts the spindle, Z lifts and lowers the tool.
+    text = ("%\n(Header)\nM3\nG21\nG00 Z5.000000\nG00 X10 Y10\nG01 Z-0.125 F100.0\n"
+            "G01 X20 Y10 F400\nG00 Z5.000000\nG00 X50 Y50\nG01 Z-0.125 F100\nG01 X60 Y50\n"
+            "G00 Z5\nM5\nM2\n")
+    r = run_import(tmp_path, text)
+    assert drawn_strokes(program_lines(r)) == [[(10.0, 10.0), (20.0, 10.0)],
+                                               [(50.0, 50.0), (60.0, 50.0)]]
+
+
+def test_auto_dialect_ignores_a_lone_z_in_m3_files(tmp_path):
+    r = run_import(tmp_path, "G0 Z0\nG0 X10 Y10\nM3\nG1 X20 F600\nM5\nG0 X30 Y30\n")
+    assert drawn_strokes(program_lines(r)) == [[(10.0, 10.0), (20.0, 10.0)]]

@@ -259,6 +259,21 @@ class GcodeReader:
         return cx - x, cy - y
 
 
+_Z_WORD = re.compile(r"Z\s*([-+]?(?:\d+\.?\d*|\.\d+))", re.I)
+_M300 = re.compile(r"M\s*300\b", re.I)
+
+
+def sniff_dialect(head: str) -> str:
+    """The pen dialect a file's beginning shows: M300 words; Z moving between at least
+    two heights (M3/M5 are then the spindle of a Z-axis machine); else M3/M5."""
+    text = _COMMENT.sub("", head)
+    if _M300.search(text):
+        return "m300"
+    if len({float(z) for z in _Z_WORD.findall(text)}) >= 2:
+        return "z"
+    return "m3"
+
+
 def read_ops(lines: Iterable[tuple[int, str]], options: ImportOptions,
              errors: ErrorLog) -> Iterator[tuple]:
     return GcodeReader(options, errors).ops(lines)

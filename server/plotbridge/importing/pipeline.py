@@ -6,10 +6,11 @@ import math
 import os
 import time
 from collections.abc import Callable, Iterable, Iterator
+from dataclasses import replace
 from pathlib import Path
 
 from .detect import check_text, detect_format, numbered_lines
-from .gcode import read_ops
+from .gcode import read_ops, sniff_dialect
 from .models import ErrorLog, ImportFailed, ImportOptions, ImportResult, MachineProfile
 from .ops import ARC, MOVE, PEN, Stroke, arc_extent, ops_to_strokes, strokes_to_ops
 from .placement import Bounds, Transform, needs_bounds, placement
@@ -17,6 +18,7 @@ from .program import ProgramWriter
 
 PROGRAM = "program.gcode"
 PREVIEW = "preview.json"
+SNIFF_CHARS = 1 << 20   # how much of a G-code file decides its pen dialect
 
 
 def drawn_bounds(ops: Iterable[tuple]) -> Bounds | None:
@@ -128,6 +130,9 @@ def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: Imp
 def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOptions,
                  profile: MachineProfile) -> ImportResult:
     errors = ErrorLog()
+    if options.pen_dialect == "auto" and options.servo_down_angle is None:
+        with source.open("r", encoding=encoding, newline=None) as f:
+            options = replace(options, pen_dialect=sniff_dialect(f.read(SNIFF_CHARS)))
     try:
         def ops() -> Iterator[tuple]:
             return read_ops(numbered_lines(source, encoding), options, errors)
