@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import random
 import re
 import time
 from collections.abc import Iterator
@@ -391,3 +392,26 @@ def test_check_mode_moves_nothing(plotter, grbl: Grbl) -> None:
     grbl.wait_for(r"^Grbl 1\.1h")  # leaving check mode resets
     trace = plotter.trace()
     assert trace["steps"] == {"x": 0, "y": 0} and trace["pen"] == "up"
+
+
+def test_random_bytes_never_crash(plotter, grbl: Grbl) -> None:
+    """Seeded binary noise and shuffled G-code words: errors, then business as usual."""
+    unlocked(grbl)
+    rng = random.Random(1234)
+    realtime = {0x18, ord("!"), ord("~"), ord("?"), 0x85}
+    junk = bytes(b for b in rng.randbytes(6000) if b not in realtime)
+    words = b"G0 G1 G2 X Y I J F M3 M5 $ = ( ) ; 1 -2.5 99999999999 \n".split(b" ")
+    junk += b"".join(rng.choice(words) for _ in range(1500))
+    for i in range(0, len(junk), 100):  # paced, so the receive buffer is not the only thing tested
+        grbl.ser.write(junk[i:i + 100])
+        time.sleep(0.01)
+    grbl.ser.write(b"\n$X\n")
+    time.sleep(1.0)
+    grbl.read_lines(2.0)
+    grbl.queue.clear()
+    grbl.ok("$X")
+    grbl.ok("G90 G21")
+    grbl.ok("G53 G0 X5 Y5")
+    grbl.wait_state("Idle", 60)
+    assert plotter.trace()["position"] == {"x": 5.0, "y": 5.0}
+    clean(plotter.trace())
