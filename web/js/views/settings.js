@@ -1,6 +1,7 @@
 // Firmware $ settings (edit and save) and the server's own options (read-only).
 
 import { $, el, setDisabled, setText, syncList } from "../dom.js";
+import { bytes } from "../format.js";
 
 const SERVER_LABELS = {
   version: "Version", virtual: "Virtual plotter", serial: "Serial device",
@@ -29,8 +30,9 @@ export function renderSettings(state) {
       return el("tr", {},
         el("td", { className: "mono" }, `$${s.id}`),
         el("td", {}, el("label", { for: inputId, className: "name" }), el("div", { className: "hint desc" })),
-        el("td", {}, el("input", { id: inputId, "data-id": s.id, inputmode: "decimal", className: "mono", size: 8 })),
-        el("td", { className: "unit" }));
+        el("td", { className: "value" },
+          el("input", { id: inputId, "data-id": s.id, inputmode: "decimal", className: "mono", size: 8 }),
+          el("span", { className: "unit" })));
     },
     (row, s) => {
       setText(row.querySelector(".name"), s.name || `$${s.id}`);
@@ -52,6 +54,7 @@ export function renderSettings(state) {
       const name = k.slice(3);
       const v = server[name];
       setText(node, k.startsWith("dt") ? SERVER_LABELS[name] || name
-        : typeof v === "boolean" ? (v ? "yes" : "no") : v === null || v === undefined ? "–" : String(v));
+        : typeof v === "boolean" ? (v ? "yes" : "no") : v === null || v === undefined ? "–"
+          : name === "upload_limit" ? bytes(v) : String(v));
     });
 }
