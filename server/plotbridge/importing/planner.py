@@ -53,15 +53,6 @@ class Timeline:
         return samples
 
 
-def _axis_limit(limits: tuple[float, float], ux: float, uy: float) -> float:
-    v = _STRAIGHT
-    if ux:
-        v = abs(limits[0] / ux)
-    if uy:
-        v = min(v, abs(limits[1] / uy))
-    return v
-
-
 def trapezoid_time(v0: float, v1: float, vn: float, a: float, length: float) -> float:
     """Seconds to cover `length` mm starting at v0, ending at v1 (mm/s), cruising at no
     more than vn with acceleration a. Assumes v0, v1 <= vn and that v1 is reachable."""
@@ -113,9 +104,16 @@ class Planner:
             return
         self.x, self.y = x, y
         ux, uy = dx / length, dy / length
-        vmax = _axis_limit(self.rapid, ux, uy)
-        vn = vmax if feed is None else min(feed / 60.0, vmax)
-        acc = _axis_limit(self.accel, ux, uy)
+        # Each axis holds to its own maximum rate and acceleration (inline: hot path).
+        ax, ay = abs(ux), abs(uy)
+        if ax > 1e-12:
+            vmax, acc = self.rapid[0] / ax, self.accel[0] / ax
+            if ay > 1e-12:
+                vmax = min(vmax, self.rapid[1] / ay)
+                acc = min(acc, self.accel[1] / ay)
+        else:
+            vmax, acc = self.rapid[1] / ay, self.accel[1] / ay
+        vn = vmax if feed is None or feed / 60.0 > vmax else feed / 60.0
         nom2 = vn * vn
         prev = self.prev_u
         if prev is None:

@@ -44,6 +44,7 @@ class ProgramWriter:
         self._area = (-EPS, -EPS, profile.width + EPS, profile.height + EPS)
         self._buf: list[str] = []
         self.last = ""
+        self._feed_value, self._feed_text = -1.0, ""
         for text in HEADER:
             self._write(text)
         # The pen is up when a job starts: the firmware skips the settle time of a pen
@@ -110,6 +111,7 @@ class ProgramWriter:
         self._write("M3" if down else "M5")
         if down:
             self.preview.end_stroke()
+            self._grow(self.x, self.y, self.x, self.y)
         else:
             self.pen_lifts += 1
         self.planner.stop(self.line, self.profile.pen_settle_s)
@@ -119,22 +121,31 @@ class ProgramWriter:
         x0, y0 = self.x, self.y
         if x == x0 and y == y0:
             return
-        if not self._check(src_line, x, y):
+        a = self._area
+        if not (a[0] <= x <= a[2] and a[1] <= y <= a[3]):
+            self._check(src_line, x, y)
             self.x, self.y = x, y     # the import fails; only keep finding errors
             return
         if feed is None:
             self._write(f"G0 X{x:.3f} Y{y:.3f}")
         else:
-            self._write(f"G1 X{x:.3f} Y{y:.3f} F{_feed(feed)}")
+            if feed != self._feed_value:
+                self._feed_value, self._feed_text = feed, _feed(feed)
+            self._write(f"G1 X{x:.3f} Y{y:.3f} F{self._feed_text}")
         self.planner.move(self.line, x, y, feed)
         d = math.hypot(x - x0, y - y0)
         if self.down:
             self.pen_down_mm += d
             self.preview.draw(x0, y0, x, y)
-            if x0 < x:
-                self._grow(x0, min(y0, y), x, max(y0, y))
-            else:
-                self._grow(x, min(y0, y), x0, max(y0, y))
+            b = self.bounds    # the stroke's first point was added at pen down
+            if x < b[0]:
+                b[0] = x
+            elif x > b[2]:
+                b[2] = x
+            if y < b[1]:
+                b[1] = y
+            elif y > b[3]:
+                b[3] = y
         else:
             self.travel_mm += d
             self.preview.move(x0, y0, x, y)
