@@ -180,10 +180,12 @@ async def test_login_sets_httponly_strict_cookie(api):
     cookie = response.headers["set-cookie"].lower()
     assert "httponly" in cookie and "samesite=strict" in cookie
     session = response.cookies["plotbridge_session"]
-    ok = await api.client.get(
-        "/api/jobs", headers={"Authorization": ""}, cookies={"plotbridge_session": session}
-    )
-    assert ok.status_code == 200
+    transport = httpx.ASGITransport(app=api.app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://test") as browser:
+        ok = await browser.get("/api/jobs", headers={"Cookie": f"plotbridge_session={session}"})
+        assert ok.status_code == 200
+        forged = await browser.get("/api/jobs", headers={"Cookie": "plotbridge_session=abc"})
+        assert forged.status_code == 401
 
 
 async def test_login_link_redirects_with_cookie(api):
