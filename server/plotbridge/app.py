@@ -11,7 +11,7 @@ from contextlib import asynccontextmanager
 from pathlib import Path
 from typing import Any
 
-from fastapi import Depends, FastAPI, Request, WebSocket, WebSocketDisconnect
+from fastapi import Depends, FastAPI, Request, WebSocket
 from fastapi.exceptions import HTTPException, RequestValidationError
 from fastapi.responses import FileResponse, JSONResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
@@ -371,15 +371,17 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
                 await ws.close()
 
     async def ws_receive(ws: WebSocket, client: Any) -> None:
-        with contextlib.suppress(WebSocketDisconnect):
-            while True:
-                text = await ws.receive_text()
-                kind = _message_type(text)
-                if kind == "estop":  # first thing, before parsing anything else
-                    manager.estop("WebSocket")
-                    hub.send(client, {"type": "ack", "command": "estop"})
-                    continue
-                hub.send(client, await ws_command(kind, text))
+        while True:
+            message = await ws.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            text = message.get("text") or (message.get("bytes") or b"").decode("utf-8", "replace")
+            kind = _message_type(text)
+            if kind == "estop":  # first thing, before parsing anything else
+                manager.estop("WebSocket")
+                hub.send(client, {"type": "ack", "command": "estop"})
+                continue
+            hub.send(client, await ws_command(kind, text))
 
     async def ws_command(kind: str | None, text: str) -> dict[str, Any]:
         try:

@@ -534,6 +534,10 @@ def test_ws_snapshot_and_commands(sync_client):
         assert _next_of(ws, "error")["command"] is None
         ws.send_json({"type": "bogus"})
         assert "unknown" in _next_of(ws, "error")["detail"]
+        ws.send_bytes(b"\xff\x00")
+        assert _next_of(ws, "error")["command"] is None
+        ws.send_bytes(b'{"type": "estop"}')
+        assert _next_of(ws, "ack") == {"type": "ack", "command": "estop"}
 
 
 def _next_of(ws, kind: str) -> dict:
