@@ -55,10 +55,14 @@ static uint8_t move_until(uint8_t mask, uint8_t toward, uint8_t want_closed, flo
     float spm = settings.steps_per_mm[0] > settings.steps_per_mm[1] ? settings.steps_per_mm[0]
                                                                       : settings.steps_per_mm[1];
     float rate = rate_mm_min / 60.0f * spm;
+    /* CoreXY: an X and a Y step in the same tick would be two pulses on one
+     * motor at once; take the axes in turns at twice the tick rate instead */
+    uint8_t turns = settings.corexy ? 2 : 1;
+    rate *= turns;
     uint16_t period = rate > 50.0f ? (uint16_t)(1.0e6f / rate) : 20000;
     for (uint8_t a = 0; a < N_AXIS; a++)
         max_steps[a] = (uint32_t)(max_mm * settings.steps_per_mm[a] + 0.5f);
-    while (mask) {
+    for (uint8_t tick = 0; mask; tick++) {
         machine_poll();
         if (mach.abort)
             return mask;
@@ -70,6 +74,8 @@ static uint8_t move_until(uint8_t mask, uint8_t toward, uint8_t want_closed, flo
                 mask &= (uint8_t)~(1 << a);
                 continue;
             }
+            if (turns == 2 && (tick & 1) != a)
+                continue;
             if (done[a]++ >= max_steps[a])
                 return mask;
             uint8_t to_min = (settings.homing_dir_mask >> a) & 1;
@@ -113,8 +119,10 @@ uint8_t homing_run(void)
         settle();
         /* want_closed = 2 never matches: travel exactly the pull-off */
         move_until(both, 0, 2, settings.homing_feed, settings.homing_pulloff);
-        for (uint8_t a = 0; a < N_AXIS; a++) /* plus the step from the trip point back to its edge */
+        for (uint8_t a = 0; a < N_AXIS; a++) { /* plus the step from the trip point back to its edge */
             cart_step(a, !((settings.homing_dir_mask >> a) & 1));
+            wait_us(200);
+        }
     }
     mach.homing = 0;
     inputs_homing(0);

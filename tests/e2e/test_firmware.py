@@ -415,3 +415,25 @@ def test_random_bytes_never_crash(plotter, grbl: Grbl) -> None:
     grbl.wait_state("Idle", 60)
     assert plotter.trace()["position"] == {"x": 5.0, "y": 5.0}
     clean(plotter.trace())
+
+
+def test_corexy_kinematics_and_homing(plotter_factory) -> None:
+    plotter = plotter_factory(args=["--corexy"], start=(40.0, 30.0))
+    g = Grbl(plotter.port)
+    try:
+        g.ser.write(b"\x18")
+        g.wait_for(r"^Grbl 1\.1h")
+        g.ok("$63=1")
+        g.ok("$H", timeout=120)
+        assert mpos(g.status()) == (1.0, 1.0)
+        for line in ["G0 X10 Y10", "M3", "G1 X60 Y30 F3000", "M5"]:
+            g.ok(line)
+        g.wait_state("Idle")
+        trace = plotter.trace()
+        clean(trace)
+        (stroke,) = stroke_points(trace)
+        assert len(stroke) == 2  # both motors together: a straight line, not a staircase
+        assert math.dist(stroke[0], (10, 10)) < TOL and math.dist(stroke[1], (60, 30)) < TOL
+        no_false_acks(g.lines)
+    finally:
+        g.close()
