@@ -134,8 +134,9 @@ def _assert_stopped(server, plotter, job_id: str, sent_at: float) -> None:
     assert plotter.trace()["steps"] == trace["steps"]
 
 
-def test_estop_rest_mid_job(server, plotter):
+def test_estop_rest_mid_job_then_resume(server, plotter):
     home(server)
+    plotter.clear()
     job = submit(server, drawing(circles=6))
     wait_progress(server, job["id"], 40)
     sent_at = time.monotonic()
@@ -146,6 +147,11 @@ def test_estop_rest_mid_job(server, plotter):
     other = submit(server, drawing(), start=False)
     refused = server.client.post(f"/api/jobs/{other['id']}/start")
     assert refused.status_code == 409 and "$H" in refused.json()["detail"]
+    # after homing, the stopped job can be resumed and the drawing completed
+    home(server)
+    assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
+    assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
+    assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
 
 
 def test_estop_does_not_wait_for_an_import(server, plotter):
