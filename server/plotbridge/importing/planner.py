@@ -162,6 +162,7 @@ class Planner:
         """Wait for motion to end, then hold still for `seconds`."""
         self.flush()
         self.time = max(self.time, self.arrival) + seconds
+        self.ready = self.time     # the firmware reads the next line only now
         self.timeline.record(line, self.time)
 
     def flush(self) -> None:
