@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from plotbridge.importing.optimize import EndIndex, optimize_strokes
-from plotbridge.importing.pipeline import travel_of
+from plotbridge.importing.optimize import travel as travel_of
 
 from .import_helpers import drawn_strokes, program_lines, run_import
 

@@ -154,7 +154,7 @@ def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
     arrays = simplify_all(arrays, tolerance)
     ordered = two_opt(order_greedy(arrays, start, merge_distance), start, deadline)
     given = join_touching(arrays, merge_distance)
-    if _travel(given, start) < _travel(ordered, start):
+    if travel(given, start) < travel(ordered, start):
         ordered = given     # greedy is a heuristic: never hand back a worse order
     return [[(float(x), float(y)) for x, y in s] for s in ordered]
 
@@ -170,10 +170,11 @@ def join_touching(strokes: list[np.ndarray], merge_distance: float) -> list[np.n
     return out
 
 
-def _travel(strokes: list[np.ndarray], start: tuple[float, float]) -> float:
-    pos = np.asarray(start, dtype=float)
+def travel(strokes, start: tuple[float, float] = (0.0, 0.0)) -> float:
+    """Pen-up travel from `start` through the strokes (point sequences) in order."""
     total = 0.0
+    x, y = start
     for s in strokes:
-        total += float(np.hypot(*(s[0] - pos)))
-        pos = s[-1]
+        total += math.hypot(float(s[0][0]) - x, float(s[0][1]) - y)
+        x, y = float(s[-1][0]), float(s[-1][1])
     return total

@@ -9,12 +9,16 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import replace
 from pathlib import Path
 
+from .coords import read_coords
 from .detect import check_text, detect_format, numbered_lines
 from .gcode import read_ops, sniff_dialect
 from .models import ErrorLog, ImportFailed, ImportOptions, ImportResult, MachineProfile
 from .ops import ARC, MOVE, PEN, Stroke, arc_extent, ops_to_strokes, strokes_to_ops
+from .optimize import optimize_strokes, travel
+from .patterns import pattern_strokes
 from .placement import Bounds, Transform, needs_bounds, placement
 from .program import ProgramWriter
+from .svg import read_svg
 
 PROGRAM = "program.gcode"
 PREVIEW = "preview.json"
@@ -48,16 +52,6 @@ def strokes_bounds(strokes: list[Stroke]) -> Bounds | None:
         return None
     xs, ys = zip(*pts, strict=True)
     return min(xs), min(ys), max(xs), max(ys)
-
-
-def travel_of(strokes: list[Stroke], start: tuple[float, float] = (0.0, 0.0)) -> float:
-    """Pen-up travel from `start` through the strokes in order."""
-    total = 0.0
-    x, y = start
-    for s in strokes:
-        total += math.hypot(s[0][0] - x, s[0][1] - y)
-        x, y = s[-1]
-    return total
 
 
 def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir: Path,
@@ -109,15 +103,13 @@ def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: Imp
                    profile: MachineProfile, errors: ErrorLog, feed: float | None = None,
                    optimize: bool = True) -> ImportResult:
     """Places, optionally optimizes, and writes a drawing given as pen-down polylines."""
-    from .optimize import optimize_strokes
-
     errors.raise_if_any()
     bounds = strokes_bounds(strokes)
     if bounds is None:
         raise ImportFailed.one(422, "nothing to draw")
     transform = placement(bounds, options, profile)
     placed = [[transform.apply(x, y) for x, y in s] for s in strokes]
-    before = travel_of(placed)
+    before = travel(placed)
     if optimize:
         # 2-opt gets time in proportion to the work, at most 2 s.
         deadline = time.monotonic() + min(2.0, 0.05 + 1e-4 * len(placed))
@@ -165,10 +157,8 @@ def import_file(source: Path, filename: str, dest_dir: Path, options: ImportOpti
     optimize = options.optimize is not False
     errors = ErrorLog()
     if fmt == "svg":
-        from .svg import read_svg
         strokes = read_svg(source, options, errors)
     else:
-        from .coords import read_coords
         strokes = read_coords(numbered_lines(source, encoding), errors)
     return import_strokes(strokes, fmt, dest_dir, options, profile, errors, optimize=optimize)
 
@@ -176,8 +166,6 @@ def import_file(source: Path, filename: str, dest_dir: Path, options: ImportOpti
 def import_pattern(name: str, dest_dir: Path, options: ImportOptions,
                    profile: MachineProfile) -> ImportResult:
     """Writes one of the built-in test patterns (see PATTERNS)."""
-    from .patterns import pattern_strokes
-
     strokes = pattern_strokes(name)
     return import_strokes(strokes, "pattern", Path(dest_dir), options, profile, ErrorLog(),
                           optimize=options.optimize is not False)
