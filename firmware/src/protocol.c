@@ -93,15 +93,16 @@ void protocol_run(void)
         }
         if (mach.abort && !machine_moving())
             mach.abort = 0;
-        uint16_t c = serial_read();
-        if (c == SERIAL_NO_DATA) {
+        /* a whole line between polls: polling per byte cost more than parsing */
+        uint8_t r = LB_NONE;
+        uint16_t c;
+        while (r == LB_NONE && (c = serial_read()) != SERIAL_NO_DATA)
+            r = linebuf_feed(&lb, (uint8_t)c);
+        if (r == LB_NONE) {
             if (!machine_moving())
                 idle_sleep();
             continue;
         }
-        uint8_t r = linebuf_feed(&lb, (uint8_t)c);
-        if (r == LB_NONE)
-            continue;
         uint8_t e;
         if (r == LB_OVERFLOW)
             e = ERR_OVERFLOW;
