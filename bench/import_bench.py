@@ -19,6 +19,7 @@ import math
 import multiprocessing
 import random
 import resource
+import subprocess
 import sys
 import tempfile
 import time
@@ -244,6 +245,10 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
         print(f"(c) NOT MEASURED: no firmware at {firmware}")
         return
     profile = MachineProfile()
+    rev = subprocess.run(["git", "log", "-1", "--format=%h %s", "--", "firmware/src"], cwd=REPO,
+                         capture_output=True, text=True).stdout.strip()
+    print(f"(c) firmware: {rev or 'unknown'}; planner model: {profile.planner_blocks} blocks, "
+          f"{profile.plan_block_s * 1000:.1f} ms to plan a block, {profile.baud} baud")
     for name, src in accuracy_drawings(tmp).items():
         dest = tmp / f"acc_{src.stem}"
         if str(src).startswith("pattern:"):
