@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from plotbridge.importing import ImportFailed, MachineProfile
 
 from .import_helpers import drawn_strokes, program_lines, run_import
@@ -172,3 +174,24 @@ def test_auto_dialect_treats_m3_as_spindle_when_z_moves(tmp_path):
 def test_auto_dialect_ignores_a_lone_z_in_m3_files(tmp_path):
     r = run_import(tmp_path, "G0 Z0\nG0 X10 Y10\nM3\nG1 X20 F600\nM5\nG0 X30 Y30\n")
     assert drawn_strokes(program_lines(r)) == [[(10.0, 10.0), (20.0, 10.0)]]
+
+
+gcode_word = st.sampled_from([*"GMXYZIJRFPSNT*();%", "G0", "G1", "G2", "G3", "G91", "M3", "M5",
+                              "M300", " ", "-", ".", "1", "nan", "inf", "\t", "\xe9"])
+gcode_text = st.lists(st.lists(st.one_of(gcode_word, st.floats(-500, 500).map(str)),
+                               max_size=8).map("".join), max_size=30).map("\n".join)
+
+
+@settings(max_examples=200, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(gcode_text)
+def test_any_text_imports_or_fails_cleanly(tmp_path, text):
+    try:
+        r = run_import(tmp_path, text or "\n")
+    except ImportFailed as e:
+        assert e.status in (415, 422)
+        assert 1 <= len(e.errors) <= 100
+        assert all(set(err) == {"line", "message"} for err in e.errors)
+        assert not (tmp_path / "out" / "program.gcode").exists()
+    else:
+        assert r.lines_total == len(program_lines(r))
