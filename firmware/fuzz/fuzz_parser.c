@@ -15,13 +15,22 @@
 #include "settings.h"
 
 #define FUZZ_ARC_POINTS 64 /* enough to exercise arcs, few enough to stay fast */
+#define FUZZ_MAX_SEGMENTS 20000 /* a 10 m move at a crawl is millions of segments: stop there */
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static uint32_t segments;
 
 static void drain_segments(void)
 {
     seg_fill();
+    segments += (uint8_t)(seg_head - seg_tail);
     seg_tail = seg_head; /* the step interrupt would consume them */
+    if (segments > FUZZ_MAX_SEGMENTS) { /* as a soft reset would: forget the queue */
+        plan_reset();
+        seg_reset();
+        segments = 0;
+    }
 }
 
 /* as the firmware's line_to: long moves in pieces the step counters can hold */
@@ -99,6 +108,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     static linebuf_t lb;
     static gc_state_t gc;
     settings_defaults(&settings);
+    segments = 0;
     plan_reset();
     seg_reset();
     int32_t zero[N_AXIS] = {0, 0};

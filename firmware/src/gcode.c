@@ -246,6 +246,8 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 if (seen & (1u << W_R)) {
                     if (seen & ((1u << W_I) | (1u << W_J)))
                         return ERR_UNUSED_WORDS;
+                    if (fabsf(val[W_R] * scale) > GC_MAX_COORD) /* the long way round a huge circle */
+                        return ERR_INVALID_TARGET;
                     uint8_t e = arc_center_from_radius(st.pos, target, val[W_R] * scale,
                                                        blk->clockwise, blk->center);
                     if (e)

@@ -53,7 +53,8 @@ uint16_t plan_pieces(const float *target)
     if (settings.corexy)
         span *= 2.0f;
     /* with a margin for rounding: no piece may come out above the limit */
-    return (uint16_t)(span / (PLAN_MAX_EVENTS * 0.9f)) + 1;
+    float pieces = span / (PLAN_MAX_EVENTS * 0.9f) + 1.0f;
+    return pieces < 65535.0f ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
 }
 
 void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = v_sqr; }
@@ -119,7 +120,10 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
     float d_mm[N_AXIS], mm2 = 0.0f;
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        cart[a] = lroundf(target[a] * settings.steps_per_mm[a]);
+        float t = target[a] * settings.steps_per_mm[a];
+        if (!(fabsf(t) < PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
+            return 0;
+        cart[a] = lroundf(t);
         delta[a] = cart[a] - position[a];
         d_mm[a] = (float)delta[a] / settings.steps_per_mm[a];
         mm2 += d_mm[a] * d_mm[a];

@@ -7,6 +7,7 @@
 #include "config.h"
 
 #define PLAN_MAX_EVENTS 30000 /* the step interrupt counts in 16 bits: longer moves are split */
+#define PLAN_MAX_STEPS 1.0e9f /* machine positions stay well inside int32 */
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
