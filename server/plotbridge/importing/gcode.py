@@ -92,24 +92,35 @@ class GcodeReader:
         if self.dialect == "servo-z" and self.servo_down is None:
             self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
             return
+        out: list[tuple] = []
+        block = self._block
         for line_no, raw in lines:
             if len(raw) > MAX_LINE:
                 self.errors.add(line_no, f"line longer than {MAX_LINE} characters")
                 continue
-            text = strip_line(raw, line_no, self.errors)
-            if not text:
-                continue
+            if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
+                text = strip_line(raw, line_no, self.errors)
+                if not text:
+                    continue
+            else:   # the common plain line
+                text = raw.replace(" ", "").replace("\t", "").upper()
+                if not text:
+                    continue
             if _BLOCK.fullmatch(text) is None:
                 self.errors.add(line_no, f"cannot parse '{raw.strip()[:60]}'")
                 continue
-            yield from self._block(line_no, _WORD.findall(text))
+            block(out, line_no, _WORD.findall(text))
+            if out:
+                yield from out
+                out.clear()
 
-    def _pen(self, line_no: int, down: bool) -> Iterator[tuple]:
+    def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
         if self.pen is not down:
             self.pen = down
-            yield (PEN, line_no, down)
+            out.append((PEN, line_no, down))
 
-    def _block(self, line_no: int, words: list[tuple[str, str]]) -> Iterator[tuple]:
+    def _block(self, out: list[tuple], line_no: int, words: list[tuple[str, str]]) -> None:
+        """Appends the ops of one line to `out` (a plain function: this runs per line)."""
         errors = self.errors
         gs: list[float] = []
         ms: list[float] = []
@@ -155,13 +166,13 @@ class GcodeReader:
         for m in ms:
             if m in (3.0, 4.0, 5.0):
                 if self.dialect in ("auto", "m3"):
-                    yield from self._pen(line_no, m != 5.0)
+                    self._pen(out, line_no, m != 5.0)
             elif m == 300.0:
                 s = vals.get("S")
                 if s == 30.0:
-                    yield from self._pen(line_no, True)
+                    self._pen(out, line_no, True)
                 elif s == 50.0:
-                    yield from self._pen(line_no, False)
+                    self._pen(out, line_no, False)
                 else:
                     errors.add(line_no, "M300 needs S30 (pen down) or S50 (pen up)")
                     return
@@ -173,7 +184,7 @@ class GcodeReader:
             if p is None or p < 0:
                 errors.add(line_no, "G4 needs a dwell time P in seconds (P >= 0)")
                 return
-            yield (DWELL, line_no, p)
+            out.append((DWELL, line_no, p))
             return
         if "Z" in vals:
             z = vals["Z"] * unit
@@ -182,9 +193,9 @@ class GcodeReader:
             self.z = z
             if self.dialect == "servo-z":
                 assert self.servo_down is not None
-                yield from self._pen(line_no, abs(vals["Z"] - self.servo_down) < 0.5)
+                self._pen(out, line_no, abs(vals["Z"] - self.servo_down) < 0.5)
             elif self.dialect in ("auto", "z"):
-                yield from self._pen(line_no, z <= self.z_threshold)
+                self._pen(out, line_no, z <= self.z_threshold)
         if motion is not None:
             self.motion = motion
         has_xy = "X" in vals or "Y" in vals
@@ -206,7 +217,7 @@ class GcodeReader:
             return
         if mode in (0, 1):
             self.x, self.y = tx, ty
-            yield (MOVE, line_no, tx, ty, None if mode == 0 else self.feed)
+            out.append((MOVE, line_no, tx, ty, None if mode == 0 else self.feed))
             return
         cw = mode == 2
         if "R" in vals:
@@ -232,7 +243,7 @@ class GcodeReader:
             errors.add(line_no, f"G{mode} needs I/J or R")
             return
         self.x, self.y = tx, ty
-        yield (ARC, line_no, tx, ty, i, j, self.feed, cw)
+        out.append((ARC, line_no, tx, ty, i, j, self.feed, cw))
 
     def _centre_from_radius(self, line_no: int, x: float, y: float, tx: float, ty: float,
                             r: float, cw: bool) -> tuple[float, float] | None:
