@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import pytest
-
 from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile
 from plotbridge.importing.placement import Transform, paper_size, placement
 
