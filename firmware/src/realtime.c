@@ -34,7 +34,10 @@ uint8_t realtime_byte(uint8_t c)
             realtime_alarm_isr(ALARM_ABORT_CYCLE);
         rt_flags |= RT_RESET;
         return 1;
-    default: return 0;
+    default:
+        /* GRBL's other extended realtime commands (overrides, 0x80-0xFF) are
+         * not supported: swallowed here, so they never corrupt a line */
+        return c >= 0x80;
     }
 }
 

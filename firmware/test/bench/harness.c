@@ -188,8 +188,13 @@ int main(int argc, char **argv)
     avr_cycle_timer_register(avr, next_byte_at, feed, 0);
 
     uint64_t limit = (uint64_t)(max_s * F_CPU);
+    uint64_t sleep_cycles = 0;
     for (;;) {
+        uint64_t before = avr->cycle;
+        int was_sleeping = avr->state == cpu_Sleeping;
         int st = avr_run(avr);
+        if (was_sleeping)
+            sleep_cycles += avr->cycle - before;
         if (st == cpu_Done || st == cpu_Crashed)
             break;
         if (avr->cycle > limit)
@@ -198,7 +203,8 @@ int main(int argc, char **argv)
             avr->cycle > ack_cycle[line_count - 1] + IDLE_END)
             break;
     }
-    printf("{\"cycles\": %llu, \"lines\": %zu, \"acked\": %zu, \"errors\": %u, \"alarm\": %d,\n",
+    printf("{\"sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles);
+    printf("\"cycles\": %llu, \"lines\": %zu, \"acked\": %zu, \"errors\": %u, \"alarm\": %d,\n",
            (unsigned long long)avr->cycle, line_count, acked, errors, alarm_seen);
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
            (unsigned long long)isr_count, (unsigned long long)isr_max,
