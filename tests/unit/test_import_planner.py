@@ -10,7 +10,7 @@ from plotbridge.importing.planner import Planner, Timeline, trapezoid_time
 
 # 1000 mm/s², 100 mm/s max rate, junction deviation 0.02 mm; lines and blocks reach
 # the planner without delay unless a test says otherwise.
-P = MachineProfile(baud=0, plan_block_s=0.0)
+P = MachineProfile(baud=0, plan_block_s=0.0, block_gap_s=0.0)
 
 
 def run(moves, profile=P, start=(0.0, 0.0)):
@@ -51,7 +51,8 @@ def test_straight_chain_runs_through_and_reversal_stops():
 
 
 def test_axis_limits_on_diagonals():
-    slow_y = MachineProfile(max_rate=(6000, 3000), accel=(1000, 500), baud=0, plan_block_s=0)
+    slow_y = MachineProfile(max_rate=(6000, 3000), accel=(1000, 500), baud=0, plan_block_s=0,
+                            block_gap_s=0)
     # Along 45°, each axis carries 1/√2 of the motion: Y limits speed to 50·√2 mm/s and
     # acceleration to 500·√2 mm/s².
     length = 100 * math.sqrt(2)
@@ -62,7 +63,7 @@ def test_axis_limits_on_diagonals():
 
 def test_short_segments_are_limited_by_the_buffer_depth():
     segs = [(0.1 * k, 0, 6000) for k in range(1, 1001)]
-    deep = run(segs, MachineProfile(planner_blocks=100000, baud=0, plan_block_s=0))
+    deep = run(segs, MachineProfile(planner_blocks=100000, baud=0, plan_block_s=0, block_gap_s=0))
     assert deep == pytest.approx(run([(100, 0, 6000)]), rel=1e-6)
     # With 17 blocks the last 16 (1.6 mm) must suffice to stop: v² = 2·1000·1.6.
     v = math.sqrt(2 * 1000 * 1.6)
@@ -125,12 +126,12 @@ def test_serial_line_bounds_dense_short_moves():
     # take 2 ms at 115200 baud: the line sets the pace.
     lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
     fast = feed_lines(P, lines)
-    slow = feed_lines(MachineProfile(plan_block_s=0), lines)
+    slow = feed_lines(MachineProfile(plan_block_s=0, block_gap_s=0), lines)
     serial = sum(len(t) + 1 for t in lines) * 10 / 115200
     assert fast < serial
     assert slow == pytest.approx(serial, rel=0.06)
     # Long moves are not limited by the line: 100 mm takes 2 s, its 26 bytes 2.3 ms.
-    pl = Planner(MachineProfile(plan_block_s=0))
+    pl = Planner(MachineProfile(plan_block_s=0, block_gap_s=0))
     pl.receive(26)
     pl.move(1, 100, 0, 3000)
     pl.flush()
@@ -140,7 +141,13 @@ def test_serial_line_bounds_dense_short_moves():
 def test_firmware_planning_time_bounds_dense_short_moves():
     # 3.4 ms to plan each block is slower than the line (2 ms) and the motion (1.3 ms).
     lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
-    cpu = feed_lines(MachineProfile(baud=0, plan_block_s=0.0034), lines)
+    cpu = feed_lines(MachineProfile(baud=0, plan_block_s=0.0034, block_gap_s=0), lines)
     assert cpu == pytest.approx(2000 * 0.0034, rel=0.05)
-    both = feed_lines(MachineProfile(plan_block_s=0.0034), lines)
+    both = feed_lines(MachineProfile(plan_block_s=0.0034, block_gap_s=0), lines)
     assert both == pytest.approx(cpu, rel=0.05)
+
+
+def test_block_gap_adds_per_block():
+    chain = [(0.4 * k, 0, 3000) for k in range(1, 301)]
+    gap = MachineProfile(baud=0, plan_block_s=0.0, block_gap_s=0.001)
+    assert run(chain, gap) == pytest.approx(run(chain) + 300 * 0.001)

@@ -210,7 +210,7 @@ class Planner:
                 took_wider = trapezoid_time(v0, math.sqrt(wider), vn, acc, length)
                 exit2 = min(self._exit_limit(start + took_wider)[0], reach, nom2)
                 took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
-        self.time += took
+        self.time += took + self.p.block_gap_s
         self.v2 = exit2
         del self.pending[0]
         self.ends.append(self.time)
