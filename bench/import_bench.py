@@ -35,7 +35,7 @@ from plotbridge.importing import (  # noqa: E402
     import_pattern,
 )
 from plotbridge.importing.models import ErrorLog  # noqa: E402
-from plotbridge.importing.optimize import optimize_strokes  # noqa: E402
+from plotbridge.importing.optimize import optimize_strokes, time_budget  # noqa: E402
 from plotbridge.importing.svg import read_svg  # noqa: E402
 
 PX_MM = 25.4 / 96
@@ -170,7 +170,7 @@ def bench_vs_vpype(tmp: Path) -> None:
         # The optimization steps alone, on drawings already read.
         drawn = read_svg(src, ImportOptions(), ErrorLog())
         t = time.perf_counter()
-        optimize_strokes(drawn, 0.02, time.monotonic() + min(2.0, 0.05 + 1e-4 * len(drawn)))
+        optimize_strokes(drawn, 0.02, time.monotonic() + time_budget(len(drawn)))
         ours_opt = time.perf_counter() - t
         doc = vpype_cli.execute(f"read '{src}'")
         t = time.perf_counter()

@@ -143,6 +143,11 @@ def two_opt(strokes: list[np.ndarray], start: tuple[float, float], deadline: flo
     return [strokes[o][::-1] if f else strokes[o] for o, f in zip(order, flipped, strict=True)]
 
 
+def time_budget(strokes: int) -> float:
+    """Seconds the 2-opt pass may take for a drawing of `strokes` strokes."""
+    return min(2.0, 0.05 + 1e-4 * strokes)
+
+
 def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
                      start: tuple[float, float] = (0.0, 0.0),
                      merge_distance: float = MERGE_DISTANCE) -> list[Stroke]:

@@ -14,7 +14,7 @@ from .detect import check_text, detect_format, numbered_lines
 from .gcode import read_ops, sniff_dialect
 from .models import ErrorLog, ImportFailed, ImportOptions, ImportResult, MachineProfile
 from .ops import ARC, MOVE, PEN, Stroke, arc_extent, ops_to_strokes, strokes_to_ops
-from .optimize import optimize_strokes, travel
+from .optimize import optimize_strokes, time_budget, travel
 from .patterns import pattern_strokes
 from .placement import Bounds, Transform, needs_bounds, placement
 from .program import ProgramWriter
@@ -111,8 +111,7 @@ def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: Imp
     placed = [[transform.apply(x, y) for x, y in s] for s in strokes]
     before = travel(placed)
     if optimize:
-        # 2-opt gets time in proportion to the work, at most 2 s.
-        deadline = time.monotonic() + min(2.0, 0.05 + 1e-4 * len(placed))
+        deadline = time.monotonic() + time_budget(len(placed))
         placed = optimize_strokes(placed, options.tolerance, deadline)
     draw_feed = feed or options.feed
     return write_program(lambda: strokes_to_ops(placed, draw_feed), fmt, dest_dir, Transform(),
