@@ -239,7 +239,9 @@ def manual_control_settings_console(page, server) -> None:
     page.click(".tab[data-tab=settings]")
     page.wait_for_selector("#settings-body tr")
     page.fill("#setting-110", "5000")
-    assert page.locator("#settings-save").text_content() == "Save 1 change"
+    page.wait_for_function(
+        "() => document.querySelector('#settings-save').textContent === 'Save 1 change'"
+    )
     page.click("#settings-save")
     page.wait_for_function(
         "() => document.querySelector('#settings-message').textContent.startsWith('Saved 1')"

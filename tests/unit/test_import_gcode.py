@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import tempfile
+from pathlib import Path
+
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -186,12 +189,13 @@ gcode_text = st.lists(st.lists(st.one_of(gcode_word, st.floats(-500, 500).map(st
           suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(gcode_text)
 def test_any_text_imports_or_fails_cleanly(tmp_path, text):
+    example_dir = Path(tempfile.mkdtemp(dir=tmp_path))  # tmp_path is shared by all examples
     try:
-        r = run_import(tmp_path, text or "\n")
+        r = run_import(example_dir, text or "\n")
     except ImportFailed as e:
         assert e.status in (415, 422)
         assert 1 <= len(e.errors) <= 100
         assert all(set(err) == {"line", "message"} for err in e.errors)
-        assert not (tmp_path / "out" / "program.gcode").exists()
+        assert not (example_dir / "out" / "program.gcode").exists()
     else:
         assert r.lines_total == len(program_lines(r))

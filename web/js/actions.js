@@ -132,7 +132,8 @@ export function createActions(store, socket, estop) {
     });
   }
 
-  async function loadSettings() {
+  /** Reads the board's settings; unsaved edits survive unless `discardEdits` (the Reload button). */
+  async function loadSettings(discardEdits = false) {
     store.update((st) => {
       st.settings.busy = true;
       st.settings.error = "";
@@ -141,7 +142,7 @@ export function createActions(store, socket, estop) {
       const data = await api.get("/api/machine/settings");
       store.update((st) => {
         st.settings.list = asList(data, "settings");
-        st.settings.edits = {};
+        if (discardEdits) st.settings.edits = {};
         st.settings.rowErrors = {};
         st.settings.message = "";
       });

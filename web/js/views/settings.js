@@ -14,7 +14,7 @@ export function bindSettings(actions) {
     if (input) actions.editSetting(input.dataset.id, input.value);
   });
   $("#settings-save").addEventListener("click", () => actions.saveSettings());
-  $("#settings-reload").addEventListener("click", () => actions.loadSettings());
+  $("#settings-reload").addEventListener("click", () => actions.loadSettings(true));
 }
 
 export function renderSettings(state) {
