@@ -15,13 +15,14 @@ import multiprocessing
 import shutil
 import time
 import uuid
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 from plotbridge.config import Config
-from plotbridge.resume import first_unexecuted_line, motion_flags
+from plotbridge.program_reader import ProgramReader
+from plotbridge.resume import first_unexecuted_line
 from plotbridge.store import JobStore
 from plotbridge.ws import Hub
 
@@ -570,14 +571,12 @@ class JobManager:
 
         program = self.config.jobs_dir / job["id"] / "program.gcode"
         try:
-            text = await asyncio.to_thread(program.read_text)
-            lines = text.splitlines()
-            self._motion = motion_flags(lines)
-            preamble: list[str] = []
-            if line > 1:
-                preamble = await self._preamble(program, line)
+            preamble = await self._preamble(program, line) if line > 1 else []
+            reader = ProgramReader(program, line, preamble)
+            self._motion = reader.motion  # filled as the reader goes
             start_time = time.time()
-            await self.link.stream(_numbered(preamble, lines, line), self._on_ack)
+            async with contextlib.aclosing(reader.lines()) as lines:
+                await self.link.stream(lines, self._on_ack)
             state = await self._wait_done(start_time)
             if job["state"] not in ACTIVE:
                 return  # settled meanwhile (estop, cancel)
@@ -690,13 +689,6 @@ class JobManager:
         self._changed(job)
         at = f" at line {job['lines_done']}" if state != "done" else ""
         log.info("job %s %s%s%s", job["id"], state, at, f": {error}" if error else "")
-
-
-def _numbered(preamble: list[str], lines: list[str], start: int) -> Iterator[tuple[int, str]]:
-    for text in preamble:
-        yield 0, text
-    for number in range(start, len(lines) + 1):
-        yield number, lines[number - 1]
 
 
 def _safe_suffix(filename: str) -> str:

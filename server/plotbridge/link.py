@@ -18,7 +18,7 @@ import dataclasses
 import logging
 import os
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import AsyncIterable, AsyncIterator, Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -46,6 +46,9 @@ log = logging.getLogger("plotbridge.link")
 
 REALTIME_BYTES = frozenset(b"?!~\x18") | frozenset(range(0x80, 0x100))
 MOVING_STATES = frozenset({"Run", "Jog", "Home"})
+
+
+Lines = Iterable[tuple[int, str]] | AsyncIterable[tuple[int, str]]
 
 
 class LinkDown(Exception):
@@ -278,10 +281,10 @@ class Link:
                 raise LinkDown("not connected")
             return await self._exchange(line, timeout)
 
-    async def stream(self, lines: Iterator[tuple[int, str]],
-                     on_ack: Callable[[int], None]) -> None:
+    async def stream(self, lines: Lines, on_ack: Callable[[int], None]) -> None:
         """Stream (line number, text) pairs with character counting.
 
+        `lines` may be an async iterable (a program read lazily from disk).
         Keeps as many lines in the board's receive buffer as fit in its 128
         bytes, so the planner never starves; calls on_ack(number) per ok, in
         order. Returns when every line is acknowledged; raises StreamAborted.
@@ -306,8 +309,8 @@ class Link:
 
     # --- sending ----------------------------------------------------------
 
-    async def _send_lines(self, st: _Stream, lines: Iterator[tuple[int, str]]) -> None:
-        for number, raw in lines:
+    async def _send_lines(self, st: _Stream, lines: Lines) -> None:
+        async for number, raw in _aiter(lines):
             text = raw.strip()
             problem = line_problem(text)
             if problem:
@@ -730,6 +733,15 @@ class Link:
                 callback(event)
             except Exception:
                 log.exception("link subscriber failed on %s event", event.kind)
+
+
+def _aiter(lines: Lines) -> AsyncIterator[tuple[int, str]]:
+    return aiter(lines) if isinstance(lines, AsyncIterable) else _from_sync(lines)
+
+
+async def _from_sync(lines: Iterable[tuple[int, str]]) -> AsyncIterator[tuple[int, str]]:
+    for item in lines:
+        yield item
 
 
 def _write_some(port: Any, data: bytes) -> int:

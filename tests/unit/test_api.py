@@ -98,7 +98,7 @@ class FakeLink:
         assert self._tick is not None
         self._abort = None
         self.set_state("Run")
-        for number, text in lines:
+        async for number, text in lines:
             if not self.auto_ack:
                 await self._tick.wait()
                 self._tick.clear()
