@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from plotbridge.importing.optimize import EndIndex, optimize_strokes
+from plotbridge.importing.optimize import EndIndex, optimize_strokes, two_opt
 from plotbridge.importing.optimize import travel as travel_of
 
 from .import_helpers import drawn_strokes, program_lines, run_import
@@ -53,6 +53,21 @@ def test_optimization_without_simplification_keeps_every_segment(strokes):
     assert segments(out) == segments(strokes)
     assert travel_of(out) <= travel_of(strokes) + 1e-6 or len(strokes) == 1
     assert len(out) <= len(strokes)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(stroke, min_size=3, max_size=40), st.integers(min_value=1, max_value=6))
+def test_two_opt_stops_only_when_no_reversal_in_the_window_helps(strokes, window):
+    arrays = [np.asarray(s, dtype=float) for s in strokes]
+    out = two_opt(arrays, (0.0, 0.0), time.monotonic() + 10.0, window=window)
+    assert sorted(map(segments, ([s] for s in out))) == \
+        sorted(map(segments, ([s] for s in arrays)))
+    best = travel_of(out)
+    assert best <= travel_of(arrays) + 1e-9
+    for i in range(len(out) - 1):     # a run starts before the last stroke
+        for j in range(i, min(len(out), i + window + 1)):
+            turned = out[:i] + [s[::-1] for s in out[i:j + 1][::-1]] + out[j + 1:]
+            assert travel_of(turned) >= best - 1e-6
 
 
 @settings(max_examples=40, deadline=None)

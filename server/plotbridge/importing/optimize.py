@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 
@@ -63,15 +64,24 @@ class EndIndex:
             ring += 1
 
 
-def _clean(stroke: Stroke) -> np.ndarray:
-    a = np.asarray(stroke, dtype=float)
-    if len(a) > 1:
-        keep = np.ones(len(a), dtype=bool)
-        keep[1:] = np.any(np.abs(np.diff(a, axis=0)) > 1e-9, axis=1)
-        a = a[keep]
-    if len(a) == 1:
-        a = np.vstack([a, a])       # a dot: pen down and up at one place
-    return a
+def _clean_all(strokes: list[Stroke]) -> list[np.ndarray]:
+    """Each non-empty stroke as an array without repeated points; a single point is
+    doubled (a dot: pen down and up at one place)."""
+    strokes = [s for s in strokes if s]
+    sizes = np.fromiter((len(s) for s in strokes), dtype=np.intp, count=len(strokes))
+    flat = np.fromiter(itertools.chain.from_iterable(itertools.chain.from_iterable(strokes)),
+                       dtype=float, count=2 * int(sizes.sum()))
+    pts = flat.reshape(-1, 2)
+    ends = np.cumsum(sizes)
+    starts = ends - sizes
+    keep = np.ones(len(pts), dtype=bool)
+    keep[1:] = np.any(np.abs(np.diff(pts, axis=0)) > 1e-9, axis=1)
+    keep[starts] = True
+    out = []
+    for a, b in zip(starts.tolist(), ends.tolist(), strict=True):
+        s = pts[a:b][keep[a:b]]
+        out.append(np.vstack([s, s]) if len(s) == 1 else s)
+    return out
 
 
 def order_greedy(strokes: list[np.ndarray], start: tuple[float, float],
@@ -105,10 +115,38 @@ def order_greedy(strokes: list[np.ndarray], start: tuple[float, float],
     return out
 
 
+def _gains(s: np.ndarray, e: np.ndarray, origin: np.ndarray, lo: int, hi: int,
+           window: int) -> np.ndarray:
+    """Travel saved by reversing positions i..i+k, for rows i in lo..hi-1 and columns
+    k <= window (-inf where i+k is past the end)."""
+    n = len(s)
+    rows = np.arange(lo, hi)[:, None]
+    js = rows + np.arange(window + 1)[None, :]
+    valid = js < n
+    js = np.minimum(js, n - 1)
+    nxt = np.minimum(js + 1, n - 1)
+    last = js + 1 >= n
+    prev = e[np.maximum(rows[:, 0] - 1, 0)]
+    if lo == 0:
+        prev[0] = origin
+    si = s[rows[:, 0]]
+    # Reversing positions i..j turns the edges prev→s[i] and e[j]→s[j+1] into
+    # prev→e[j] and s[i]→s[j+1] (no edge after the last position).
+    head = np.hypot(si[:, 0] - prev[:, 0], si[:, 1] - prev[:, 1])[:, None]
+    ej, sn = e[js], s[nxt]
+    old = head + np.where(last, 0.0, np.hypot(sn[..., 0] - ej[..., 0], sn[..., 1] - ej[..., 1]))
+    new = np.hypot(ej[..., 0] - prev[:, None, 0], ej[..., 1] - prev[:, None, 1]) + \
+        np.where(last, 0.0, np.hypot(sn[..., 0] - si[:, None, 0], sn[..., 1] - si[:, None, 1]))
+    return np.where(valid, old - new, -np.inf)
+
+
 def two_opt(strokes: list[np.ndarray], start: tuple[float, float], deadline: float,
             window: int = TWO_OPT_WINDOW) -> list[np.ndarray]:
     """Reverses runs of up to `window` strokes (and each stroke in them) while that
-    shortens the travel, until no run does or the deadline passes."""
+    shortens the travel, until no run does or the deadline passes. Each pass takes
+    positions i in order and makes the best reversal starting at i; the gains of a band
+    of rows are computed at once, again from just after each reversal (it changes the
+    travel of no row that starts past its end)."""
     n = len(strokes)
     if n < 3:
         return strokes
@@ -117,29 +155,26 @@ def two_opt(strokes: list[np.ndarray], start: tuple[float, float], deadline: flo
     s = np.array([st[0] for st in strokes], dtype=float)    # start of position k
     e = np.array([st[-1] for st in strokes], dtype=float)   # end of position k
     origin = np.asarray(start, dtype=float)
+    band = 16
     improved = True
     while improved and time.monotonic() < deadline:
         improved = False
-        for i in range(n - 1):
-            if i % 64 == 0 and time.monotonic() >= deadline:
-                break
-            # Reversing positions i..j turns the edges prev→s[i] and e[j]→s[j+1] into
-            # prev→e[j] and s[i]→s[j+1] (no edge after the last position).
-            prev = e[i - 1] if i else origin
-            hi = min(n, i + 1 + window)
-            js = np.arange(i, hi)
-            nxt = np.minimum(js + 1, n - 1)
-            last = js + 1 >= n
-            old = np.hypot(*(s[i] - prev)) + np.where(last, 0.0, np.hypot(*(s[nxt] - e[js]).T))
-            new = np.hypot(*(e[js] - prev).T) + np.where(last, 0.0, np.hypot(*(s[nxt] - s[i]).T))
-            gain = old - new
-            k = int(np.argmax(gain))
-            if gain[k] > 1e-9:
-                j = i + k
-                s[i:j + 1], e[i:j + 1] = e[i:j + 1][::-1].copy(), s[i:j + 1][::-1].copy()
-                order[i:j + 1] = order[i:j + 1][::-1].copy()
-                flipped[i:j + 1] = ~flipped[i:j + 1][::-1]
-                improved = True
+        i = 0
+        while i < n - 1 and time.monotonic() < deadline:
+            hi = min(n - 1, i + band)
+            gains = _gains(s, e, origin, i, hi, window)
+            best = gains.max(axis=1)
+            hits = np.flatnonzero(best > 1e-9)
+            if not len(hits):
+                i = hi
+                continue
+            i += int(hits[0])
+            j = i + int(np.argmax(gains[hits[0]]))
+            s[i:j + 1], e[i:j + 1] = e[i:j + 1][::-1].copy(), s[i:j + 1][::-1].copy()
+            order[i:j + 1] = order[i:j + 1][::-1].copy()
+            flipped[i:j + 1] = ~flipped[i:j + 1][::-1]
+            improved = True
+            i += 1
     return [strokes[o][::-1] if f else strokes[o] for o, f in zip(order, flipped, strict=True)]
 
 
@@ -153,7 +188,7 @@ def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
                      merge_distance: float = MERGE_DISTANCE) -> list[Stroke]:
     """Strokes reordered, reversed, merged and simplified; the drawn geometry stays
     within `tolerance` of the original."""
-    arrays = [_clean(s) for s in strokes if s]
+    arrays = _clean_all(strokes)
     if not arrays:
         return []
     arrays = simplify_all(arrays, tolerance)
@@ -161,7 +196,7 @@ def optimize_strokes(strokes: list[Stroke], tolerance: float, deadline: float,
     given = join_touching(arrays, merge_distance)
     if travel(given, start) < travel(ordered, start):
         ordered = given     # greedy is a heuristic: never hand back a worse order
-    return [[(float(x), float(y)) for x, y in s] for s in ordered]
+    return [list(map(tuple, s.tolist())) for s in ordered]
 
 
 def join_touching(strokes: list[np.ndarray], merge_distance: float) -> list[np.ndarray]:
