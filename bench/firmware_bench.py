@@ -15,6 +15,8 @@ edges and the interrupt pin in simulated cycles. Measures:
 - flash and RAM use of the real build.
 
 Run: .venv/bin/python bench/firmware_bench.py
+     .venv/bin/python bench/firmware_bench.py --profile   (where the cycles of
+     the F18000 throughput run go, per function, from program-counter samples)
 """
 
 from __future__ import annotations
@@ -54,10 +56,13 @@ def _has_pc(name: str) -> bool:
     return subprocess.run(["pkg-config", "--exists", name]).returncode == 0
 
 
-def simulate(harness: Path, elf: Path, lines: list[str], tmp: Path, max_s: float = 120) -> dict:
+def simulate(harness: Path, elf: Path, lines: list[str], tmp: Path, max_s: float = 120,
+             profile: Path | None = None, profile_from: int = 0) -> dict:
     gcode = tmp / "in.gcode"
     gcode.write_text("\n".join(lines) + "\n")
-    out = run([str(harness), str(elf), str(gcode), str(max_s)])
+    env = {"HARNESS_PROFILE": str(profile),
+           "HARNESS_PROFILE_FROM": str(profile_from)} if profile else {}
+    out = run([str(harness), str(elf), str(gcode), str(max_s)], env=env)
     result = json.loads(out[out.index("{"):])
     if result["errors"] or result["alarm"] or result["acked"] != result["lines"]:
         summary = {k: result[k] for k in ("lines", "acked", "errors", "alarm")}
@@ -88,10 +93,12 @@ def step_rate(harness: Path, elf: Path, tmp: Path) -> dict:
     r = simulate(harness, elf, lines, tmp)
     per_window = r["window_cycles"] / F_CPU
     rates = [(a / per_window, b / per_window) for a, b in r["windows"]]
-    # the cruise: windows at (near) the commanded rate; a late step shows up
-    # as a window inside the cruise that falls short
+    # the cruise: from the first window at the commanded rate (to within a
+    # step: the window where the ramp ends is partly ramp) to the last one
+    # near it; a late step shows up as a window inside the cruise that falls short
+    start = next((i for i, (a, b) in enumerate(rates) if min(a, b) >= 0.995 * TARGET_STEP_HZ), None)
     cruise = [i for i, (a, b) in enumerate(rates) if a >= 0.97 * TARGET_STEP_HZ]
-    inner = rates[cruise[0] + 1: cruise[-1]] if cruise else []
+    inner = rates[start + 1: cruise[-1]] if start is not None else []
     late = sum(1 for a, b in inner if min(a, b) < 0.97 * TARGET_STEP_HZ)
     sustained = min(min(a, b) for a, b in inner) if inner else 0.0
     return {
@@ -105,7 +112,7 @@ def step_rate(harness: Path, elf: Path, tmp: Path) -> dict:
     }
 
 
-def line_throughput(harness: Path, elf: Path, tmp: Path, feed: float, check: bool) -> float:
+def circle_program(feed: float, check: bool) -> tuple[list[str], list[str]]:
     """0.5 mm G1 segments around a circle of radius 50 mm, short modal lines."""
     r, n = 50.0, 1500
     per_turn = int(2 * math.pi * r / 0.5)
@@ -115,9 +122,43 @@ def line_throughput(harness: Path, elf: Path, tmp: Path, feed: float, check: boo
     for k in range(1, n + 1):
         a = 2 * math.pi * k / per_turn
         body.append(f"X{100 + r * math.cos(a):.2f}Y{110 + r * math.sin(a):.2f}")
+    return pre, body
+
+
+def line_throughput(harness: Path, elf: Path, tmp: Path, feed: float, check: bool) -> float:
+    pre, body = circle_program(feed, check)
     res = simulate(harness, elf, pre + body, tmp)
     acks = res["ack_cycles"][len(pre):]
     return (len(acks) - 1) / ((acks[-1] - acks[0]) / F_CPU)
+
+
+def profile(harness: Path, elf: Path, tmp: Path, feed: float = 18000, top: int = 25) -> None:
+    """Cycles per streamed line by function, between the first and last ack."""
+    pre, body = circle_program(feed, False)
+    samples = tmp / "profile.txt"
+    res = simulate(harness, elf, pre + body, tmp, profile=samples, profile_from=len(pre))
+    acks = res["ack_cycles"][len(pre):]
+    nm = run(["avr-nm", "-n", "-S", "-C", str(elf)])
+    funcs = []
+    for line in nm.splitlines():
+        parts = line.split()
+        if len(parts) == 4 and parts[2] in "tTW":
+            funcs.append((int(parts[0], 16), int(parts[1], 16), parts[3]))
+    counts: dict[str, int] = {}
+    total = 0
+    for line in samples.read_text().split("\n"):
+        if not line:
+            continue
+        addr, n = (int(x) for x in line.split())
+        name = next((f for a, size, f in funcs if a <= addr < a + size), f"0x{addr:x}")
+        counts[name] = counts.get(name, 0) + n
+        total += n
+    # samples from the first streamed line's ack to the last one's
+    per_sample = (acks[-1] - acks[0]) / total
+    lines = len(acks) - 1
+    print(f"{lines} lines at F{feed:.0f}: {(acks[-1] - acks[0]) / lines:.0f} cycles a line")
+    for name, n in sorted(counts.items(), key=lambda kv: -kv[1])[:top]:
+        print(f"{n * per_sample / lines:9.0f}  {name}")
 
 
 def sizes() -> dict:
@@ -130,6 +171,9 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         elf, harness = build(tmp)
+        if "--profile" in sys.argv[1:]:
+            profile(harness, elf, tmp)
+            return 0
         overhead = isr_overhead_cycles(elf)
         sr = step_rate(harness, elf, tmp)
         serial_bytes = 13  # "X123.45Y67.89\n"-style lines

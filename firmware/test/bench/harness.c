@@ -36,6 +36,21 @@ static uint64_t steps[2], last_step_cycle, last_rise[2], min_interval[2] = {~0UL
 static uint32_t window_steps[MAX_WINDOWS][2];
 static int alarm_seen;
 static uint64_t mark_rise, mark_total, mark_count; /* PC4: optional profiling mark */
+/* HARNESS_PROFILE=FILE: sample the program counter every PROFILE_EVERY
+ * cycles (odd, so no loop aliases with it) and write "byte_address count"
+ * lines; bench/firmware_bench.py --profile maps them to functions. */
+#define PROFILE_EVERY 97
+#define FLASH_WORDS 16384
+static uint32_t *profile;
+static size_t profile_from; /* HARNESS_PROFILE_FROM: first line acknowledged */
+
+static avr_cycle_count_t sample_pc(avr_t *a, avr_cycle_count_t when, void *param)
+{
+    (void)param;
+    if (acked >= profile_from && acked < line_count && a->pc / 2 < FLASH_WORDS)
+        profile[a->pc / 2]++;
+    return when + PROFILE_EVERY;
+}
 
 static void on_mark_pin(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -187,6 +202,14 @@ int main(int argc, char **argv)
     next_byte_at = F_CPU / 5; /* after the banner and the EEPROM defaults */
     avr_cycle_timer_register(avr, next_byte_at, feed, 0);
 
+    const char *profile_path = getenv("HARNESS_PROFILE");
+    if (profile_path) {
+        profile = calloc(FLASH_WORDS, sizeof(*profile));
+        const char *from = getenv("HARNESS_PROFILE_FROM");
+        profile_from = from ? (size_t)atol(from) : 0;
+        avr_cycle_timer_register(avr, PROFILE_EVERY, sample_pc, 0);
+    }
+
     uint64_t limit = (uint64_t)(max_s * F_CPU);
     uint64_t sleep_cycles = 0;
     for (;;) {
@@ -202,6 +225,14 @@ int main(int argc, char **argv)
         if (acked == line_count && avr->cycle > last_step_cycle + IDLE_END &&
             avr->cycle > ack_cycle[line_count - 1] + IDLE_END)
             break;
+    }
+    if (profile_path) {
+        FILE *pf = fopen(profile_path, "w");
+        for (uint32_t w = 0; pf && w < FLASH_WORDS; w++)
+            if (profile[w])
+                fprintf(pf, "%u %u\n", w * 2, profile[w]);
+        if (pf)
+            fclose(pf);
     }
     printf("{\"sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles);
     printf("\"cycles\": %llu, \"lines\": %zu, \"acked\": %zu, \"errors\": %u, \"alarm\": %d,\n",
