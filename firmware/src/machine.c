@@ -252,7 +252,7 @@ static uint8_t line_to(const float *target, float feed, uint8_t flags)
     int32_t from_steps[N_AXIS];
     float from[N_AXIS], p[N_AXIS];
     plan_get_position(from_steps);
-    for (uint8_t a = 0; a < N_AXIS; a++)
+    for (uint8_t a = 0; a < N_AXIS && pieces > 1; a++) /* divisions only a split move needs */
         from[a] = (float)from_steps[a] / settings.steps_per_mm[a];
     for (uint16_t k = 1; k <= pieces; k++) {
         for (uint8_t a = 0; a < N_AXIS; a++)

@@ -14,6 +14,32 @@ static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
 static float exec_exit_limit;       /* for ring[tail] */
 
+/* Reciprocals of the per-axis settings, so that plan_line multiplies where
+ * it would divide (a float division costs ~500 cycles here); recomputed
+ * whenever one of the settings they come from has changed. */
+static struct {
+    float steps_per_mm[N_AXIS], max_rate[N_AXIS], accel[N_AXIS]; /* as last seen */
+    float mm_per_step[N_AXIS];
+    float s_per_mm[N_AXIS];       /* 1 / max rate in mm/s */
+    float inv_accel[N_AXIS];
+} axis;
+
+static void refresh_axis(void)
+{
+    if (!memcmp(axis.steps_per_mm, settings.steps_per_mm, sizeof(axis.steps_per_mm)) &&
+        !memcmp(axis.max_rate, settings.max_rate, sizeof(axis.max_rate)) &&
+        !memcmp(axis.accel, settings.accel, sizeof(axis.accel)))
+        return;
+    memcpy(axis.steps_per_mm, settings.steps_per_mm, sizeof(axis.steps_per_mm));
+    memcpy(axis.max_rate, settings.max_rate, sizeof(axis.max_rate));
+    memcpy(axis.accel, settings.accel, sizeof(axis.accel));
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        axis.mm_per_step[a] = 1.0f / settings.steps_per_mm[a];
+        axis.s_per_mm[a] = 60.0f / settings.max_rate[a];
+        axis.inv_accel[a] = 1.0f / settings.accel[a];
+    }
+}
+
 static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == PLAN_SIZE ? 0 : i + 1); }
 static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? PLAN_SIZE - 1 : i - 1); }
 
@@ -53,7 +79,7 @@ uint16_t plan_pieces(const float *target)
     if (settings.corexy)
         span *= 2.0f;
     /* with a margin for rounding: no piece may come out above the limit */
-    float pieces = span / (PLAN_MAX_EVENTS * 0.9f) + 1.0f;
+    float pieces = span * (1.0f / (PLAN_MAX_EVENTS * 0.9f)) + 1.0f;
     return pieces < 65535.0f ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
 }
 
@@ -119,13 +145,14 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
 {
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
     float d_mm[N_AXIS], mm2 = 0.0f;
+    refresh_axis();
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = target[a] * settings.steps_per_mm[a];
         if (!(fabsf(t) < PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
             return 0;
         cart[a] = lroundf(t);
         delta[a] = cart[a] - position[a];
-        d_mm[a] = (float)delta[a] / settings.steps_per_mm[a];
+        d_mm[a] = (float)delta[a] * axis.mm_per_step[a];
         mm2 += d_mm[a] * d_mm[a];
     }
     plan_motor_steps(delta, motor);
@@ -140,30 +167,39 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
 
     plan_block_t *b = &ring[head];
     b->flags = flags;
-    memcpy(b->steps, motor, sizeof(motor));
-    b->events = events;
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        b->steps[a] = (int16_t)motor[a];
+    b->events = (uint16_t)events;
     b->mm = sqrtf(mm2);
-    float unit[N_AXIS];
-    float speed = (flags & PB_RAPID) ? 1.0e9f : feed * (1.0f / 60.0f);
-    float accel = 1.0e9f;
     float inv_mm = 1.0f / b->mm;
-    /* divide only where an axis limit applies: divisions cost ~500 cycles here */
+    b->events_per_mm = (float)events * inv_mm;
+    /* the axis limits along the move: speed <= max_rate / |u|, accel <= accel / |u|
+     * for every moving axis; the tightest has the largest |u| / limit, so
+     * one division each at most */
+    float unit[N_AXIS];
+    float s_per_mm = 0.0f, inv_accel = 0.0f;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         unit[a] = d_mm[a] * inv_mm;
         float u = fabsf(unit[a]);
         if (u > 1.0e-6f) {
-            float vmax = settings.max_rate[a] * (1.0f / 60.0f);
-            if (speed * u > vmax)
-                speed = vmax / u;
-            if (accel * u > settings.accel[a])
-                accel = settings.accel[a] / u;
+            float r = u * axis.s_per_mm[a];
+            if (r > s_per_mm)
+                s_per_mm = r;
+            r = u * axis.inv_accel[a];
+            if (r > inv_accel)
+                inv_accel = r;
         }
     }
+    float speed = (flags & PB_RAPID) ? 1.0e9f : feed * (1.0f / 60.0f);
+    if (speed * s_per_mm > 1.0f)
+        speed = 1.0f / s_per_mm;
+    float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
     /* the step timer cannot run slower than MIN_STEP_RATE */
     if (speed * (float)events < MIN_STEP_RATE * b->mm)
         speed = MIN_STEP_RATE * b->mm / (float)events;
     b->nominal_sqr = speed * speed;
     b->accel = accel;
+    b->inv_accel = inv_accel;
     b->accel_dist2 = 2.0f * accel * b->mm;
 
     float junction = 0.0f;

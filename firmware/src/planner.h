@@ -12,11 +12,13 @@
 #define PB_JOG 0x02
 
 typedef struct {
-    int32_t steps[N_AXIS];  /* signed motor steps */
-    uint32_t events;        /* step events: the largest |steps| */
+    int16_t steps[N_AXIS];  /* signed motor steps, |steps| <= PLAN_MAX_EVENTS */
+    uint16_t events;        /* step events: the largest |steps| */
     float mm;               /* length in mm */
+    float events_per_mm;
     float nominal_sqr;      /* cruise speed squared, (mm/s)^2 */
     float accel;            /* mm/s^2 along the move */
+    float inv_accel;        /* 1 / accel, so the segment preparer multiplies */
     float accel_dist2;      /* 2 * accel * mm: speed^2 gained over the block */
     float entry_sqr;        /* planned entry speed squared */
     float max_entry_sqr;    /* junction limit squared */

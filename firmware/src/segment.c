@@ -16,7 +16,7 @@ static struct {
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
     float events_per_mm;
-    float mm_per_event;
+    float mm_per_event;  /* 0 until a segment ends inside the block */
     float inv_accel;     /* 1 / block acceleration: multiplications are cheaper */
 } prep;
 
@@ -156,9 +156,9 @@ static void start_block(const plan_block_t *b)
     prep.first = 1;
     prep.s = 0.0f;
     prep.done = 0;
-    prep.events_per_mm = (float)b->events / b->mm;
-    prep.mm_per_event = b->mm / (float)b->events;
-    prep.inv_accel = 1.0f / b->accel;
+    prep.events_per_mm = b->events_per_mm;
+    prep.mm_per_event = 0.0f; /* a division that short blocks never need */
+    prep.inv_accel = b->inv_accel;
 }
 
 uint8_t seg_fill(void)
@@ -193,6 +193,8 @@ uint8_t seg_fill(void)
         if (!ended && prep.v > 0.0f) {
             /* end the segment exactly on its last step, so its rate is exact;
              * the distance to that step is moved over to the next segment */
+            if (prep.mm_per_event == 0.0f)
+                prep.mm_per_event = b->mm / (float)b->events;
             float extra = prep.s - (float)target * prep.mm_per_event;
             float back = extra / prep.v;
             if (fabsf(back) < 0.25f * time) { /* when slow, v is too rough an estimate */
