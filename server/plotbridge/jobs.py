@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from plotbridge.config import Config
+from plotbridge.importing.eta import eta  # numpy-free, unlike the rest of the importer
 from plotbridge.program_reader import ProgramReader
 from plotbridge.resume import first_unexecuted_line
 from plotbridge.store import JobStore
@@ -636,8 +637,6 @@ class JobManager:
         total = max(job["lines_total"], 1)
         job["progress"] = round(min(job["lines_done"] / total, 1.0), 4)
         try:
-            from plotbridge.importing import eta
-
             left = eta(job["timeline"], job["estimate_s"], job["lines_done"])
             job["eta_s"] = round(float(left), 1)
         except Exception:
