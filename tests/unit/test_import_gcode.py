@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import re
 import tempfile
 from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from plotbridge.importing import ImportFailed, MachineProfile
+from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile
+from plotbridge.importing.gcode import read_ops
+from plotbridge.importing.models import ErrorLog
 
 from .import_helpers import drawn_strokes, program_lines, run_import
 
@@ -199,3 +202,34 @@ def test_any_text_imports_or_fails_cleanly(tmp_path, text):
         assert not (example_dir / "out" / "program.gcode").exists()
     else:
         assert r.lines_total == len(program_lines(r))
+
+
+def _ops_and_errors(lines: list[str], options: ImportOptions) -> tuple[list, list]:
+    errors = ErrorLog()
+    ops = list(read_ops(enumerate(lines, 1), options, errors))
+    return ops, errors.errors
+
+
+_number = st.sampled_from(["10", "10.", ".5", "-3.25", "+7", "250.125", "0", "1e3", ""])
+_line = st.builds(
+    lambda g, x, y, f, sp, tail: sp.join(p for p in (g, "X" + x, "Y" + y, f) if p) + tail,
+    st.sampled_from(["G0", "G1", "G00", "G01", "g1", "G2", "M3", "M5", "G91", "G90", "G20"]),
+    _number, _number,
+    st.sampled_from(["", "F3000", "f1500.5", "F0", "F-5", "F 600"]),
+    st.sampled_from([" ", "", "\t", "  "]),
+    st.sampled_from(["", " ; note", ";", " (c)", " ; a*b", " ;("]))
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(_line, min_size=1, max_size=30))
+def test_common_lines_read_as_the_general_parser_reads_them(lines):
+    # A line number sends every line through the general parser (errors quote it).
+    for first in ([], ["G20"], ["G91"], ["F1200"]):
+        plain = first + lines
+        numbered = [f"N{k} {text}" for k, text in enumerate(plain, 1)]
+        for options in (ImportOptions(), ImportOptions(pen_dialect="z")):
+            ops, errors = _ops_and_errors(plain, options)
+            ops_n, errors_n = _ops_and_errors(numbered, options)
+            assert ops == ops_n
+            assert errors == [{**e, "message": re.sub(r"'N\d+ ", "'", e["message"])}
+                              for e in errors_n]

@@ -18,6 +18,12 @@ PEN_DIALECTS = ("auto", "m3", "z", "m300", "servo-z")
 _BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
 _WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
 _COMMENT = re.compile(r"\([^)]*\)|;.*")
+# The common line, read without the general parser: G0/G1 X Y [F] [; comment], in any
+# case, spaces and tabs between words only. A comment with a parenthesis or an asterisk,
+# anything else, takes the general path (which reports it).
+_NUM = r"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))"
+_FAST = re.compile(rf"[ \t]*G0?([01])[ \t]*X[ \t]*{_NUM}[ \t]*Y[ \t]*{_NUM}"
+                   rf"(?:[ \t]*F[ \t]*{_NUM})?[ \t]*(?:;[^()*]*)?", re.I)
 # G words accepted without effect on a plotter (plane XY, feed per minute, work
 # coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
 _NOOP_G = {17.0, 94.0, 54.0, 61.0, 64.0, 40.0, 49.0, 80.0, 91.1}
@@ -30,6 +36,10 @@ ARC_RADIUS_REL = 0.001
 
 def _num(v: float) -> str:
     return f"{v:g}"
+
+
+def _no_feed(mode: int) -> str:
+    return f"G{mode} with no feed rate: no F on this line or before it"
 
 
 def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
@@ -94,10 +104,31 @@ class GcodeReader:
             return
         out: list[tuple] = []
         block = self._block
+        fast = _FAST.fullmatch
         for line_no, raw in lines:
             if len(raw) > MAX_LINE:
                 self.errors.add(line_no, f"line longer than {MAX_LINE} characters")
                 continue
+            m = fast(raw)
+            if m is not None and not self.relative and not self.inches:
+                g, xs, ys, fs = m.groups()
+                if fs is not None:
+                    f = float(fs)
+                    if f > 0:
+                        self.feed = f
+                    else:
+                        m = None    # the general path reports it
+                if m is not None:
+                    self.motion = mode = int(g)
+                    self.x = x = float(xs)
+                    self.y = y = float(ys)
+                    if mode == 0:
+                        yield (MOVE, line_no, x, y, None)
+                    elif self.feed is None:
+                        self.errors.add(line_no, _no_feed(1))
+                    else:
+                        yield (MOVE, line_no, x, y, self.feed)
+                    continue
             if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
                 text = strip_line(raw, line_no, self.errors)
                 if not text:
@@ -212,7 +243,7 @@ class GcodeReader:
             ty = vals["Y"] * unit if "Y" in vals else y
         mode = self.motion
         if mode != 0 and self.feed is None:
-            errors.add(line_no, f"G{mode} with no feed rate: no F on this line or before it")
+            errors.add(line_no, _no_feed(mode))
             self.x, self.y = tx, ty
             return
         if mode in (0, 1):

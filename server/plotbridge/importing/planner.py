@@ -71,11 +71,13 @@ class Planner:
         self.p = profile
         self.rapid = (profile.max_rate[0] / 60.0, profile.max_rate[1] / 60.0)
         self.accel = profile.accel
+        self.junction = profile.junction_deviation
         self.depth = max(2, profile.planner_blocks)
         self.x, self.y = start
         self.time = 0.0
         self.timeline = Timeline()
-        # pending blocks: [length, accel, nominal², max entry², line, arrival time]
+        # pending blocks: [length, accel, nominal², max entry², line, arrival time,
+        # 2·accel·length (the change of squared speed the block allows)]
         self.pending: list[list] = []
         # The serial line: a line arrives `bytes · 10 / baud` after the one before it,
         # and not before the planner and the receive buffer have room for it.
@@ -129,13 +131,13 @@ class Planner:
                     # The firmware takes the acceleration of the block entered, along
                     # its own direction (GRBL 1.1 uses the junction vector instead).
                     s = math.sqrt(0.5 * (1.0 - cos_t))
-                    j2 = acc * self.p.junction_deviation * s / (1.0 - s)
+                    j2 = acc * self.junction * s / (1.0 - s)
                 entry2 = min(j2, nom2, self.prev_nom2)
         self.prev_u = (ux, uy)
         self.prev_nom2 = nom2
         slot = self.ends[-1] if self.ends and len(self.pending) >= self.depth - 1 else 0.0
         self.ready = max(self.arrival, self.ready, slot) + self.block_s
-        self.pending.append([length, acc, nom2, entry2, line, self.ready])
+        self.pending.append([length, acc, nom2, entry2, line, self.ready, 2 * acc * length])
         if len(self.pending) >= self.depth:
             self._finish_first()
 
@@ -188,17 +190,17 @@ class Planner:
             limit = blk[3] + s
             if limit < exit2:
                 exit2 = limit
-            s += 2 * blk[1] * blk[0]
+            s += blk[6]
         return min(exit2, s), False
 
     def _finish_first(self) -> None:
-        length, acc, nom2, _, line, ready = self.pending[0]
+        length, acc, nom2, _, line, ready, dv2 = self.pending[0]
         if ready > self.time:
             self.time = ready        # the machine waited for this block, standing still
             self.v2 = 0.0
         start = self.time
         v0, vn = math.sqrt(self.v2), math.sqrt(nom2)
-        reach = self.v2 + 2 * acc * length
+        reach = self.v2 + dv2
         # Blocks that reach the buffer while this one runs still raise its exit speed
         # (the firmware replans the running block): widen the window to its end.
         limit, cut = self._exit_limit(start)

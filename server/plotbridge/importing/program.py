@@ -44,7 +44,7 @@ class ProgramWriter:
         self._area = (-EPS, -EPS, profile.width + EPS, profile.height + EPS)
         self._buf: list[str] = []
         self.last = ""
-        self._feed_value, self._feed_text = -1.0, ""
+        self._feed_texts: dict[float, str] = {}
         for text in HEADER:
             self._write(text)
         # The pen is up when a job starts: the firmware skips the settle time of a pen
@@ -129,9 +129,12 @@ class ProgramWriter:
         if feed is None:
             self._write(f"G0 X{x:.3f} Y{y:.3f}")
         else:
-            if feed != self._feed_value:
-                self._feed_value, self._feed_text = feed, _feed(feed)
-            self._write(f"G1 X{x:.3f} Y{y:.3f} F{self._feed_text}")
+            f = self._feed_texts.get(feed)
+            if f is None:
+                if len(self._feed_texts) >= 256:    # a file of ever new feeds
+                    self._feed_texts.clear()
+                f = self._feed_texts[feed] = _feed(feed)
+            self._write(f"G1 X{x:.3f} Y{y:.3f} F{f}")
         self.planner.move(self.line, x, y, feed)
         d = math.hypot(x - x0, y - y0)
         if self.down:
