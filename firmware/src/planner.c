@@ -12,7 +12,7 @@ static uint8_t head, tail, count;
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
-static float exec_exit_limit;       /* for ring[tail] */
+static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
@@ -47,7 +47,7 @@ void plan_reset(void)
 {
     head = tail = count = 0;
     prev_nominal_sqr = 0.0f;
-    exec_exit_limit = 0.0f;
+    exec_exit_limit = 0;
     memset(prev_unit, 0, sizeof(prev_unit));
 }
 
@@ -57,7 +57,20 @@ uint8_t plan_free(void) { return (uint8_t)(PLAN_SIZE - 1 - count); }
 uint8_t plan_count(void) { return count; }
 plan_block_t *plan_current(void) { return count ? &ring[tail] : 0; }
 
-float plan_next_entry_sqr(void) { return count > 1 ? ring[next_index(tail)].entry_sqr : 0.0f; }
+plan_sqr_t plan_sqr_from_float(float v_sqr)
+{
+    float f = v_sqr * PLAN_SQR_SCALE;
+    if (!(f > 0.0f)) /* negative rounding leftovers (and NaN) are a stop */
+        return 0;
+    return f < (float)PLAN_SQR_MAX ? (plan_sqr_t)f : PLAN_SQR_MAX;
+}
+
+float plan_sqr_to_float(plan_sqr_t v) { return (float)v * (1.0f / PLAN_SQR_SCALE); }
+
+float plan_next_entry_sqr(void)
+{
+    return count > 1 ? plan_sqr_to_float(ring[next_index(tail)].entry_sqr) : 0.0f;
+}
 
 void plan_discard_current(void)
 {
@@ -65,7 +78,7 @@ void plan_discard_current(void)
         return;
     tail = next_index(tail);
     count--;
-    exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0.0f;
+    exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0;
 }
 
 uint16_t plan_pieces(const float *target)
@@ -83,7 +96,7 @@ uint16_t plan_pieces(const float *target)
     return pieces < 65535.0f ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
 }
 
-void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = v_sqr; }
+void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = plan_sqr_from_float(v_sqr); }
 
 void plan_motor_steps(const int32_t *cart, int32_t *motor)
 {
@@ -118,10 +131,10 @@ static void recalculate(void)
 {
     uint8_t i = prev_index(head);
     uint8_t first = tail;
-    float next_entry = 0.0f;
+    plan_sqr_t next_entry = 0;
     for (uint8_t n = count; n > 1; n--) {
         plan_block_t *b = &ring[i];
-        float e = next_entry + b->accel_dist2;
+        plan_sqr_t e = next_entry + b->accel_dist2;
         if (e > b->max_entry_sqr)
             e = b->max_entry_sqr;
         if (e == b->entry_sqr && e == b->max_entry_sqr) {
@@ -132,12 +145,12 @@ static void recalculate(void)
         next_entry = e;
         i = prev_index(i);
     }
-    float reach = first == tail ? exec_exit_limit : ring[first].entry_sqr + ring[first].accel_dist2;
+    plan_sqr_t reach = first == tail ? exec_exit_limit : ring[first].entry_sqr + ring[first].accel_dist2;
     for (i = next_index(first); i != head; i = next_index(i)) {
         plan_block_t *b = &ring[i];
         if (b->entry_sqr > reach)
             b->entry_sqr = reach;
-        reach = b->entry_sqr + b->accel_dist2;
+        reach = b->entry_sqr + b->accel_dist2; /* both <= PLAN_SQR_MAX: no overflow */
     }
 }
 
@@ -200,7 +213,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->nominal_sqr = speed * speed;
     b->accel = accel;
     b->inv_accel = inv_accel;
-    b->accel_dist2 = 2.0f * accel * b->mm;
+    b->accel_dist2 = plan_sqr_from_float(2.0f * accel * b->mm);
 
     float junction = 0.0f;
     if (count) {
@@ -218,8 +231,8 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         if (junction > b->nominal_sqr)
             junction = b->nominal_sqr;
     }
-    b->max_entry_sqr = junction;
-    b->entry_sqr = 0.0f;
+    b->max_entry_sqr = plan_sqr_from_float(junction);
+    b->entry_sqr = 0;
 
     memcpy(prev_unit, unit, sizeof(unit));
     prev_nominal_sqr = b->nominal_sqr;

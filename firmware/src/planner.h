@@ -8,6 +8,14 @@
 
 #define PLAN_MAX_EVENTS 30000 /* the step interrupt counts in 16 bits: longer moves are split */
 #define PLAN_MAX_STEPS 1.0e9f /* machine positions stay well inside int32 */
+/* Squared speeds in units of 1/PLAN_SQR_SCALE (mm/s)^2, rounded down (so
+ * never above a limit), saturated at PLAN_SQR_MAX (4096 mm/s) so that a sum
+ * of two never overflows. */
+typedef uint32_t plan_sqr_t;
+#define PLAN_SQR_SCALE 64.0f
+#define PLAN_SQR_MAX (1UL << 30)
+plan_sqr_t plan_sqr_from_float(float v_sqr);
+float plan_sqr_to_float(plan_sqr_t v);
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
@@ -19,9 +27,12 @@ typedef struct {
     float nominal_sqr;      /* cruise speed squared, (mm/s)^2 */
     float accel;            /* mm/s^2 along the move */
     float inv_accel;        /* 1 / accel, so the segment preparer multiplies */
-    float accel_dist2;      /* 2 * accel * mm: speed^2 gained over the block */
-    float entry_sqr;        /* planned entry speed squared */
-    float max_entry_sqr;    /* junction limit squared */
+    /* The planner passes run on every queued block for every new one, so
+     * they work on squared speeds in fixed point (plan_sqr_t): integer adds
+     * and compares instead of float ones. */
+    plan_sqr_t accel_dist2;   /* 2 * accel * mm: speed^2 gained over the block */
+    plan_sqr_t entry_sqr;     /* planned entry speed squared */
+    plan_sqr_t max_entry_sqr; /* junction limit squared */
     uint8_t flags;
 } plan_block_t;
 

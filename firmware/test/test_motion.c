@@ -77,23 +77,24 @@ void test_planner_junctions(void)
     plan_block_t *first = plan_current();
     CHECK(first && plan_count() == 4);
     /* straight continuation: junction limited only by the nominal speed */
-    CHECK_NEAR(first[1].max_entry_sqr, 50.0 * 50.0, 1);
+    CHECK_NEAR(plan_sqr_to_float(first[1].max_entry_sqr), 50.0 * 50.0, 1);
     /* a 90 degree corner: v^2 = a * jd * sin(t/2) / (1 - sin(t/2)) */
     double sh = sqrt(0.5);
-    CHECK_NEAR(first[2].max_entry_sqr, 1000.0 * 0.02 * sh / (1 - sh), 0.01);
+    CHECK_NEAR(plan_sqr_to_float(first[2].max_entry_sqr), 1000.0 * 0.02 * sh / (1 - sh),
+               1.0 / PLAN_SQR_SCALE);
     /* a full reversal stops */
     fresh_planner();
     CHECK(plan_line(a, 3000, 0));
     float back[2] = {0, 0};
     CHECK(plan_line(back, 3000, 0));
-    CHECK(plan_current()[1].max_entry_sqr == 0.0f);
+    CHECK(plan_current()[1].max_entry_sqr == 0);
     /* the last block can always stop: backward pass bound */
     fresh_planner();
     float tiny1[2] = {0.5f, 0}, tiny2[2] = {1.0f, 0};
     plan_line(tiny1, 6000, 0);
     plan_line(tiny2, 6000, 0);
     plan_block_t *t = plan_current();
-    CHECK(t[1].entry_sqr <= 2 * 1000 * 0.5 + 1e-3);
+    CHECK(plan_sqr_to_float(t[1].entry_sqr) <= 2 * 1000 * 0.5);
     /* zero-length moves queue nothing */
     CHECK(plan_line(tiny2, 6000, 0) == 0);
     /* moves beyond the 16-bit step counters are refused, and cut by plan_pieces */
