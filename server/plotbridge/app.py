@@ -41,6 +41,8 @@ from plotbridge.ws import Hub
 
 log = logging.getLogger("plotbridge.app")
 
+WS_MESSAGE_MAX = 4096  # characters; the longest real message (a console line) is ~200
+WS_COMMANDS_WAITING = 16  # per WebSocket client: jog and console lines not yet answered
 TRUE = ("1", "true", "yes", "on")
 FALSE = ("0", "false", "no", "off", "")
 
@@ -371,25 +373,52 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
                 await ws.close()
 
     async def ws_receive(ws: WebSocket, client: Any) -> None:
-        while True:
-            message = await ws.receive()
-            if message["type"] == "websocket.disconnect":
-                return
-            text = message.get("text") or (message.get("bytes") or b"").decode("utf-8", "replace")
-            kind = _message_type(text)
-            if kind == "estop":  # first thing, before parsing anything else
-                manager.estop("WebSocket")
-                hub.send(client, {"type": "ack", "command": "estop"})
-                continue
-            hub.send(client, await ws_command(kind, text))
+        """Read the client's messages; never awaits anything but the next one.
 
-    async def ws_command(kind: str | None, text: str) -> dict[str, Any]:
+        Stop, pause and resume are realtime bytes, handled at once. Commands that
+        wait for the board (jog, console lines) run in order in their own task,
+        so a slow one never holds back an emergency stop sent after it.
+        """
+        waiting: asyncio.Queue[tuple[str, dict[str, Any]]] = asyncio.Queue(WS_COMMANDS_WAITING)
+        worker = asyncio.create_task(ws_board_commands(client, waiting))
         try:
-            message = json.loads(text)
-            if not isinstance(message, dict):
-                raise ValueError("not an object")
-        except ValueError:
-            return {"type": "error", "command": None, "detail": "send a JSON object with a type"}
+            while True:
+                message = await ws.receive()
+                if message["type"] == "websocket.disconnect":
+                    return
+                text = message.get("text")
+                if text is None:
+                    text = (message.get("bytes") or b"").decode("utf-8", "replace")
+                kind, body = _parse_message(text)
+                if kind == "estop":  # first thing, before anything else
+                    manager.estop("WebSocket")
+                    hub.send(client, {"type": "ack", "command": "estop"})
+                elif body is None:
+                    hub.send(client, {"type": "error", "command": None, "detail": kind})
+                elif kind in ("jog", "command"):
+                    try:
+                        waiting.put_nowait((kind, body))
+                    except asyncio.QueueFull:
+                        hub.send(client, {"type": "error", "command": kind, "detail":
+                                          "too many commands waiting for the board"})
+                else:
+                    hub.send(client, await ws_command(kind, body))
+        finally:
+            worker.cancel()
+
+    async def ws_board_commands(
+        client: Any, waiting: asyncio.Queue[tuple[str, dict[str, Any]]]
+    ) -> None:
+        while True:
+            kind, body = await waiting.get()
+            try:
+                answer = await ws_command(kind, body)
+            except Exception as exc:  # a bug; the client's later commands must still run
+                log.exception("WebSocket %s failed", kind)
+                answer = {"type": "error", "command": kind, "detail": f"internal error: {exc}"}
+            hub.send(client, answer)
+
+    async def ws_command(kind: Any, message: dict[str, Any]) -> dict[str, Any]:
         try:
             if kind == "pause":
                 manager.pause(message.get("job"))
@@ -416,12 +445,18 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
     return app
 
 
-def _message_type(text: str) -> str | None:
+def _parse_message(text: str) -> tuple[Any, dict[str, Any] | None]:
+    """(type, message), or (what is wrong, None). A message longer than any real
+    one is refused unread: parsing megabytes would hold up the event loop."""
+    if len(text) > WS_MESSAGE_MAX:
+        return f"message longer than {WS_MESSAGE_MAX} characters", None
     try:
         message = json.loads(text)
     except ValueError:
-        return None
-    return message.get("type") if isinstance(message, dict) else None
+        message = None
+    if not isinstance(message, dict):
+        return "send a JSON object with a type", None
+    return message.get("type"), message
 
 
 def settings_view(values: dict[int, float]) -> list[dict[str, Any]]:

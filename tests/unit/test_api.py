@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import threading
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -538,6 +539,34 @@ def test_ws_snapshot_and_commands(sync_client):
         assert _next_of(ws, "error")["command"] is None
         ws.send_bytes(b'{"type": "estop"}')
         assert _next_of(ws, "ack") == {"type": "ack", "command": "estop"}
+
+
+def test_ws_estop_is_not_held_back_by_a_slow_command(sync_client):
+    release = threading.Event()
+    threading.Timer(2.0, release.set).start()  # without it the test would hang, not fail
+    sent: list[str] = []
+
+    async def slow_command(line: str, timeout: float = 10) -> list[str]:  # noqa: ASYNC109
+        sent.append(line)
+        await asyncio.to_thread(release.wait)
+        return []
+
+    sync_client.link.command = slow_command
+    with sync_client.websocket_connect(f"/api/ws?token={TOKEN}") as ws:
+        ws.send_json({"type": "command", "line": "G4 P10"})
+        ws.send_json({"type": "estop"})
+        assert _next_of(ws, "ack") == {"type": "ack", "command": "estop"}
+        assert sync_client.link.estop_calls == 1 and not release.is_set()
+        for n in range(20):  # 16 may wait behind the running one; the rest are refused
+            ws.send_json({"type": "command", "line": f"G0 X{n}"})
+        refused = [_next_of(ws, "error")["detail"] for _ in range(4)]
+        assert all("too many commands" in detail for detail in refused)
+        ws.send_text(json.dumps({"type": "estop", "pad": "x" * 5000}))
+        assert "longer than" in _next_of(ws, "error")["detail"]
+        release.set()
+        answers = [_next_of(ws, "ack") for _ in range(17)]
+        assert {a["command"] for a in answers} == {"command"}
+    assert sent[:2] == ["G4 P10", "G0 X0"] and len(sent) == 17
 
 
 def _next_of(ws, kind: str) -> dict:
