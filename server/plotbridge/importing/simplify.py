@@ -38,18 +38,19 @@ def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np
     keep[fixed] = True
     active = np.flatnonzero(~keep)
     tol2 = tolerance * tolerance
+    xs, ys = np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1])
     while active.size:
         kept = np.flatnonzero(keep)
-        pos = np.searchsorted(kept, active)
+        pos = np.cumsum(keep)[active]    # kept points before each active one
         a, b = kept[pos - 1], kept[pos]
-        p = points[a]
-        d = points[b] - p
-        rel = points[active] - p
-        dd = np.einsum("ij,ij->i", d, d)
-        t = np.einsum("ij,ij->i", rel, d) / np.where(dd > 0, dd, 1.0)
+        ax, ay = xs[a], ys[a]
+        dx, dy = xs[b] - ax, ys[b] - ay
+        rx, ry = xs[active] - ax, ys[active] - ay
+        dd = dx * dx + dy * dy
+        t = (rx * dx + ry * dy) / np.where(dd > 0, dd, 1.0)
         np.clip(t, 0.0, 1.0, out=t)
-        off = rel - t[:, None] * d
-        dist2 = np.einsum("ij,ij->i", off, off)
+        ox, oy = rx - t * dx, ry - t * dy
+        dist2 = ox * ox + oy * oy
         starts = np.flatnonzero(np.r_[True, pos[1:] != pos[:-1]])
         gmax = np.maximum.reduceat(dist2, starts)
         sizes = np.diff(np.r_[starts, active.size])
