@@ -89,8 +89,8 @@ def order_greedy(strokes: list[np.ndarray], start: tuple[float, float],
     n = len(strokes)
     ends = [(float(s[0][0]), float(s[0][1])) for s in strokes] + \
            [(float(s[-1][0]), float(s[-1][1])) for s in strokes]
-    lo = np.min([s.min(axis=0) for s in strokes], axis=0)
-    hi = np.max([s.max(axis=0) for s in strokes], axis=0)
+    pts = np.concatenate(strokes)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
     area = float(np.prod(np.maximum(hi - lo, 1.0)))
     index = EndIndex(ends, max(math.sqrt(area / max(n, 1)), 0.5))
     out: list[np.ndarray] = []
