@@ -11,12 +11,14 @@ edges and the interrupt pin in simulated cycles. Measures:
   during the cruise);
 - worst-case cycles of the step interrupt: the pin-measured body plus the
   fixed entry/exit cost counted from the disassembly;
-- G-code throughput in lines per simulated second for 0.5 mm G1 segments;
+- G-code throughput in lines per simulated second for 0.5 mm G1 segments,
+  at the acceleration of the target (3000 mm/s^2, where the planner's
+  look-ahead caps it) and at 20000 mm/s^2 (where the CPU does);
 - flash and RAM use of the real build.
 
 Run: .venv/bin/python bench/firmware_bench.py
      .venv/bin/python bench/firmware_bench.py --profile   (where the cycles of
-     the F18000 throughput run go, per function, from program-counter samples)
+     the CPU-bound throughput run go, per function, from program-counter samples)
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ F_CPU = 16_000_000
 TARGET_STEP_HZ = 40_000
 TARGET_LINES_S = 600
 FLASH_MAX, RAM_MAX = 30_720, 1_536
+CPU_ACCEL = 20_000  # mm/s^2: look-ahead then allows more than F24000 (400 mm/s)
 
 
 def run(cmd: list[str], **kw) -> str:
@@ -112,11 +115,11 @@ def step_rate(harness: Path, elf: Path, tmp: Path) -> dict:
     }
 
 
-def circle_program(feed: float, check: bool) -> tuple[list[str], list[str]]:
+def circle_program(feed: float, check: bool, accel: float = 3000) -> tuple[list[str], list[str]]:
     """0.5 mm G1 segments around a circle of radius 50 mm, short modal lines."""
     r, n = 50.0, 1500
     per_turn = int(2 * math.pi * r / 0.5)
-    pre = ["$X", "$110=30000", "$111=30000", "$120=3000", "$121=3000",
+    pre = ["$X", "$110=30000", "$111=30000", f"$120={accel:.0f}", f"$121={accel:.0f}",
            "$C" if check else "G0 X150 Y110", f"G1 F{feed:.0f}"]
     body = []
     for k in range(1, n + 1):
@@ -125,16 +128,25 @@ def circle_program(feed: float, check: bool) -> tuple[list[str], list[str]]:
     return pre, body
 
 
-def line_throughput(harness: Path, elf: Path, tmp: Path, feed: float, check: bool) -> float:
-    pre, body = circle_program(feed, check)
+def line_throughput(harness: Path, elf: Path, tmp: Path, feed: float, check: bool,
+                    accel: float = 3000) -> float:
+    pre, body = circle_program(feed, check, accel)
     res = simulate(harness, elf, pre + body, tmp)
     acks = res["ack_cycles"][len(pre):]
     return (len(acks) - 1) / ((acks[-1] - acks[0]) / F_CPU)
 
 
-def profile(harness: Path, elf: Path, tmp: Path, feed: float = 18000, top: int = 25) -> None:
+def lookahead_cap(accel: float) -> float:
+    """Lines/s of 0.5 mm segments the planner allows at best: it plans every
+    queued block to a stop at the end of the queue, so the speed is at most
+    sqrt(2 a L) over the 16 blocks queued behind the one executing."""
+    return math.sqrt(2 * accel * 16 * 0.5) / 0.5
+
+
+def profile(harness: Path, elf: Path, tmp: Path, feed: float = 24000, accel: float = CPU_ACCEL,
+            top: int = 25) -> None:
     """Cycles per streamed line by function, between the first and last ack."""
-    pre, body = circle_program(feed, False)
+    pre, body = circle_program(feed, False, accel)
     samples = tmp / "profile.txt"
     res = simulate(harness, elf, pre + body, tmp, profile=samples, profile_from=len(pre))
     acks = res["ack_cycles"][len(pre):]
@@ -180,6 +192,7 @@ def main() -> int:
         serial_limit = 117_647 / 11 / serial_bytes  # the harness paces at 11 bits a byte
         lines_run = {f: line_throughput(harness, elf, tmp, f, False) for f in (6000, 12000, 18000)}
         lines_check = line_throughput(harness, elf, tmp, 18000, True)
+        lines_cpu = line_throughput(harness, elf, tmp, 24000, False, CPU_ACCEL)
     sz = sizes()
     worst = sr["isr_body_max_cycles"] + overhead
     print(f"step rate, both axes at once: {sr['sustained_hz_both_axes']:.0f} Hz sustained over "
@@ -191,6 +204,10 @@ def main() -> int:
     for f, v in lines_run.items():
         print(f"0.5 mm G1 segments at F{f:.0f}: {v:.0f} lines/s (motion limit "
               f"{f / 60 / 0.5:.0f}, serial limit {serial_limit:.0f}; target {TARGET_LINES_S})")
+    print(f"  (at $120/$121=3000 the look-ahead caps 0.5 mm segments at "
+          f"{lookahead_cap(3000):.0f} lines/s, whatever the CPU does)")
+    print(f"0.5 mm G1 segments at F24000 with $120/$121={CPU_ACCEL} (CPU-bound: motion limit 800, "
+          f"look-ahead cap {lookahead_cap(CPU_ACCEL):.0f}): {lines_cpu:.0f} lines/s")
     print(f"parse only ($C check mode): {lines_check:.0f} lines/s")
     print(f"flash {sz['flash']} / {FLASH_MAX} bytes, RAM (data+bss) {sz['ram']} / {RAM_MAX} bytes")
     ok = (sr["sustained_hz_both_axes"] >= TARGET_STEP_HZ * 0.99 and sr["late_windows"] == 0
