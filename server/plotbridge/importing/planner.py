@@ -94,9 +94,11 @@ class Planner:
     def receive(self, nbytes: int) -> None:
         """The next program line, `nbytes` long with its newline, is sent."""
         if self.byte_time:
-            full = len(self.ends) == self.ends.maxlen
-            room = self.ends[0] if full else 0.0
-            self.arrival = max(self.arrival, room) + nbytes * self.byte_time
+            ends = self.ends
+            start = self.arrival
+            if len(ends) == ends.maxlen and ends[0] > start:
+                start = ends[0]
+            self.arrival = start + nbytes * self.byte_time
 
     def move(self, line: int, x: float, y: float, feed: float | None) -> None:
         """A straight move to (x, y); feed in mm/min, None for a rapid."""
@@ -106,13 +108,18 @@ class Planner:
             return
         self.x, self.y = x, y
         ux, uy = dx / length, dy / length
-        # Each axis holds to its own maximum rate and acceleration (inline: hot path).
+        # Each axis holds to its own maximum rate and acceleration (inline, with
+        # comparisons rather than min/max calls: this runs once per block).
         ax, ay = abs(ux), abs(uy)
         if ax > 1e-12:
             vmax, acc = self.rapid[0] / ax, self.accel[0] / ax
             if ay > 1e-12:
-                vmax = min(vmax, self.rapid[1] / ay)
-                acc = min(acc, self.accel[1] / ay)
+                v = self.rapid[1] / ay
+                if v < vmax:
+                    vmax = v
+                a = self.accel[1] / ay
+                if a < acc:
+                    acc = a
         else:
             vmax, acc = self.rapid[1] / ay, self.accel[1] / ay
         vn = vmax if feed is None or feed / 60.0 > vmax else feed / 60.0
@@ -132,13 +139,22 @@ class Planner:
                     # its own direction (GRBL 1.1 uses the junction vector instead).
                     s = math.sqrt(0.5 * (1.0 - cos_t))
                     j2 = acc * self.junction * s / (1.0 - s)
-                entry2 = min(j2, nom2, self.prev_nom2)
+                entry2 = j2
+                if nom2 < entry2:
+                    entry2 = nom2
+                if self.prev_nom2 < entry2:
+                    entry2 = self.prev_nom2
         self.prev_u = (ux, uy)
         self.prev_nom2 = nom2
-        slot = self.ends[-1] if self.ends and len(self.pending) >= self.depth - 1 else 0.0
-        self.ready = max(self.arrival, self.ready, slot) + self.block_s
-        self.pending.append([length, acc, nom2, entry2, line, self.ready, 2 * acc * length])
-        if len(self.pending) >= self.depth:
+        pending = self.pending
+        ready = self.arrival
+        if self.ready > ready:
+            ready = self.ready
+        if self.ends and len(pending) >= self.depth - 1 and self.ends[-1] > ready:
+            ready = self.ends[-1]     # the planner is full: wait for a slot
+        self.ready = ready = ready + self.block_s
+        pending.append([length, acc, nom2, entry2, line, ready, 2 * acc * length])
+        if len(pending) >= self.depth:
             self._finish_first()
 
     def arc(self, line: int, x: float, y: float, i: float, j: float, feed: float,
@@ -203,8 +219,11 @@ class Planner:
         reach = self.v2 + dv2
         # Blocks that reach the buffer while this one runs still raise its exit speed
         # (the firmware replans the running block): widen the window to its end.
-        limit, cut = self._exit_limit(start)
-        exit2 = min(limit, reach, nom2)
+        exit2, cut = self._exit_limit(start)
+        if reach < exit2:
+            exit2 = reach
+        if nom2 < exit2:
+            exit2 = nom2
         took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
         if cut:
             wider = min(self._exit_limit(start + took)[0], reach, nom2)

@@ -117,7 +117,9 @@ class ProgramWriter:
         self.planner.stop(self.line, self.profile.pen_settle_s)
 
     def move(self, src_line: int | None, x: float, y: float, feed: float | None) -> None:
-        x, y = round(x, 3), round(y, 3)
+        # Formatted once: the value of the text is round(x, 3), the point written.
+        xt, yt = f"{x:.3f}", f"{y:.3f}"
+        x, y = float(xt), float(yt)
         x0, y0 = self.x, self.y
         if x == x0 and y == y0:
             return
@@ -127,14 +129,14 @@ class ProgramWriter:
             self.x, self.y = x, y     # the import fails; only keep finding errors
             return
         if feed is None:
-            self._write(f"G0 X{x:.3f} Y{y:.3f}")
+            self._write(f"G0 X{xt} Y{yt}")
         else:
             f = self._feed_texts.get(feed)
             if f is None:
                 if len(self._feed_texts) >= 256:    # a file of ever new feeds
                     self._feed_texts.clear()
                 f = self._feed_texts[feed] = _feed(feed)
-            self._write(f"G1 X{x:.3f} Y{y:.3f} F{f}")
+            self._write(f"G1 X{xt} Y{yt} F{f}")
         self.planner.move(self.line, x, y, feed)
         d = math.hypot(x - x0, y - y0)
         if self.down:
