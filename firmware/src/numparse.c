@@ -47,9 +47,17 @@ uint8_t read_number(const char *line, uint8_t *pos, float *out)
     if (sig + exponent > 10)  /* more than ten integer digits: surely too big */
         return 0;
     /* powers of ten up to 1e10 are exact in a float, so scale with one
-     * multiplication or one division (a division costs ~500 cycles here) */
+     * multiplication or one division (a division costs ~500 cycles here);
+     * the one to three decimals of G-code multiply by a constant instead,
+     * within a float's last bit of the division */
     float v = (float)mantissa;
-    if (exponent < -40) {
+    if (exponent == -1) {
+        v *= 0.1f;
+    } else if (exponent == -2) {
+        v *= 0.01f;
+    } else if (exponent == -3) {
+        v *= 0.001f;
+    } else if (exponent < -40) {
         v = 0.0f;
     } else {
         for (; exponent < -10; exponent += 10)
