@@ -186,24 +186,26 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         except TimeoutError as exc:
             raise JobError(409, f"the board did not answer {line!r} within {wait:g} s") from exc
 
+    async def idle_board(action: str, line: str, wait: float = 10.0) -> dict[str, Any]:
+        """One line to the board while no job runs; the answer of the machine endpoints."""
+        idle_machine(action)
+        return {"responses": await board(line, wait)}
+
     @app.post("/api/machine/unlock", dependencies=guard)
     async def unlock() -> dict[str, Any]:
-        idle_machine("unlock")
         log.info("unlock ($X) requested")
-        return {"responses": await board("$X")}
+        return await idle_board("unlock", "$X")
 
     @app.post("/api/machine/home", dependencies=guard)
     async def home() -> dict[str, Any]:
-        idle_machine("home")
         log.info("homing ($H) requested")
-        responses = await board("$H", wait=120)
+        answer = await idle_board("home", "$H", wait=120)
         log.info("homing done")
-        return {"responses": responses}
+        return answer
 
     @app.post("/api/machine/pen", dependencies=guard)
     async def pen(body: PenBody) -> dict[str, Any]:
-        idle_machine("move the pen")
-        return {"responses": await board("M3" if body.down else "M5")}
+        return await idle_board("move the pen", "M3" if body.down else "M5")
 
     @app.post("/api/machine/jog", dependencies=guard)
     async def jog(body: JogBody) -> dict[str, Any]:
@@ -218,8 +220,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
 
     @app.post("/api/machine/motors", dependencies=guard)
     async def motors(body: MotorsBody) -> dict[str, Any]:
-        idle_machine("switch the motors")
-        return {"responses": await board("M17" if body.enabled else "M18")}
+        return await idle_board("switch the motors", "M17" if body.enabled else "M18")
 
     @app.post("/api/machine/command", dependencies=guard)
     async def command(body: CommandBody) -> dict[str, Any]:

@@ -462,25 +462,24 @@ class JobManager:
         return job
 
     def pause(self, job_id: str | None = None) -> dict[str, Any]:
-        job = self._active_job(job_id)
-        if job["state"] != "running":
-            raise JobError(409, f"job {job['id']} is {job['state']}, not running")
-        self._realtime(b"!")
-        job["state"] = "paused"
-        self._changed(job)
-        log.info("job %s paused", job["id"])
-        return job
+        return self._hold_or_go(job_id, b"!", "running", "paused")
 
     def resume(self, job_id: str | None = None) -> dict[str, Any]:
         if job_id is not None and self.get(job_id)["state"] in RESUMABLE:
             return self.start_job(job_id)
+        return self._hold_or_go(job_id, b"~", "paused", "running")
+
+    def _hold_or_go(
+        self, job_id: str | None, byte: bytes, before: str, after: str
+    ) -> dict[str, Any]:
+        """Feed hold (`!`) or cycle start (`~`) for the active job in state `before`."""
         job = self._active_job(job_id)
-        if job["state"] != "paused":
-            raise JobError(409, f"job {job['id']} is {job['state']}, not paused")
-        self._realtime(b"~")
-        job["state"] = "running"
+        if job["state"] != before:
+            raise JobError(409, f"job {job['id']} is {job['state']}, not {before}")
+        self._realtime(byte)
+        job["state"] = after
         self._changed(job)
-        log.info("job %s resumed", job["id"])
+        log.info("job %s %s", job["id"], "paused" if after == "paused" else "resumed")
         return job
 
     def _realtime(self, byte: bytes) -> None:

@@ -32,8 +32,23 @@ def firmware_dir() -> Path:
     return Path(__file__).resolve().parents[2] / "firmware"
 
 
-def _die_with_parent() -> None:
-    """In the child: get SIGTERM when the server dies, even by SIGKILL (Linux)."""
+def control_request(path: Path, command: str, limit_s: float) -> str:
+    """One command to a plotsim control socket and its one-line answer (blocking)."""
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
+        sock.settimeout(limit_s)
+        sock.connect(str(path))
+        sock.sendall(command.encode() + b"\n")
+        answer = bytearray()
+        while not answer.endswith(b"\n"):
+            chunk = sock.recv(65536)
+            if not chunk:
+                break
+            answer += chunk
+    return answer.decode(errors="replace").strip()
+
+
+def die_with_parent() -> None:
+    """In the child (preexec_fn): get SIGTERM when the parent dies, even by SIGKILL (Linux)."""
     with contextlib.suppress(Exception):
         ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
@@ -133,7 +148,7 @@ class VirtualPlotter:
         proc = await asyncio.create_subprocess_exec(
             *self.command_line(), stdout=asyncio.subprocess.PIPE,
             stderr=asyncio.subprocess.STDOUT, start_new_session=True,
-            preexec_fn=_die_with_parent)
+            preexec_fn=die_with_parent)
         self._proc = proc
         assert proc.stdout is not None
         try:
@@ -168,17 +183,7 @@ class VirtualPlotter:
 
     def control(self, command: str, limit_s: float = 2.0) -> str:
         """Send one control-socket command; returns its one-line answer (blocking)."""
-        with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as sock:
-            sock.settimeout(limit_s)
-            sock.connect(str(self.control_path))
-            sock.sendall(command.encode() + b"\n")
-            answer = bytearray()
-            while not answer.endswith(b"\n"):
-                chunk = sock.recv(65536)
-                if not chunk:
-                    break
-                answer += chunk
-        return answer.decode(errors="replace").strip()
+        return control_request(self.control_path, command, limit_s)
 
     def trace(self) -> dict[str, Any]:
         """The simulator's trace JSON (blocking: call it in a thread).

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import threading
 import time
+from collections.abc import AsyncIterator
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -133,17 +135,24 @@ def make_app(tmp_path: Path, **config: Any):
     return create_app(cfg, link, TOKEN), link
 
 
-@pytest.fixture
-async def api(tmp_path, monkeypatch):
-    monkeypatch.setattr(JobManager, "_import", fake_import)
-    app, link = make_app(tmp_path, max_upload_mb=1)
+@contextlib.asynccontextmanager
+async def serving(app: Any) -> AsyncIterator[httpx.AsyncClient]:
+    """The app started (lifespan) and a client with the token."""
     async with app.router.lifespan_context(app):
         await asyncio.sleep(0)  # let the fake link's run() start
         transport = httpx.ASGITransport(app=app)
         async with httpx.AsyncClient(
             transport=transport, base_url="http://test", headers=AUTH
         ) as client:
-            yield SimpleNamespace(app=app, link=link, client=client, manager=app.state.manager)
+            yield client
+
+
+@pytest.fixture
+async def api(tmp_path, monkeypatch):
+    monkeypatch.setattr(JobManager, "_import", fake_import)
+    app, link = make_app(tmp_path, max_upload_mb=1)
+    async with serving(app) as client:
+        yield SimpleNamespace(app=app, link=link, client=client, manager=app.state.manager)
 
 
 async def upload(client: httpx.AsyncClient, text: str = "G1 X1 Y1\n", **data: str):
@@ -473,18 +482,14 @@ async def test_server_info(api, tmp_path):
 async def test_restart_marks_running_job_interrupted(tmp_path, monkeypatch):
     monkeypatch.setattr(JobManager, "_import", fake_import)
     app, link = make_app(tmp_path)
-    async with app.router.lifespan_context(app):
-        await asyncio.sleep(0)
-        async with httpx.AsyncClient(
-            transport=httpx.ASGITransport(app=app), base_url="http://t", headers=AUTH
-        ) as client:
-            jid = (await upload(client)).json()["id"]
-            queued = (await upload(client)).json()["id"]
-            await client.post(f"/api/jobs/{jid}/start")
-            for _ in range(4):
-                link.step()
-                await asyncio.sleep(0.01)
-            app.state.manager._save(app.state.manager.jobs[jid]).result()
+    async with serving(app) as client:
+        jid = (await upload(client)).json()["id"]
+        queued = (await upload(client)).json()["id"]
+        await client.post(f"/api/jobs/{jid}/start")
+        for _ in range(4):
+            link.step()
+            await asyncio.sleep(0.01)
+        app.state.manager._save(app.state.manager.jobs[jid]).result()
     again, _ = make_app(tmp_path)
     jobs = {job["id"]: job for job in again.state.manager.list()}
     assert jobs[jid]["state"] == "interrupted" and jobs[jid]["resume_line"] >= 1
@@ -589,23 +594,20 @@ async def test_machine_buttons_pause_and_resume_the_job(api):
 async def test_real_import_runs_in_a_worker_process(tmp_path):
     """No fake importer here: the upload goes through the real importer in its process."""
     app, _ = make_app(tmp_path)
-    async with app.router.lifespan_context(app):
-        async with httpx.AsyncClient(
-            transport=httpx.ASGITransport(app=app), base_url="http://t", headers=AUTH
-        ) as client:
-            gcode = "G21\nG90\nG0 X10 Y10\nM3\nG1 X20 Y10 F3000\nM5\n"
-            response = await client.post("/api/jobs", files={"file": ("a.nc", gcode)})
-            assert response.status_code == 201, response.text
-            job = response.json()
-            assert job["format"] == "gcode" and job["bounds"]["max_x"] == 20
-            bad = await client.post("/api/jobs", files={"file": ("a.gcode", "G1 X1\nG7 Q\n")})
-            assert bad.status_code == 422
-            assert all(isinstance(e["line"], int) for e in bad.json()["detail"]["errors"])
-            assert not [p for p in (tmp_path / "jobs").iterdir() if p.name != job["id"]]
-            names = (await client.get("/api/patterns")).json()["patterns"]
-            assert names and {"name", "description"} <= set(names[0])
-            pattern = await client.post("/api/jobs?pattern=nosuch")
-            assert pattern.status_code == 422
+    async with serving(app) as client:
+        gcode = "G21\nG90\nG0 X10 Y10\nM3\nG1 X20 Y10 F3000\nM5\n"
+        response = await client.post("/api/jobs", files={"file": ("a.nc", gcode)})
+        assert response.status_code == 201, response.text
+        job = response.json()
+        assert job["format"] == "gcode" and job["bounds"]["max_x"] == 20
+        bad = await client.post("/api/jobs", files={"file": ("a.gcode", "G1 X1\nG7 Q\n")})
+        assert bad.status_code == 422
+        assert all(isinstance(e["line"], int) for e in bad.json()["detail"]["errors"])
+        assert not [p for p in (tmp_path / "jobs").iterdir() if p.name != job["id"]]
+        names = (await client.get("/api/patterns")).json()["patterns"]
+        assert names and {"name", "description"} <= set(names[0])
+        pattern = await client.post("/api/jobs?pattern=nosuch")
+        assert pattern.status_code == 422
 
 
 async def test_settings_and_jog_refuse_non_finite_numbers(api):
@@ -642,16 +644,12 @@ async def test_auto_start_runs_the_queue(tmp_path, monkeypatch):
     monkeypatch.setattr(JobManager, "_import", fake_import)
     app, link = make_app(tmp_path, auto_start=True)
     link.auto_ack = True
-    async with app.router.lifespan_context(app):
-        await asyncio.sleep(0)
-        async with httpx.AsyncClient(
-            transport=httpx.ASGITransport(app=app), base_url="http://t", headers=AUTH
-        ) as client:
-            first = (await upload(client)).json()["id"]
-            second = (await upload(client)).json()["id"]
-            manager = app.state.manager
-            await settle(lambda: manager.jobs[second]["state"] == "done")
-            assert manager.jobs[first]["state"] == "done"
+    async with serving(app) as client:
+        first = (await upload(client)).json()["id"]
+        second = (await upload(client)).json()["id"]
+        manager = app.state.manager
+        await settle(lambda: manager.jobs[second]["state"] == "done")
+        assert manager.jobs[first]["state"] == "done"
 
 
 JSON = st.recursive(
