@@ -220,10 +220,10 @@ class Planner:
         # Blocks that reach the buffer while this one runs still raise its exit speed
         # (the firmware replans the running block): widen the window to its end.
         exit2, cut = self._exit_limit(start)
-        if reach < exit2:
-            exit2 = reach
-        if nom2 < exit2:
-            exit2 = nom2
+        bound = reach if reach < nom2 else nom2
+        if bound <= exit2:
+            exit2 = bound
+            cut = False     # no wider window can raise the exit speed
         took = trapezoid_time(v0, math.sqrt(exit2), vn, acc, length)
         if cut:
             wider = min(self._exit_limit(start + took)[0], reach, nom2)
