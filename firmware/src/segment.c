@@ -78,14 +78,18 @@ static float advance(const plan_block_t *b, float dt)
     }
     float ve2 = plan_next_entry_sqr();
     float vn2 = b->nominal_sqr;
-    float peak2 = 0.5f * (v * v + ve2) + a * remaining;
+    float v2 = v * v;
+    float peak2 = 0.5f * (v2 + ve2) + a * remaining;
     if (peak2 > vn2)
         peak2 = vn2;
-    if (peak2 < v * v)
-        peak2 = v * v;
-    float vp = sqrtf(peak2);
+    /* no acceleration phase (cruising on from the last block): no sqrt */
+    float vp = v;
+    if (peak2 > v2)
+        vp = sqrtf(peak2);
+    else
+        peak2 = v2;
     float half_inv_a = 0.5f * prep.inv_accel;
-    float d_acc = (peak2 - v * v) * half_inv_a;
+    float d_acc = (peak2 - v2) * half_inv_a;
     float d_dec = (peak2 - ve2) * half_inv_a;
     if (d_dec < 0.0f)
         d_dec = 0.0f;
@@ -119,7 +123,9 @@ static float advance(const plan_block_t *b, float dt)
     /* deceleration to the exit speed (or as close as the distance allows) */
     float left = remaining - s;
     float vend2 = v * v - 2.0f * a * left;
-    float vend = vend2 > ve2 ? sqrtf(vend2) : sqrtf(ve2);
+    if (vend2 < ve2)
+        vend2 = ve2;
+    float vend = vend2 < v * v ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
     float td = (v - vend) * prep.inv_accel;
     if (td > 0.0f && t + td > dt) {
         float tt = dt - t;
