@@ -8,6 +8,7 @@ same clock as time.monotonic()) minus the moment the request was sent.
 Also samples the server's CPU and resident memory while a job plots.
 
     .venv/bin/python bench/estop_latency.py [--runs 50] [--clients 50] [--sim-speed 1]
+                                            [--cpu-hogs N]
 """
 
 from __future__ import annotations
@@ -266,11 +267,23 @@ def run_watchers(port: int, count: int, connected: Any, received: Any) -> None:
     asyncio.run(main())
 
 
+def spin() -> None:
+    while True:
+        pass
+
+
 async def main_async(args: argparse.Namespace) -> dict:
     bench = Bench(args)
+    # Busy processes stand in for a machine loaded by other work (test runs, builds).
+    hogs = [multiprocessing.get_context("spawn").Process(target=spin, daemon=True)
+            for _ in range(args.cpu_hogs)]
+    for hog in hogs:
+        hog.start()
     try:
-        return await bench.run()
+        return {**await bench.run(), "cpu_hogs": args.cpu_hogs}
     finally:
+        for hog in hogs:
+            hog.terminate()
         await bench.close()
 
 
@@ -280,6 +293,8 @@ def main() -> None:
     parser.add_argument("--clients", type=int, default=50)
     parser.add_argument("--sim-speed", type=float, default=1)
     parser.add_argument("--load-seconds", type=float, default=5)
+    parser.add_argument("--cpu-hogs", type=int, default=0,
+                        help="busy-looping processes to run meanwhile (a loaded machine)")
     args = parser.parse_args()
     result = asyncio.run(main_async(args))
     for key, value in result.items():
