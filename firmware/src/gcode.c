@@ -140,7 +140,10 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         val[w] = v;
     }
 
-    float scale = st.inches ? 25.4f : 1.0f;
+    if (st.inches) /* lengths (X Y Z I J R F) to mm once; mm lines multiply nothing */
+        for (uint8_t w = W_X; w <= W_F; w++)
+            if (seen & (1u << w))
+                val[w] *= 25.4f;
     uint8_t axes = (uint8_t)(seen & ((1u << W_X) | (1u << W_Y)));
     if (jog) {
         if (seen & ~((1u << W_X) | (1u << W_Y) | (1u << W_F) | (1u << W_N)))
@@ -155,9 +158,9 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         if (val[W_F] < 0.0f)
             return ERR_NEGATIVE;
         if (jog)
-            blk->feed = val[W_F] * scale;
+            blk->feed = val[W_F];
         else
-            st.feed = val[W_F] * scale;
+            st.feed = val[W_F];
     }
     if (m300) {
         if (!(seen & (1u << W_S)))
@@ -165,7 +168,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
     }
     if (seen & (1u << W_Z)) {
-        float z = st.incremental ? st.z + val[W_Z] * scale : val[W_Z] * scale;
+        float z = st.incremental ? st.z + val[W_Z] : val[W_Z];
         if (fabsf(z) > GC_MAX_COORD)
             return ERR_INVALID_TARGET;
         st.z = z;
@@ -181,7 +184,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         target[a] = st.pos[a];
         if (!(axes & (1u << a)))
             continue;
-        float v = val[a] * scale;
+        float v = val[a];
         if (g53)
             target[a] = v;
         else if (st.incremental)
@@ -218,7 +221,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
             return ERR_NO_AXIS_WORDS;
         for (uint8_t a = 0; a < N_AXIS; a++)
             if (axes & (1u << a))
-                st.offset[a] = st.pos[a] - val[a] * scale;
+                st.offset[a] = st.pos[a] - val[a];
     } else if (non_modal == NM_G28) {
         if (motion >= 0)
             return ERR_AXIS_COMMAND_CONFLICT;
@@ -246,9 +249,9 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 if (seen & (1u << W_R)) {
                     if (seen & ((1u << W_I) | (1u << W_J)))
                         return ERR_UNUSED_WORDS;
-                    if (fabsf(val[W_R] * scale) > GC_MAX_COORD) /* the long way round a huge circle */
+                    if (fabsf(val[W_R]) > GC_MAX_COORD) /* the long way round a huge circle */
                         return ERR_INVALID_TARGET;
-                    uint8_t e = arc_center_from_radius(st.pos, target, val[W_R] * scale,
+                    uint8_t e = arc_center_from_radius(st.pos, target, val[W_R],
                                                        blk->clockwise, blk->center);
                     if (e)
                         return e;
@@ -258,7 +261,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                         return ERR_NO_OFFSETS;
                     float r0 = 0.0f;
                     for (uint8_t a = 0; a < N_AXIS; a++) {
-                        float off = (seen & (1u << (W_I + a))) ? val[W_I + a] * scale : 0.0f;
+                        float off = (seen & (1u << (W_I + a))) ? val[W_I + a] : 0.0f;
                         if (fabsf(off) > GC_MAX_COORD)
                             return ERR_INVALID_TARGET;
                         blk->center[a] = st.pos[a] + off;
