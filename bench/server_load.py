@@ -57,6 +57,19 @@ def spiral(segment_mm: float = 0.5, turns: int = 40, feed: int = 3000) -> str:
     return "\n".join(lines) + "\n"
 
 
+def hatch(segments: int, segment_mm: float = 0.5, feed: int = 3000) -> str:
+    """`segments` pen-down moves of `segment_mm` in rows 0.1 mm apart: a long program
+    (one million segments is about 30 MB) to see what streaming it costs in memory."""
+    per_row = int(280 / segment_mm)
+    lines = ["G21", "G90", "M5", "G0 X10 Y10", "M3"]
+    for n in range(segments):
+        row, step = divmod(n, per_row)
+        x = 10 + (step + 1) * segment_mm if row % 2 == 0 else 290 - (step + 1) * segment_mm
+        lines.append(f"G1 X{x:.3f} Y{10 + (row * 0.1) % 200:.3f} F{feed}")
+    lines.append("M5")
+    return "\n".join(lines) + "\n"
+
+
 async def watch(url: str, counts: list[int], index: int, stop: asyncio.Event) -> None:
     async with connect(url, max_queue=None) as ws:
         while not stop.is_set():
@@ -100,6 +113,8 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=20.0)
     parser.add_argument("--serial", help="a board or plotsim pty (default: --virtual)")
     parser.add_argument("--sim-speed", type=float, default=1.0)
+    parser.add_argument("--segments", type=int, default=0,
+                        help="plot a hatch of this many 0.5 mm moves instead of the spiral")
     args = parser.parse_args()
     link = ["--serial", args.serial] if args.serial else ["--virtual", "--sim-speed", f"{args.sim_speed:g}"]  # noqa: E501
     with tempfile.TemporaryDirectory() as tmp:
@@ -111,7 +126,9 @@ def main() -> int:
                 home = server.client.post("/api/machine/home")
                 assert home.status_code == 200, home.text
             server.wait_machine(lambda m: m["state"] == "Idle", 30)
-            upload = server.client.post("/api/jobs", files={"file": ("spiral.gcode", spiral())})
+            drawing = hatch(args.segments) if args.segments else spiral()
+            upload = server.client.post("/api/jobs", files={"file": ("bench.gcode", drawing)},
+                                        timeout=600)
             assert upload.status_code == 201, upload.text
             server.bench_job = upload.json()["id"]
             start = server.client.post(f"/api/jobs/{server.bench_job}/start")

@@ -371,6 +371,22 @@ async def test_estop_stops_running_job_at_last_ack(api):
     assert (await api.client.get("/api/machine")).json()["state"] == "Alarm"
 
 
+async def test_estop_does_not_wait_for_a_stuck_disk(api, monkeypatch):
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    api.link.step()
+    disk = threading.Event()
+    monkeypatch.setattr(api.manager.store, "save", lambda *_: disk.wait(10))
+    api.manager._save(api.manager.jobs[job["id"]])  # the store's one thread is now stuck
+    began = time.monotonic()
+    response = await api.client.post("/api/machine/estop")
+    took = time.monotonic() - began
+    disk.set()
+    assert response.status_code == 202 and api.link.estop_calls == 1
+    assert took < 0.5, f"the stop waited {took:.2f} s"
+    assert api.manager.jobs[job["id"]]["state"] == "stopped"
+
+
 async def test_estop_when_idle_is_accepted(api):
     assert (await api.client.post("/api/machine/estop")).status_code == 202
     assert api.link.estop_calls == 1
