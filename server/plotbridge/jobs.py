@@ -598,7 +598,11 @@ class JobManager:
             raise
         except Exception as exc:  # keep the queue consistent whatever went wrong
             log.exception("job %s crashed", job["id"])
+            settled = job["state"] not in ACTIVE
             self._finish(job, "failed", f"server error while streaming: {exc}")
+            if not settled:  # e.g. the program could not be read on: stop what was sent
+                with contextlib.suppress(Exception):
+                    await self._halt()
         finally:
             if self.active == job["id"]:
                 self.active = None

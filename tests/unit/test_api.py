@@ -387,6 +387,22 @@ async def test_estop_does_not_wait_for_a_stuck_disk(api, monkeypatch):
     assert api.manager.jobs[job["id"]]["state"] == "stopped"
 
 
+async def test_program_unreadable_mid_job_fails_it_and_stops_the_board(api, monkeypatch):
+    import plotbridge.program_reader as reader
+
+    def unreadable(file, count):
+        raise OSError(5, "Input/output error")
+
+    monkeypatch.setattr(reader, "_read_block", unreadable)
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "failed")
+    assert "Input/output error" in api.manager.jobs[job["id"]]["error"]
+    await settle(lambda: "M5" in api.link.commands)  # hold, reset, pen up
+    assert api.link.realtime_bytes == [b"!"] and api.link.estop_calls == 1
+    assert api.manager.active is None
+
+
 async def test_estop_when_idle_is_accepted(api):
     assert (await api.client.post("/api/machine/estop")).status_code == 202
     assert api.link.estop_calls == 1
