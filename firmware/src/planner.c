@@ -208,8 +208,8 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         speed = 1.0f / s_per_mm;
     float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
     /* the step timer cannot run slower than MIN_STEP_RATE */
-    if (speed * (float)events < MIN_STEP_RATE * b->mm)
-        speed = MIN_STEP_RATE * b->mm / (float)events;
+    if (speed * b->events_per_mm < MIN_STEP_RATE)
+        speed = MIN_STEP_RATE / b->events_per_mm;
     b->nominal_sqr = speed * speed;
     b->accel = accel;
     b->inv_accel = inv_accel;
@@ -218,18 +218,25 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     float junction = 0.0f;
     if (count) {
         float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
+        float cap = prev_nominal_sqr < b->nominal_sqr ? prev_nominal_sqr : b->nominal_sqr;
         if (cos_theta < STRAIGHT_COS) {
-            junction = 1.0e18f;
+            junction = cap;
         } else if (cos_theta < REVERSAL_COS) {
             /* circle of radius r through the corner, deviating junction_deviation
-             * from it: r = jd * sin(t/2) / (1 - sin(t/2)), v^2 = a * r */
-            float sin_half = sqrtf(0.5f * (1.0f - cos_theta));
-            junction = accel * settings.junction_deviation * sin_half / (1.0f - sin_half);
+             * from it: r = jd * sin(t/2) / (1 - sin(t/2)), v^2 = a * r, at most
+             * cap. With k = a * jd, k s / (1 - s) >= cap exactly when
+             * s^2 (k + cap)^2 >= cap^2: gentle corners (most of a curve) need
+             * neither the square root nor the division. */
+            float k = accel * settings.junction_deviation;
+            float s2 = 0.5f * (1.0f - cos_theta);
+            float kc = k + cap;
+            if (s2 * kc * kc >= cap * cap) {
+                junction = cap;
+            } else {
+                float sin_half = sqrtf(s2);
+                junction = k * sin_half / (1.0f - sin_half);
+            }
         }
-        if (junction > prev_nominal_sqr)
-            junction = prev_nominal_sqr;
-        if (junction > b->nominal_sqr)
-            junction = b->nominal_sqr;
     }
     b->max_entry_sqr = plan_sqr_from_float(junction);
     b->entry_sqr = 0;

@@ -118,6 +118,26 @@ void test_planner_junctions(void)
     plan_line(diag, 100000, 0);
     CHECK_NEAR(sqrt(plan_current()->nominal_sqr), 10 * sqrt(2), 0.01);
     settings_defaults(&settings);
+    /* the junction rule across all corner angles, on both sides of the
+     * nominal cap (gentle corners take a shortcut to the cap) */
+    for (int deg = 1; deg < 180; deg++) {
+        fresh_planner();
+        double t = deg * M_PI / 180.0;
+        float p1[2] = {20, 20}, p2[2] = {20 + 20 * (float)cos(t), 20 + 20 * (float)sin(t)};
+        CHECK(plan_line(p1, 6000, 0) && plan_line(p2, 6000, 0));
+        plan_block_t *q = plan_current();
+        /* the planner sees the move between whole steps */
+        double dx = round(p2[0] * 80.0) / 80.0 - 20, dy = round(p2[1] * 80.0) / 80.0 - 20;
+        double ux = dx / hypot(dx, dy), uy = dy / hypot(dx, dy);
+        double u0 = sqrt(0.5);
+        double c = -(u0 * ux + u0 * uy);
+        double sh = sqrt(0.5 * (1 - c));
+        double accel = q[1].accel;
+        double expect = accel * 0.02 * sh / (1 - sh);
+        if (expect > 100.0 * 100.0)
+            expect = 100.0 * 100.0;
+        CHECK_NEAR(plan_sqr_to_float(q[1].max_entry_sqr), expect, expect * 1e-4 + 2.0 / PLAN_SQR_SCALE);
+    }
 }
 
 /* Run the segment preparer to the end, as the step interrupt would consume it. */
