@@ -119,8 +119,11 @@ def circle_program(feed: float, check: bool, accel: float = 3000) -> tuple[list[
     """0.5 mm G1 segments around a circle of radius 50 mm, short modal lines."""
     r, n = 50.0, 1500
     per_turn = int(2 * math.pi * r / 0.5)
+    # G4 P0 waits for the rapid to the start: without it the first acks come
+    # at once (into the planner) and then wait for the rapid, which would be
+    # counted against the line rate
     pre = ["$X", "$110=30000", "$111=30000", f"$120={accel:.0f}", f"$121={accel:.0f}",
-           "$C" if check else "G0 X150 Y110", f"G1 F{feed:.0f}"]
+           *(["$C"] if check else ["G0 X150 Y110", "G4 P0"]), f"G1 F{feed:.0f}"]
     body = []
     for k in range(1, n + 1):
         a = 2 * math.pi * k / per_turn
