@@ -156,7 +156,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
 
 def test_estop_does_not_wait_for_an_import(server, plotter):
     home(server)
-    job = submit(server, drawing(circles=6))
+    job = submit(server, drawing(circles=15))  # long enough to outlast the upload's start
     wait_progress(server, job["id"], 20)
     big = drawing(circles=1).encode() * 1000  # ~3 MB of G-code: seconds of import work
     with ThreadPoolExecutor(1) as pool:
@@ -165,6 +165,7 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
         )
         time.sleep(0.5)  # the upload is received and being imported
         assert not uploading.done()
+        assert server.job(job["id"])["lines_done"] < 600, "the job ran out before the stop"
         sent_at = time.monotonic()
         response = server.client.post("/api/machine/estop")
         answered = time.monotonic() - sent_at
