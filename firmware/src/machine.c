@@ -242,33 +242,46 @@ static uint8_t outside_work_area(const float *t)
     return 0;
 }
 
+static uint8_t wait_for_planner_room(void)
+{
+    while (!plan_free()) {
+        machine_poll();
+        if (mach.abort)
+            return 0;
+        idle_wait();
+    }
+    return 1;
+}
+
 /* Queue one straight move, waiting for planner room; moves too long for
  * the 16-bit step counters go in equal pieces. */
 static uint8_t line_to(const float *target, float feed, uint8_t flags)
 {
     if (mach.check)
         return STATUS_OK;
-    uint16_t pieces = plan_pieces(target);
-    int32_t from_steps[N_AXIS];
-    float from[N_AXIS], p[N_AXIS];
-    plan_get_position(from_steps);
-    for (uint8_t a = 0; a < N_AXIS && pieces > 1; a++) /* divisions only a split move needs */
-        from[a] = (float)from_steps[a] / settings.steps_per_mm[a];
-    for (uint16_t k = 1; k <= pieces; k++) {
+    if (!wait_for_planner_room())
+        return ERR_LOCKED;
+    /* plan_line finds out whether the move fits; the split is the rare case */
+    if (plan_line(target, feed, flags) == PLAN_TOO_LONG) {
+        uint16_t pieces = plan_pieces(target);
+        int32_t from_steps[N_AXIS];
+        float from[N_AXIS], p[N_AXIS];
+        plan_get_position(from_steps);
         for (uint8_t a = 0; a < N_AXIS; a++)
-            p[a] = k == pieces ? target[a] : from[a] + (target[a] - from[a]) * (float)k / (float)pieces;
-        while (!plan_free()) {
+            from[a] = (float)from_steps[a] / settings.steps_per_mm[a];
+        for (uint16_t k = 1; k <= pieces; k++) {
+            for (uint8_t a = 0; a < N_AXIS; a++)
+                p[a] = k == pieces ? target[a] : from[a] + (target[a] - from[a]) * (float)k / (float)pieces;
+            if (!wait_for_planner_room())
+                return ERR_LOCKED;
+            plan_line(p, feed, flags);
             machine_poll();
             if (mach.abort)
                 return ERR_LOCKED;
-            idle_wait();
         }
-        plan_line(p, feed, flags);
-        machine_poll();
-        if (mach.abort)
-            return ERR_LOCKED;
     }
-    return STATUS_OK;
+    machine_poll();
+    return mach.abort ? ERR_LOCKED : STATUS_OK;
 }
 
 static uint8_t soft_limit_violation(const gc_block_t *blk)

@@ -175,7 +175,9 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         if (m > events)
             events = m;
     }
-    if (events == 0 || events > PLAN_MAX_EVENTS)
+    if (events > PLAN_MAX_EVENTS)
+        return PLAN_TOO_LONG;
+    if (events == 0)
         return 0;
 
     plan_block_t *b = &ring[head];

@@ -43,9 +43,10 @@ void plan_get_position(int32_t *steps);
 uint8_t plan_free(void);
 uint8_t plan_count(void);
 /* Queue a move to target (machine mm) at feed (mm/min; ignored with PB_RAPID).
- * The caller makes sure plan_free() > 0 and splits moves so that none needs
- * more than PLAN_MAX_EVENTS step events (plan_pieces). Returns 0 for a move too
- * short for a step, or one that would need too many step events. */
+ * The caller makes sure plan_free() > 0. Returns 1 when queued, 0 for a move
+ * too short for a step, PLAN_TOO_LONG (nothing queued) for one that needs
+ * more than PLAN_MAX_EVENTS step events: the caller splits it (plan_pieces). */
+#define PLAN_TOO_LONG 2
 uint8_t plan_line(const float *target, float feed, uint8_t flags);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */

@@ -103,7 +103,7 @@ void test_planner_junctions(void)
     CHECK(plan_pieces(far) == 1);
     settings.steps_per_mm[0] = 400;
     CHECK(plan_pieces(far) == 5);
-    CHECK(plan_line(far, 3000, 0) == 0 && plan_count() == 0);
+    CHECK(plan_line(far, 3000, 0) == PLAN_TOO_LONG && plan_count() == 0);
     float fifth[2] = {60, 44};
     CHECK(plan_line(fifth, 3000, 0) == 1);
     settings_defaults(&settings);
