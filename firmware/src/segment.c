@@ -79,6 +79,17 @@ static float advance(const plan_block_t *b, float dt)
     float ve2 = plan_next_entry_sqr();
     float vn2 = b->nominal_sqr;
     float v2 = v * v;
+    if (v2 >= vn2 && ve2 >= v2 && v > 0.0f) {
+        /* cruising on at the block's speed to an exit no slower: the
+         * profile below comes down to this, without its dozen float steps */
+        float tc = remaining / v;
+        if (tc >= dt) {
+            prep.s += v * dt;
+            return dt;
+        }
+        prep.s = b->mm;
+        return tc;
+    }
     float peak2 = 0.5f * (v2 + ve2) + a * remaining;
     if (peak2 > vn2)
         peak2 = vn2;
