@@ -34,6 +34,7 @@ from plotbridge.models import (
     PenBody,
     Placement,
     SettingsBody,
+    upload_openapi,
 )
 from plotbridge.store import JobStore
 from plotbridge.upload import UploadRefused, receive, refuse_unusable
@@ -252,7 +253,8 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
     async def list_jobs() -> list[dict[str, Any]]:
         return manager.list()
 
-    @app.post("/api/jobs", dependencies=guard, status_code=201)
+    @app.post("/api/jobs", dependencies=guard, status_code=201, response_model=Job,
+              openapi_extra=upload_openapi())  # fmt: skip
     async def upload(request: Request) -> Any:
         tmp_dir = config.data_dir / "tmp"
         try:

@@ -127,3 +127,30 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         422: "invalid request or invalid drawing (errors with line numbers)",
     }.items()
 }
+
+
+def upload_openapi() -> dict[str, Any]:
+    """The upload's request body for the OpenAPI schema (the route reads the raw request)."""
+    fields: dict[str, Any] = {
+        "file": {"type": "string", "format": "binary", "description": "the drawing"},
+        "name": {"type": "string", "maxLength": 200},
+        "pattern": {"type": "string", "description": "a built-in test pattern instead of a file"},
+        "start": {"type": "boolean", "description": "start the job at once"},
+        "optimize": {"type": "boolean", "description": "merge and reorder strokes"},
+        "layers": {"type": "string", "description": "SVG group ids, labels or stroke colours"},
+        **Placement.model_json_schema()["properties"],
+    }
+    query = ("name", "pattern", "start", "optimize", "paper", "fit", "scale", "rotate")
+    return {
+        "parameters": [
+            {"name": key, "in": "query", "required": False, "schema": fields[key]}
+            for key in query
+        ],
+        "requestBody": {
+            "content": {
+                "multipart/form-data": {"schema": {"type": "object", "properties": fields}},
+                "application/octet-stream": {"schema": {"type": "string", "format": "binary"}},
+                "text/plain": {"schema": {"type": "string"}},
+            }
+        },
+    }
