@@ -129,25 +129,27 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
  * pass resumes from there. */
 static void recalculate(void)
 {
-    uint8_t i = prev_index(head);
-    uint8_t first = tail;
+    /* pointers rather than ring indices: no index multiply per block */
+    plan_block_t *const last = &ring[PLAN_SIZE - 1];
+    plan_block_t *const oldest = &ring[tail];
+    plan_block_t *b = &ring[prev_index(head)];
+    plan_block_t *first = oldest;
     plan_sqr_t next_entry = 0;
     for (uint8_t n = count; n > 1; n--) {
-        plan_block_t *b = &ring[i];
         plan_sqr_t e = next_entry + b->accel_dist2;
         if (e > b->max_entry_sqr)
             e = b->max_entry_sqr;
         if (e == b->entry_sqr && e == b->max_entry_sqr) {
-            first = i;
+            first = b;
             break;
         }
         b->entry_sqr = e;
         next_entry = e;
-        i = prev_index(i);
+        b = b == ring ? last : b - 1;
     }
-    plan_sqr_t reach = first == tail ? exec_exit_limit : ring[first].entry_sqr + ring[first].accel_dist2;
-    for (i = next_index(first); i != head; i = next_index(i)) {
-        plan_block_t *b = &ring[i];
+    plan_sqr_t reach = first == oldest ? exec_exit_limit : first->entry_sqr + first->accel_dist2;
+    plan_block_t *const end = &ring[head];
+    for (b = first == last ? ring : first + 1; b != end; b = b == last ? ring : b + 1) {
         if (b->entry_sqr > reach)
             b->entry_sqr = reach;
         reach = b->entry_sqr + b->accel_dist2; /* both <= PLAN_SQR_MAX: no overflow */
