@@ -207,7 +207,7 @@ def main() -> int:
     for f, v in lines_run.items():
         print(f"0.5 mm G1 segments at F{f:.0f}: {v:.0f} lines/s (motion limit "
               f"{f / 60 / 0.5:.0f}, serial limit {serial_limit:.0f}; target {TARGET_LINES_S})")
-    print(f"  (at $120/$121=3000 the look-ahead caps 0.5 mm segments at "
+    print(f"  (at $120/$121=3000 the look-ahead caps 0.5 mm segments at about "
           f"{lookahead_cap(3000):.0f} lines/s, whatever the CPU does)")
     print(f"0.5 mm G1 segments at F24000 with $120/$121={CPU_ACCEL} (CPU-bound: motion limit 800, "
           f"look-ahead cap {lookahead_cap(CPU_ACCEL):.0f}): {lines_cpu:.0f} lines/s")
