@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 from websockets.sync.client import connect
 
+from tests.fixtures.server import running_server
+
 pytestmark = pytest.mark.e2e
 
 FEED = 3000  # mm/min in the test drawings
@@ -271,24 +273,29 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     assert redrawn <= allowance, f"{redrawn:.1f} mm drawn twice (allowed {allowance:.1f})"
 
 
-def test_server_killed_mid_job_keeps_queue(server, plotter):
-    home(server)
-    job = submit(server, drawing(circles=15))
-    waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
-    moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
-    assert moved.status_code == 200
-    wait_progress(server, job["id"], 60)
-    time.sleep(1.2)  # a progress write reaches the store
-    server.kill()
-    server.start()
-    jobs = server.client.get("/api/jobs").json()
-    assert [j["id"] for j in jobs] == [job["id"], waiting[1], waiting[0]]
-    assert [j["state"] for j in jobs] == ["interrupted", "queued", "queued"]
-    assert jobs[0]["resume_line"] and jobs[0]["lines_done"] >= 60
-    server.wait_machine(lambda m: m["state"] == "Idle", 30)
-    resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
-    assert resumed.status_code == 200, resumed.text
-    assert server.wait_job(job["id"], ("done", "failed", "interrupted"), 120)["state"] == "done"
+def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
+    # A plotter at 3x real time: the job must still be running when the server dies,
+    # however fast the unthrottled simulation would be on this machine.
+    plotter = plotter_factory(speed=3)
+    with running_server(tmp_path / "server-data", ["--serial", str(plotter.port)]) as server:
+        home(server)
+        job = submit(server, drawing(circles=15))
+        waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
+        moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
+        assert moved.status_code == 200
+        wait_progress(server, job["id"], 60)
+        time.sleep(1.2)  # a progress write reaches the store
+        server.kill()
+        server.start()
+        jobs = server.client.get("/api/jobs").json()
+        assert [j["id"] for j in jobs] == [job["id"], waiting[1], waiting[0]]
+        assert [j["state"] for j in jobs] == ["interrupted", "queued", "queued"]
+        assert jobs[0]["resume_line"] and jobs[0]["lines_done"] >= 60
+        server.wait_machine(lambda m: m["state"] == "Idle", 30)
+        resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
+        assert resumed.status_code == 200, resumed.text
+        final = server.wait_job(job["id"], ("done", "failed", "interrupted"), 120)
+        assert final["state"] == "done"
 
 
 def test_virtual_mode_serves_the_trace(server_virtual):
