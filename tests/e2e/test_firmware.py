@@ -437,3 +437,25 @@ def test_corexy_kinematics_and_homing(plotter_factory) -> None:
         no_false_acks(g.lines)
     finally:
         g.close()
+
+
+def test_long_move_split_into_pieces_stays_exact_and_straight(plotter_factory) -> None:
+    # 400 steps/mm: the 200 mm move is 80,000 step events, cut into equal pieces by the firmware
+    plotter = plotter_factory(args=["--steps-per-mm", "400"])
+    g = Grbl(plotter.port)
+    try:
+        g.ser.write(b"\x18")
+        g.wait_for(r"^Grbl 1\.1h")
+        for line in ["$100=400", "$101=400", "$X", "G0 X1 Y1", "M3", "G1 X201 Y151 F3000", "M5"]:
+            g.ok(line)
+        g.wait_state("Idle")
+        trace = plotter.trace()
+        clean(trace)
+        (stroke,) = stroke_points(trace)
+        assert len(stroke) == 2, stroke  # no kink where the pieces meet
+        assert math.dist(stroke[0], (1, 1)) < TOL and math.dist(stroke[1], (201, 151)) < TOL
+        assert trace["steps"] == {"x": 201 * 400, "y": 151 * 400}
+        assert mpos(g.status()) == (201.0, 151.0)
+        no_false_acks(g.lines)
+    finally:
+        g.close()
