@@ -101,6 +101,14 @@ def preview_pixels(page) -> dict[str, int]:
     }""")
 
 
+def wait_preview_pixels(page, colour: str, more_than: int, timeout: float = 5) -> None:
+    """The preview is painted over a few frames: wait until `colour` covers enough pixels."""
+    deadline = time.monotonic() + timeout
+    while (pixels := preview_pixels(page))[colour] <= more_than:
+        assert time.monotonic() < deadline, pixels
+        page.wait_for_timeout(50)
+
+
 def plot_stop_unlock_next(
     page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False,
     pause_resume: bool = False, cancel_next: bool = False,
@@ -121,8 +129,7 @@ def plot_stop_unlock_next(
     wait_job_state(page, long_name, ("queued",))
     page.wait_for_function("() => (window.plotbridge.preview.geom?.strokes.count ?? 0) > 100")
     page.wait_for_function("() => window.plotbridge.preview.layersBuilt > 0")
-    pixels = preview_pixels(page)
-    assert pixels["todo"] > 500, pixels  # the strokes are on the canvas
+    wait_preview_pixels(page, "todo", 500)  # the strokes are on the canvas
     screenshot(page, f"{prefix}-preview")
 
     job_row(page, long_name).locator("button[data-verb=start]").click()
@@ -145,7 +152,7 @@ def plot_stop_unlock_next(
         "(name) => document.querySelector('#queue li.job .pct')?.textContent.includes('%')",
         arg=long_name,
     )
-    assert preview_pixels(page)["done"] > 0  # the drawn part in its own colour
+    wait_preview_pixels(page, "done", 0)  # the drawn part in its own colour
     assert_stop_on_screen(page, viewport)
     page.locator("#preview").scroll_into_view_if_needed()
     screenshot(page, f"{prefix}-running")
