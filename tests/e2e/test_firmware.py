@@ -131,6 +131,18 @@ def stroke_points(trace: dict) -> list[list[tuple[float, float]]]:
     return [[(p[0], p[1]) for p in s] for s in trace["strokes"]]
 
 
+def straight_stroke(plotter, start: tuple[float, float], end: tuple[float, float]) -> dict:
+    """The trace holds one pen-down stroke, straight from `start` to `end`; returns the trace.
+    plotsim keeps a vertex only where the path bends by more than a step, so a staircase
+    (X then Y) or a kink would show up as extra vertices."""
+    trace = plotter.trace()
+    clean(trace)
+    (stroke,) = stroke_points(trace)
+    assert len(stroke) == 2, stroke
+    assert math.dist(stroke[0], start) < TOL and math.dist(stroke[1], end) < TOL, stroke
+    return trace
+
+
 def dist_to_segment(p, a, b) -> float:
     ax, ay = a
     bx, by = b
@@ -176,13 +188,7 @@ def test_diagonal_is_one_straight_stroke(plotter, grbl: Grbl) -> None:
     for line in ["G0 X5 Y5", "M3", "G1 X205.3 Y77.7 F4000", "M5"]:
         grbl.ok(line)
     grbl.wait_state("Idle")
-    trace = plotter.trace()
-    clean(trace)
-    (stroke,) = stroke_points(trace)
-    # plotsim keeps a vertex only where the path bends by more than a step:
-    # a staircase (X then Y) would show up as extra vertices
-    assert len(stroke) == 2, stroke
-    assert math.dist(stroke[0], (5, 5)) < TOL and math.dist(stroke[1], (205.3, 77.7)) < TOL
+    trace = straight_stroke(plotter, (5, 5), (205.3, 77.7))
     assert mpos(grbl.status()) == (205.3, 77.7)
     assert trace["steps"] == {"x": round(205.3 * 80), "y": round(77.7 * 80)}
 
@@ -429,11 +435,7 @@ def test_corexy_kinematics_and_homing(plotter_factory) -> None:
         for line in ["G0 X10 Y10", "M3", "G1 X60 Y30 F3000", "M5"]:
             g.ok(line)
         g.wait_state("Idle")
-        trace = plotter.trace()
-        clean(trace)
-        (stroke,) = stroke_points(trace)
-        assert len(stroke) == 2  # both motors together: a straight line, not a staircase
-        assert math.dist(stroke[0], (10, 10)) < TOL and math.dist(stroke[1], (60, 30)) < TOL
+        straight_stroke(plotter, (10, 10), (60, 30))  # both motors together, not a staircase
         no_false_acks(g.lines)
     finally:
         g.close()
@@ -449,11 +451,7 @@ def test_long_move_split_into_pieces_stays_exact_and_straight(plotter_factory) -
         for line in ["$100=400", "$101=400", "$X", "G0 X1 Y1", "M3", "G1 X201 Y151 F3000", "M5"]:
             g.ok(line)
         g.wait_state("Idle")
-        trace = plotter.trace()
-        clean(trace)
-        (stroke,) = stroke_points(trace)
-        assert len(stroke) == 2, stroke  # no kink where the pieces meet
-        assert math.dist(stroke[0], (1, 1)) < TOL and math.dist(stroke[1], (201, 151)) < TOL
+        trace = straight_stroke(plotter, (1, 1), (201, 151))  # no kink where the pieces meet
         assert trace["steps"] == {"x": 201 * 400, "y": 151 * 400}
         assert mpos(g.status()) == (201.0, 151.0)
         no_false_acks(g.lines)
