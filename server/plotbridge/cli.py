@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import gc
-import inspect
 import logging
 import os
 import socket
@@ -85,10 +84,6 @@ def _login_url(config: Config, token: str) -> str:
     return f"http://{host}:{config.port}/login?token={token}"
 
 
-async def _maybe_await(value: Any) -> Any:
-    return await value if inspect.isawaitable(value) else value
-
-
 def keep_pauses_short() -> None:
     """Nothing may stall the event loop for long (an emergency stop waits behind it).
 
@@ -116,7 +111,7 @@ async def serve(config: Config) -> int:
         from plotbridge.virtual import VirtualPlotter
 
         virtual = VirtualPlotter(data_dir=config.data_dir / "sim", speed=config.sim_speed)
-        await _maybe_await(virtual.start())
+        await virtual.start()
         device = str(virtual.port)
         log.info("virtual plotter on %s (speed %g)", device, config.sim_speed)
     try:
@@ -134,7 +129,7 @@ async def serve(config: Config) -> int:
         await server.serve()
     finally:
         if virtual is not None:
-            await _maybe_await(virtual.stop())
+            await virtual.stop()
     return 0
 
 
