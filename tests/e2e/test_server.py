@@ -42,13 +42,6 @@ def drawing(circles: int = 1, radius: float = 15.0, segments: int = 72) -> str:
     return "\n".join(lines) + "\n"
 
 
-def home(server) -> None:
-    server.wait_machine(lambda m: m["connected"], 30)
-    response = server.client.post("/api/machine/home")
-    assert response.status_code == 200, response.text
-    server.wait_machine(lambda m: m["state"] == "Idle", 30)
-
-
 def submit(server, gcode: str, start: bool = True) -> dict:
     response = server.client.post("/api/jobs", files={"file": ("drawing.gcode", gcode)})
     assert response.status_code == 201, response.text
@@ -112,7 +105,7 @@ def assert_same_drawing(expected: list, drawn: list) -> None:
 
 
 def test_plot_matches_preview(server, plotter):
-    home(server)
+    server.home()
     plotter.clear()
     job = submit(server, drawing(circles=2))
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
@@ -137,7 +130,7 @@ def _assert_stopped(server, plotter, job_id: str, sent_at: float) -> None:
 
 
 def test_estop_rest_mid_job_then_resume(server, plotter):
-    home(server)
+    server.home()
     plotter.clear()
     job = submit(server, drawing(circles=6))
     wait_progress(server, job["id"], 40)
@@ -150,14 +143,14 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     refused = server.client.post(f"/api/jobs/{other['id']}/start")
     assert refused.status_code == 409 and "$H" in refused.json()["detail"]
     # after homing, the stopped job can be resumed and the drawing completed
-    home(server)
+    server.home()
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
     assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
     assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
 
 
 def test_estop_does_not_wait_for_an_import(server, plotter):
-    home(server)
+    server.home()
     job = submit(server, drawing(circles=15))  # long enough to outlast the upload's start
     wait_progress(server, job["id"], 20)
     big = drawing(circles=1).encode() * 1000  # ~3 MB of G-code: seconds of import work
@@ -177,7 +170,7 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
 
 
 def test_estop_websocket_mid_job(server, plotter):
-    home(server)
+    server.home()
     job = submit(server, drawing(circles=6))
     url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
     with connect(url) as ws:
@@ -197,7 +190,7 @@ def test_estop_websocket_mid_job(server, plotter):
 
 
 def test_pause_resume(server, plotter):
-    home(server)
+    server.home()
     plotter.clear()
     job = submit(server, drawing(circles=10))
     wait_progress(server, job["id"], 30)
@@ -225,7 +218,7 @@ def test_pause_resume(server, plotter):
 
 
 def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
-    home(server)
+    server.home()
     job = submit(server, drawing(circles=6))
     wait_progress(server, job["id"], 40)
     plotter.press("estop")
@@ -238,7 +231,7 @@ def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
 
 
 def test_plotter_killed_mid_job_then_resumed(server, plotter):
-    home(server)
+    server.home()
     plotter.clear()
     job = submit(server, drawing(circles=6))
     started = time.monotonic()
@@ -256,7 +249,7 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     x, y = before["position"]["x"], before["position"]["y"]
     plotter.restart(start=(x, y))
     server.wait_machine(lambda m: m["connected"], 15)
-    home(server)
+    server.home()
     resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
     assert resumed.status_code == 200, resumed.text
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
@@ -278,7 +271,7 @@ def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
     # however fast the unthrottled simulation would be on this machine.
     plotter = plotter_factory(speed=3)
     with running_server(tmp_path / "server-data", ["--serial", str(plotter.port)]) as server:
-        home(server)
+        server.home()
         job = submit(server, drawing(circles=15))
         waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
         moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
@@ -301,7 +294,7 @@ def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
 def test_virtual_mode_serves_the_trace(server_virtual):
     info = server_virtual.client.get("/api/server").json()
     assert info["virtual"] is True and info["serial"] is None
-    home(server_virtual)
+    server_virtual.home()
     changed = server_virtual.client.put("/api/machine/settings", json={"settings": {"62": 120}})
     assert changed.status_code == 200, changed.text
     settings = server_virtual.client.get("/api/machine/settings").json()["settings"]

@@ -10,8 +10,6 @@ import time
 
 import pytest
 
-from tests.e2e.test_server import home
-
 SQUARE = "G21\nG90\nG0 X10 Y10\nM3\nG1 X40 Y10 F3000\nG1 X40 Y40\nG1 X10 Y40\nG1 X10 Y10\nM5\n"
 LONG = "G21\nG90\nG0 X10 Y10\nM3\n" + "".join(
     f"G1 X{10 + (i % 2) * 150} Y{10 + i * 0.5:.1f} F1500\n" for i in range(200)
@@ -28,7 +26,7 @@ def submit(server, *args: str, **popen) -> subprocess.Popen:
 
 @pytest.mark.e2e
 def test_submit_start_wait_plots_and_exits_zero(server, plotter, tmp_path):
-    home(server)
+    server.home()
     drawing = tmp_path / "square.gcode"
     drawing.write_text(SQUARE)
     out, err = submit(server, str(drawing), "--start", "--wait", "--json").communicate(timeout=120)
@@ -51,7 +49,7 @@ def test_submit_reports_validation_errors_with_lines(server, tmp_path):
 
 @pytest.mark.e2e
 def test_submit_wait_exits_nonzero_when_the_job_is_stopped(server, tmp_path):
-    home(server)
+    server.home()
     drawing = tmp_path / "long.gcode"
     drawing.write_text(LONG)
     proc = submit(server, str(drawing), "--start", "--wait", "--poll", "0.1")
