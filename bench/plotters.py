@@ -86,6 +86,7 @@ class Watch:
         self.samples: list[tuple[str, str, int]] = []  # plotter, state, free blocks
         self.jobs: dict[str, dict[str, Any]] = {}
         self.starved: list[tuple[str, str, int]] = []
+        self.began_at: dict[str, int] = {}  # lines done when the job (re)started there
 
     async def run(self, url: str, token: str) -> None:
         async with websockets.connect(f"{url.replace('http', 'ws')}/api/ws?token={token}") as ws:
@@ -95,7 +96,11 @@ class Watch:
     def on(self, message: dict[str, Any]) -> None:
         if message.get("type") == "job":
             job = message["job"]
-            self.jobs[job["plotter"] or ""] = job
+            name = job["plotter"] or ""
+            before = self.jobs.get(name)
+            if job["state"] == "running" and (before is None or before["state"] != "running"):
+                self.began_at[name] = job["lines_done"]  # a resume's preamble lifts the pen
+            self.jobs[name] = job
         elif message.get("type") == "machine":
             name, machine = message["plotter"], message["machine"]
             free = machine.get("planner_free")
@@ -104,7 +109,8 @@ class Watch:
             depth = self.planner[name] = max(self.planner.get(name, 0), free)
             job = self.jobs.get(name)
             mid_job = (job is not None and job["state"] == "running"
-                       and 50 < job["lines_done"] < job["lines_total"] - depth - 10)
+                       and self.began_at.get(name, 0) + 50 < job["lines_done"]
+                       < job["lines_total"] - depth - 10)
             if mid_job:
                 self.samples.append((name, machine["state"], free))
                 if free >= depth:
