@@ -18,6 +18,7 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import ValidationError
 
 from plotbridge import __version__
+from plotbridge.apidocs import mount_docs
 from plotbridge.auth import COOKIE, Auth, origin_allowed
 from plotbridge.config import Config
 from plotbridge.jobs import JobError, JobManager, public
@@ -80,9 +81,10 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
             store.close()
 
     app = FastAPI(
-        title="plotbridge", version=__version__, lifespan=lifespan, docs_url="/docs",
+        title="plotbridge", version=__version__, lifespan=lifespan, docs_url=None,
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
     )  # fmt: skip
+    mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
     app.state.manager = manager
     app.state.hub = hub
     app.state.link = link
