@@ -56,9 +56,9 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="start the next queued job automatically",
     )  # fmt: skip
     parser.add_argument(
-        "--no-zeroconf", dest="zeroconf", action="store_false",
+        "--zeroconf", action=argparse.BooleanOptionalAction,
         default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
-        help="do not announce the server on the LAN (mDNS; env PLOTBRIDGE_ZEROCONF=0)",
+        help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
     )  # fmt: skip
     parser.add_argument(
         "--log-level", default=_env("LOG_LEVEL", "info"), choices=logsetup.LEVELS,
