@@ -30,6 +30,7 @@ END_STATES = frozenset({"done", "failed", "cancelled", "stopped", "interrupted"}
 ACTIVE_STATES = ("running", "pen_change", "paused", "waiting")
 PLACEMENT = ("paper", "margin", "fit", "rotate", "scale", "dx", "dy", "optimize", "pen_dialect")
 DISCOVER_TIMEOUT_S = 3.0
+NO_ROUTE = (404, 405)  # a server from before several plotters (its web UI answers the path)
 
 
 class PlotbridgeError(Exception):
@@ -164,7 +165,7 @@ class Plotbridge:
         try:
             return self.request("GET", "/api/plotters", "plotter list")
         except PlotbridgeError as exc:
-            if exc.status != 404:
+            if exc.status not in NO_ROUTE:
                 raise
         return [{"name": None, "machine": self.machine()}]
 
@@ -177,14 +178,21 @@ class Plotbridge:
             try:
                 return self.request("POST", "/api/estop", "emergency stop", timeout=10)
             except PlotbridgeError as exc:
-                if exc.status != 404:  # a single-plotter server: its one machine
+                if exc.status not in NO_ROUTE:  # a single-plotter server: its one machine
                     raise
         return self.request(
             "POST", f"{self._board(plotter)}/machine/estop", "emergency stop", timeout=10
         )
 
-    def home(self, plotter: str | None = None) -> dict[str, Any]:
-        return self.request("POST", f"{self._board(plotter)}/machine/home", "homing", timeout=180)
+    def home(self, plotter: str | None = None, settle: float = 10.0) -> dict[str, Any]:
+        """Run homing; `{"responses", "machine"}` once the machine reports it is done."""
+        answer = self.request("POST", f"{self._board(plotter)}/machine/home", "homing", timeout=180)
+        deadline = time.monotonic() + settle  # the board's status lags its "ok" a little
+        machine = self.machine(plotter)
+        while machine.get("state") == "Home" and time.monotonic() < deadline:
+            time.sleep(0.05)
+            machine = self.machine(plotter)
+        return {**answer, "machine": machine}
 
     def unlock(self, plotter: str | None = None) -> dict[str, Any]:
         return self.request("POST", f"{self._board(plotter)}/machine/unlock", "unlock")

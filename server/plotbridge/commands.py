@@ -85,8 +85,7 @@ def resume(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
 
 def home(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
     answer = pb.home(args.plotter)
-    machine = pb.machine(args.plotter)
-    return {**answer, "machine": machine}, _machine_line(args.plotter, machine)
+    return answer, _machine_line(args.plotter, answer["machine"])
 
 
 VERBS: dict[str, tuple[Verb, str]] = {
