@@ -256,8 +256,10 @@ class Plotbridge:
                                   f"{describe_detail(job['start_error'])}", 409, job)  # fmt: skip
         return job
 
-    def start(self, job_id: str) -> Job:
-        return self.request("POST", f"/api/jobs/{job_id}/start", "start")
+    def start(self, job_id: str, plotter: str | None = None) -> Job:
+        """Start a queued job (on `plotter`, where the server drives several)."""
+        params = {"plotter": plotter} if plotter else None
+        return self.request("POST", f"/api/jobs/{job_id}/start", "start", params=params)
 
     def active_job(self) -> Job | None:
         """The job that is running (or paused, or waiting for a pen change), if any."""

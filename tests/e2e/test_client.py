@@ -8,6 +8,8 @@ from typing import Any
 import pytest
 from plotbridge.client import Plotbridge, PlotbridgeError, SetupError
 
+from tests.fixtures.server import running_server
+
 SQUARE_SVG = b"""<svg xmlns="http://www.w3.org/2000/svg" width="40mm" height="40mm"
 viewBox="0 0 40 40"><path d="M 5 5 L 35 5 L 35 35 L 5 35 Z" stroke="black" fill="none"/></svg>"""
 LONG = "G21\nG90\nG0 X10 Y10\nM3\n" + "".join(
@@ -112,3 +114,23 @@ def test_errors_say_what_went_wrong(server_virtual, tmp_path, monkeypatch):
         with pytest.raises(PlotbridgeError, match="cannot reach") as unreachable:
             nowhere.machine()
     assert unreachable.value.status is None
+
+
+@pytest.mark.e2e
+def test_plotters_and_a_job_on_a_named_plotter(tmp_path):
+    link = ["--virtual", "2", "--sim-speed", "0"]
+    with running_server(tmp_path / "data", link) as server, \
+            Plotbridge(server.url, server.token) as pb:  # fmt: skip
+        names = [p["name"] for p in pb.plotters()]
+        assert names == ["plotter1", "plotter2"]
+        server.wait_machine(lambda _: pb.machine("plotter2")["connected"], 60)
+        assert pb.home("plotter2")["machine"]["state"] == "Idle"
+        assert pb.machine("plotter1")["state"] == "Alarm"  # not homed: untouched
+        job = pb.upload(SQUARE_SVG, filename="square.svg", plotter="plotter2")
+        pb.start(job["id"], plotter="plotter2")
+        assert pb.wait(job["id"], timeout=120, poll=0.05)["state"] == "done"
+        assert len(pb.trace("plotter2")["strokes"]) == 1
+        assert pb.trace("plotter1")["strokes"] == []
+        with pytest.raises(PlotbridgeError) as unknown:
+            pb.machine("plotter9")
+        assert unknown.value.status == 404
