@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from plotbridge.config import Config
-from plotbridge.importing.eta import eta  # numpy-free, unlike the rest of the importer
+from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
 from plotbridge.program_reader import ProgramReader
 from plotbridge.resume import first_unexecuted_line
 from plotbridge.store import JobStore
