@@ -231,8 +231,8 @@ def accuracy_drawings(tmp: Path) -> dict[str, Path]:
 
 def bench_accuracy(tmp: Path, speed: float) -> None:
     try:
-        from tests.e2e.test_import_plot import Board
         from tests.fixtures import plotsim
+        from tests.fixtures.grbl_sender import Board
     except ImportError as e:
         print(f"(c) NOT MEASURED: {e}")
         return

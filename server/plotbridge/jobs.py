@@ -22,6 +22,7 @@ from typing import Any
 
 from plotbridge.config import Config
 from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
+from plotbridge.program import wire
 from plotbridge.program_reader import ProgramReader
 from plotbridge.resume import first_unexecuted_line
 from plotbridge.store import JobStore
@@ -566,6 +567,10 @@ class JobManager:
                  "resumed" if resumed else "started", line)  # fmt: skip
         self._task = asyncio.create_task(self._run(job, line))
 
+    def _steps_per_mm(self) -> tuple[float, float]:
+        s = getattr(self.link, "settings", None) or {}
+        return (float(s.get(100, 80.0)), float(s.get(101, 80.0)))
+
     async def _run(self, job: dict[str, Any], line: int) -> None:
         from plotbridge.link import LinkDown, StreamAborted
 
@@ -576,7 +581,8 @@ class JobManager:
             self._motion = reader.motion  # filled as the reader goes
             start_time = time.time()
             async with contextlib.aclosing(reader.lines()) as lines:
-                await self.link.stream(lines, self._on_ack)
+                await self.link.stream(wire.compact_async(lines, self._steps_per_mm()),
+                                       self._on_ack)
             state = await self._wait_done(start_time)
             if job["state"] not in ACTIVE:
                 return  # settled meanwhile (estop, cancel)
