@@ -45,6 +45,7 @@ static double exec_end;        /* when the last queued segment ends */
 static double last_byte;       /* when the serial line finished the last line sent */
 static float pos[N_AXIS];      /* the parser's position (gc.pos) */
 static int pen_down;
+static plan_block_t *ring_base; /* ring[0]: the first block after motion_configure */
 /* character counting: (ack time, bytes) of lines sent, oldest first */
 #define RXQ 256
 static double rxq_ack[RXQ];
@@ -69,6 +70,7 @@ void motion_configure(const motion_config_t *c)
     settings.corexy = (uint8_t)(c->corexy != 0);
     plan_reset();
     seg_reset();
+    ring_base = 0;
     int32_t zero[N_AXIS] = {0};
     plan_set_position(zero);
     pos[0] = pos[1] = 0.0f;
@@ -239,3 +241,47 @@ double motion_run(int n, const uint8_t *kind, const float *x, const float *y, co
     sync_motion();
     return t_main;
 }
+
+/* For the differential test: plan lines with nothing executing (no timing),
+ * then read the queued blocks. The library is built with packed structs, so a
+ * block's bytes are laid out as avr-gcc lays them out in the firmware's RAM. */
+
+void motion_plan(int n, const uint8_t *kind, const float *x, const float *y, const float *i,
+                 const float *j, const float *feed)
+{
+    for (int k = 0; k < n; k++) {
+        float target[N_AXIS] = {x[k], y[k]};
+        if (kind[k] == OP_ARC_CW || kind[k] == OP_ARC_CCW) {
+            arc_t arc;
+            float center[N_AXIS] = {pos[0] + i[k], pos[1] + j[k]};
+            if (!arc_init(&arc, pos, target, center, kind[k] == OP_ARC_CW, settings.arc_tolerance))
+                for (uint16_t s = 1; s <= arc.segments && plan_free(); s++) {
+                    float p[N_AXIS];
+                    arc_point(&arc, s, p);
+                    plan_line(p, feed[k], 0);
+                }
+        } else if (plan_free()) {
+            uint8_t was_empty = !plan_count();
+            plan_line(target, feed[k], kind[k] == OP_RAPID ? PB_RAPID : 0);
+            if (was_empty && plan_count() && !ring_base)
+                ring_base = plan_current(); /* after plan_reset the first block is ring[0] */
+        }
+        pos[0] = target[0];
+        pos[1] = target[1];
+    }
+}
+
+/* Copies the queued blocks, oldest first, into out (room for max); returns
+ * how many. */
+int motion_blocks(plan_block_t *out, int max)
+{
+    plan_block_t *b = plan_current();
+    int n = 0;
+    for (; b && ring_base && n < plan_count() && n < max; n++) {
+        out[n] = *b;
+        b = b + 1 == ring_base + PLAN_SIZE ? ring_base : b + 1;
+    }
+    return n;
+}
+
+int motion_block_size(void) { return (int)sizeof(plan_block_t); }

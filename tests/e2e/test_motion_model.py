@@ -5,6 +5,7 @@ plotter; and the compact wire format against the readable program on the same bo
 from __future__ import annotations
 
 import math
+import subprocess
 
 import pytest
 from plotbridge.importing import MachineProfile
@@ -12,6 +13,7 @@ from plotbridge.motion.estimate import Estimator
 from plotbridge.program.wire import compact
 
 from tests.fixtures.grbl_sender import Board
+from tests.fixtures.plotsim import FIRMWARE_ELF
 
 pytestmark = pytest.mark.e2e
 
@@ -48,23 +50,26 @@ PROGRAMS = {
 }
 
 
-def estimate(lines: list[str], profile: MachineProfile = PROFILE) -> float:
+def received(lines: list[str], profile: MachineProfile = PROFILE) -> Estimator:
+    """An estimator fed these program lines (the normalized dialect)."""
     e = Estimator(profile)
-    x = y = 0.0
+    down = False
     for n, text in enumerate(lines, 1):
         e.receive(len(text) + 1)
         words = {w[0]: float(w[1:]) for w in text.split()[1:]}
         head = text.split()[0]
         if head in ("G0", "G1"):
-            x, y = words["X"], words["Y"]
-            e.move(n, x, y, words["F"] if head == "G1" else None)
+            e.move(n, words["X"], words["Y"], words["F"] if head == "G1" else None)
         elif head in ("G2", "G3"):
-            x, y = words["X"], words["Y"]
-            e.arc(n, x, y, words["I"], words["J"], words["F"], head == "G2")
+            e.arc(n, words["X"], words["Y"], words["I"], words["J"], words["F"], head == "G2")
         elif head in ("M3", "M5"):
+            e.stop(n, profile.pen_settle_s if (head == "M3") != down else 0.0)
             down = head == "M3"
-            e.stop(n, PROFILE.pen_settle_s if down != getattr(e, "_down", False) else 0.0)
-            e._down = down
+    return e
+
+
+def estimate(lines: list[str]) -> float:
+    e = received(lines)
     e.flush()
     return e.time
 
@@ -106,3 +111,64 @@ def test_compact_stream_draws_the_same_steps(plotter_factory, name):
     assert len(compacted["strokes"]) == len(readable["strokes"])
     for a, b in zip(compacted["strokes"], readable["strokes"], strict=True):
         assert [p[:2] for p in a] == [p[:2] for p in b]
+
+
+# Block speeds: a slow lead-in move keeps the board busy while a window of lines (no
+# more than the planner holds) is planned behind it; then the board's planner ring is
+# read from simulated RAM (located by the ELF's symbol table) and compared byte for byte
+# with the host library's after the same lines. The lead-in's own progress only moves
+# the executing block's exit limit, which the slow lead-in never lets bind.
+LEAD_IN = "G1 X200.000 Y0.000 F30"
+WINDOWS = {
+    "short segments": [f"G1 X{200 + 0.4 * k:.3f} Y{0.3 * k * k / 10:.3f} F3000"
+                       for k in range(1, 13)],
+    "long lines and sharp corners": ["G1 X250.000 Y0.000 F6000", "G1 X250.000 Y100.000 F6000",
+                                     "G1 X200.000 Y2.000 F4000", "G1 X260.000 Y3.000 F4000",
+                                     "G0 X210.000 Y150.000", "G1 X210.000 Y10.000 F900"],
+    "arcs": ["G1 X201.000 Y0.000 F3000", "G3 X202.237 Y0.155 I0.000 J5.000 F3000",
+             "G2 X202.829 Y0.245 I0.742 J-2.907 F2000"],
+    "feeds changing": [f"G1 X{200 + 2 * k:.3f} Y{k % 3:.3f} F{600 + 700 * k}"
+                       for k in range(1, 14)],
+}
+
+
+def planner_symbols() -> dict[str, tuple[int, int]]:
+    """(address, size) of planner.c's variables in the firmware ELF."""
+    out = subprocess.run(["readelf", "-sW", str(FIRMWARE_ELF)], capture_output=True,
+                         text=True, check=True).stdout
+    symbols: dict[str, tuple[int, int]] = {}
+    source = None
+    for row in out.splitlines():
+        f = row.split()
+        if len(f) >= 8 and f[3] == "FILE":
+            source = f[7]
+        elif len(f) >= 8 and f[3] == "OBJECT" and source == "planner.c":
+            symbols[f[7]] = (int(f[1], 16), int(f[2]))
+    return symbols
+
+
+@pytest.mark.parametrize("name", list(WINDOWS))
+def test_block_speeds_equal_the_firmware_ones(plotter_factory, name):
+    lines = ["G21", "G90", LEAD_IN, *WINDOWS[name]]
+    host = received(lines).planned_blocks()
+    assert 4 <= len(host) <= 15, len(host)   # all fit: every line is acknowledged
+    sym = planner_symbols()
+    plotter = plotter_factory(speed=1)
+    board = Board(plotter.port)
+    board.command("$X")
+    board.stream(lines, timeout=60)       # every line acknowledged: planned
+
+    def peek(var: str) -> bytes:
+        addr, size = sym[var]
+        return bytes.fromhex(plotter.control(f"peek {addr} {size}"))
+    ring, tail, count = peek("ring"), peek("tail")[0], peek("count")[0]
+    size = len(host[0])
+    slots = len(ring) // size
+    assert slots * size == len(ring)
+    board.close()
+    plotter.stop()
+    assert count == len(host), (count, len(host))
+    board_blocks = [ring[((tail + k) % slots) * size:((tail + k) % slots + 1) * size]
+                    for k in range(count)]
+    for k, (ours, theirs) in enumerate(zip(host, board_blocks, strict=True)):
+        assert ours == theirs, f"block {k}: host {ours.hex()} board {theirs.hex()}"

@@ -117,6 +117,26 @@ class Estimator:
                 n, _ptr(self.kind, ctypes.c_uint8), _ptr(self.x, f), _ptr(self.y, f),
                 _ptr(self.i, f), _ptr(self.j, f), _ptr(self.feed, f),
                 _ptr(self.bytes, ctypes.c_uint16), _ptr(self.ack, ctypes.c_double))
-        # the inputs are no longer needed
+        self._clear()
+
+    def planned_blocks(self) -> list[bytes]:
+        """Plans the lines received so far with nothing executing and returns the queued
+        planner blocks, oldest first, as the firmware lays them out in RAM (the
+        differential test compares them with the board's)."""
+        library = lib.load()
+        size = library.motion_block_size()
+        out = ctypes.create_string_buffer(size * 256)
+        with lib.run_lock:
+            library.motion_configure(ctypes.byref(_config(self.profile)))
+            f = ctypes.c_float
+            library.motion_plan(
+                len(self.kind), _ptr(self.kind, ctypes.c_uint8), _ptr(self.x, f),
+                _ptr(self.y, f), _ptr(self.i, f), _ptr(self.j, f), _ptr(self.feed, f))
+            n = library.motion_blocks(out, 256)
+        self._clear()
+        return [out.raw[k * size:(k + 1) * size] for k in range(n)]
+
+    def _clear(self) -> None:
+        """The inputs are no longer needed."""
         for name in ("kind", "x", "y", "i", "j", "feed", "bytes"):
             setattr(self, name, array(getattr(self, name).typecode))

@@ -24,6 +24,7 @@ RAPID, LINE, ARC_CW, ARC_CCW, PEN_DOWN, PEN_UP, DWELL, OTHER = range(8)
 
 
 class Config(ctypes.Structure):
+    _pack_ = 1    # the library packs its structs as avr-gcc does
     _fields_ = [
         ("steps_per_mm", ctypes.c_double * 2),
         ("max_rate", ctypes.c_double * 2),
@@ -69,5 +70,10 @@ def load() -> ctypes.CDLL:
                                        f, ctypes.POINTER(ctypes.c_uint16),
                                        ctypes.POINTER(ctypes.c_double)]
             lib.motion_run.restype = ctypes.c_double
+            lib.motion_plan.argtypes = lib.motion_run.argtypes[:7]
+            lib.motion_plan.restype = None
+            lib.motion_blocks.argtypes = [ctypes.c_char_p, ctypes.c_int]
+            lib.motion_blocks.restype = ctypes.c_int
+            lib.motion_block_size.restype = ctypes.c_int
             _lib = lib
         return _lib
