@@ -283,8 +283,8 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
     rev = subprocess.run(["git", "log", "-1", "--format=%h %s", "--", "firmware/src"], cwd=REPO,
                          capture_output=True, text=True).stdout.strip()
     print(f"(c) firmware: {rev or 'unknown'}; planner model: {profile.planner_blocks} blocks, "
-          f"{profile.plan_block_s * 1000:.1f} ms to plan a block, "
-          f"{profile.block_gap_s * 1000:.2f} ms lost between blocks, {profile.baud} baud")
+          f"{profile.plan_block_s * 1000:.1f} ms to parse and plan a line, {profile.baud} baud "
+          f"(the firmware's own motion code via libmotion)")
     for name, src in accuracy_drawings(tmp).items():
         dest = tmp / f"acc_{src.stem}"
         if str(src).startswith("pattern:"):
