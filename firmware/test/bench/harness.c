@@ -35,7 +35,7 @@ static uint64_t isr_rise, isr_max, isr_count, isr_total;
 static uint64_t steps[2], last_step_cycle, last_rise[2], min_interval[2] = {~0ULL, ~0ULL};
 static uint32_t window_steps[MAX_WINDOWS][2];
 static int alarm_seen;
-static uint64_t mark_rise, mark_total, mark_count; /* PC4: optional profiling mark */
+static uint64_t mark_rise, mark_total, mark_count, mark_max; /* PC4: the pulse-end interrupt */
 /* HARNESS_PROFILE=FILE: sample the program counter every PROFILE_EVERY
  * cycles (odd, so no loop aliases with it) and write "byte_address count"
  * lines; bench/firmware_bench.py --profile maps them to functions. */
@@ -59,8 +59,11 @@ static void on_mark_pin(struct avr_irq_t *irq, uint32_t value, void *param)
     if (value & 1) {
         mark_rise = avr->cycle;
     } else if (mark_rise) {
-        mark_total += avr->cycle - mark_rise;
+        uint64_t d = avr->cycle - mark_rise;
+        mark_total += d;
         mark_count++;
+        if (d > mark_max)
+            mark_max = d;
     }
 }
 
@@ -240,8 +243,8 @@ int main(int argc, char **argv)
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
            (unsigned long long)isr_count, (unsigned long long)isr_max,
            isr_count ? (double)isr_total / (double)isr_count : 0.0);
-    printf(" \"mark\": {\"count\": %llu, \"total_cycles\": %llu},\n", (unsigned long long)mark_count,
-           (unsigned long long)mark_total);
+    printf(" \"mark\": {\"count\": %llu, \"total_cycles\": %llu, \"max_cycles\": %llu},\n",
+           (unsigned long long)mark_count, (unsigned long long)mark_total, (unsigned long long)mark_max);
     printf(" \"steps\": [%llu, %llu], \"min_interval_cycles\": [%llu, %llu],\n",
            (unsigned long long)steps[0], (unsigned long long)steps[1],
            (unsigned long long)(steps[0] > 1 ? min_interval[0] : 0),
