@@ -129,7 +129,9 @@ ISR(TIMER1_COMPA_vect)
 #ifdef BENCH_ISR_PIN
     IO_HIGH(BENCH_ISR);
 #endif
+#if DRIVE_PULSED
     uint8_t t0 = TCNT0;
+#endif
     drive_step(pending_steps);
     uint8_t new_dir = 0;
     if (seg_left == 0) {
