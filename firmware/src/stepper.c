@@ -36,7 +36,9 @@ void stepper_init(void)
 {
 #ifdef BENCH_ISR_PIN
     IO_OUTPUT(BENCH_ISR);
+#ifdef BENCH_ISR_END
     IO_OUTPUT(BENCH_ISR_END);
+#endif
 #endif
     TCCR0A = 0;
     TCCR0B = 1 << CS01;          /* Timer0 free-running at 2 MHz: its compare A ends step pulses */
@@ -163,11 +165,12 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * step: a whole period before that step's edge, and after the edge of the
  * old block's last step made at the top of the tick (past its hold time).
  *
- * Cycle budget, measured by bench/firmware_bench.py (worst case, entry and
- * exit included): 252 cycles when a segment starts a block (step rate test
- * at 50 kHz on both axes, a period of 320 cycles), about 150 on other ticks;
- * with the compare-B interrupt below, at most 290 of the 320 cycles of a
- * 50 kHz period. */
+ * Cycle budget, measured by bench/firmware_bench.py on the 328P at 50 kHz
+ * on both axes (a period of 320 cycles), entry and exit (86) included:
+ * 229 cycles on average, 394 at worst on the tick that loads a segment
+ * starting a block (the next edge then comes up to ~5 us late, the tick
+ * after it early: the hardware period holds, so no step is lost or late
+ * over a segment). The pulse-end interrupt below adds at most 50. */
 ISR(TIMER1_COMPA_vect)
 {
 #ifdef BENCH_ISR_PIN
@@ -236,15 +239,15 @@ ISR(TIMER1_COMPA_vect)
 
 #if DRIVE_PULSED
 /* The pulse ends $0 us after its edge. Cycle budget, measured by
- * bench/firmware_bench.py: 40 cycles worst, entry and exit included. */
+ * bench/firmware_bench.py: 50 cycles worst, entry and exit included. */
 ISR(TIMER0_COMPA_vect)
 {
-#ifdef BENCH_ISR_PIN
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
     IO_HIGH(BENCH_ISR_END);
 #endif
     drive_step_end();
     TIMSK0 = 0;
-#ifdef BENCH_ISR_PIN
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
     IO_LOW(BENCH_ISR_END);
 #endif
 }
