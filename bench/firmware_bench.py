@@ -84,6 +84,8 @@ def isr_overhead_cycles(elf: Path, vector: str = "__vector_11") -> int:
     """Entry/exit cost outside the pin-measured body: interrupt response (4),
     vector jump (3), reti (4), and the prologue/epilogue push/pop/in/out/eor."""
     dis = run(["avr-objdump", "-d", str(elf)])
+    if f"<{vector}>:" not in dis:
+        return 0  # a build without that interrupt (no pulse-end interrupt: a busy-wait)
     body = dis[dis.index(f"<{vector}>:"):]
     body = body[: body.index("reti") + 4]
     lines = body.splitlines()
