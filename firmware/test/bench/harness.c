@@ -215,12 +215,20 @@ int main(int argc, char **argv)
 
     uint64_t limit = (uint64_t)(max_s * F_CPU);
     uint64_t sleep_cycles = 0;
+    /* HARNESS_SPAN_FROM=N: also count the sleep from the Nth acknowledgement
+     * to the last one (the CPU's idle share of a measured run) */
+    const char *span_env = getenv("HARNESS_SPAN_FROM");
+    size_t span_from = span_env ? (size_t)atol(span_env) : (size_t)-1;
+    uint64_t span_sleep_cycles = 0;
     for (;;) {
         uint64_t before = avr->cycle;
         int was_sleeping = avr->state == cpu_Sleeping;
         int st = avr_run(avr);
-        if (was_sleeping)
+        if (was_sleeping) {
             sleep_cycles += avr->cycle - before;
+            if (acked >= span_from && acked < line_count)
+                span_sleep_cycles += avr->cycle - before;
+        }
         if (st == cpu_Done || st == cpu_Crashed)
             break;
         if (avr->cycle > limit)
@@ -237,7 +245,8 @@ int main(int argc, char **argv)
         if (pf)
             fclose(pf);
     }
-    printf("{\"sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles);
+    printf("{\"sleep_cycles\": %llu, \"span_sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles,
+           (unsigned long long)span_sleep_cycles);
     printf("\"cycles\": %llu, \"lines\": %zu, \"acked\": %zu, \"errors\": %u, \"alarm\": %d,\n",
            (unsigned long long)avr->cycle, line_count, acked, errors, alarm_seen);
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
