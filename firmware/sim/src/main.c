@@ -1,5 +1,5 @@
-/* plotsim: the real firmware ELF on a simulated ATmega328P at 16 MHz, wired
- * to a plotter model. One thread: the loop runs instructions in slices and,
+/* plotsim: the real firmware ELF on a simulated ATmega328P or ATmega2560 at
+ * 16 MHz, wired as a board profile (--board) to a plotter model. One thread: the loop runs instructions in slices and,
  * between slices, services the pty and the control socket, paces simulated
  * time against the wall clock, and keeps the trace file and EEPROM current. */
 #include <elf.h>
@@ -16,6 +16,7 @@
 #include "sim_elf.h"
 
 #include "control.h"
+#include "board_pins.h"
 #include "eeprom_file.h"
 #include "machine.h"
 #include "options.h"
@@ -46,6 +47,7 @@ static void on_signal(int sig)
 
 struct sim {
 	struct options opt;
+	const struct board_pins *board;
 	avr_t *avr;
 	struct machine mc;
 	struct pins pins;
@@ -138,8 +140,10 @@ static void handle_command(void *ctx, const char *line, FILE *reply)
 			fprintf(reply, "error: unknown button '%s' (estop, pause, resume)\n", arg);
 			return;
 		}
-		pins_set_button(&s->pins, b, cmd[0] == 'p');
-		fputs("ok\n", reply);
+		if (pins_set_button(&s->pins, b, cmd[0] == 'p') < 0)
+			fprintf(reply, "error: board %s has no %s button\n", s->board->name, arg);
+		else
+			fputs("ok\n", reply);
 	} else if (strcmp(cmd, "trace") == 0) {
 		write_json(s, reply, 1);
 	} else if (strcmp(cmd, "svg") == 0) {
@@ -264,26 +268,40 @@ static int check_elf(const char *path, char *err, size_t errlen)
 static int setup(struct sim *s, char *err, size_t errlen)
 {
 	static elf_firmware_t fw;
+	s->board = board_pins_find(s->opt.board);
+	if (!s->board) {
+		snprintf(err, errlen, "--board %s: unknown board (%s)", s->opt.board, board_pins_names);
+		return -1;
+	}
+	if (!s->opt.have_spm)
+		s->opt.steps_per_mm = s->board->steps_per_mm;
+	if (!s->opt.have_width)
+		s->opt.width = s->board->width;
+	if (!s->opt.have_height)
+		s->opt.height = s->board->height;
 	if (check_elf(s->opt.firmware, err, errlen) < 0)
 		return -1;
 	if (elf_read_firmware(s->opt.firmware, &fw) < 0 || fw.flashsize == 0) {
 		snprintf(err, errlen, "%s: no program in this AVR ELF file", s->opt.firmware);
 		return -1;
 	}
-	if (fw.flashsize + fw.datasize > 32768) {
-		snprintf(err, errlen, "%s: %u bytes of program do not fit the 32 KiB flash",
-			 s->opt.firmware, (unsigned)(fw.flashsize + fw.datasize));
+	const struct board_pins *b = s->board;
+	unsigned flash_kib = strcmp(b->mcu, "atmega2560") == 0 ? 256 : 32;
+	if (fw.flashsize + fw.datasize > flash_kib * 1024) {
+		snprintf(err, errlen, "%s: %u bytes of program do not fit the %u KiB flash",
+			 s->opt.firmware, (unsigned)(fw.flashsize + fw.datasize), flash_kib);
 		return -1;
 	}
-	if (fw.mmcu[0] && strcmp(fw.mmcu, "atmega328p") != 0) {
-		snprintf(err, errlen, "%s is built for %s, not atmega328p", s->opt.firmware, fw.mmcu);
+	if (fw.mmcu[0] && strcmp(fw.mmcu, b->mcu) != 0) {
+		snprintf(err, errlen, "%s is built for %s, not %s (board %s)", s->opt.firmware,
+			 fw.mmcu, b->mcu, b->name);
 		return -1;
 	}
-	snprintf(fw.mmcu, sizeof fw.mmcu, "atmega328p");
+	snprintf(fw.mmcu, sizeof fw.mmcu, "%s", b->mcu);
 	fw.frequency = CPU_HZ;
-	s->avr = avr_make_mcu_by_name("atmega328p");
+	s->avr = avr_make_mcu_by_name(b->mcu);
 	if (!s->avr || avr_init(s->avr) != 0) {
-		snprintf(err, errlen, "simavr cannot create an atmega328p");
+		snprintf(err, errlen, "simavr cannot create an %s", b->mcu);
 		return -1;
 	}
 	avr_load_firmware(s->avr, &fw);
@@ -301,10 +319,10 @@ static int setup(struct sim *s, char *err, size_t errlen)
 		.freq = CPU_HZ, .width = s->opt.width, .height = s->opt.height,
 		.steps_per_mm = s->opt.steps_per_mm, .corexy = s->opt.corexy,
 		.pen_up_us = s->opt.pen_up_us, .pen_down_us = s->opt.pen_down_us,
-		.max_step_rate = s->opt.max_step_rate,
+		.max_step_rate = s->opt.max_step_rate, .coil_stride = b->coil_stride,
 	};
 	machine_init(&s->mc, &cfg, s->opt.start_x, s->opt.start_y);
-	pins_attach(&s->pins, s->avr, &s->mc);
+	pins_attach(&s->pins, s->avr, &s->mc, b);
 	if (pty_link_open(&s->pty, s->avr, s->opt.pty_link, err, errlen) < 0)
 		return -1;
 	if (control_open(&s->ctl, s->opt.control, err, errlen) < 0)
