@@ -19,7 +19,6 @@ if TYPE_CHECKING:
     from .models import ImportFailed, ImportOptions, ImportResult, MachineProfile
     from .patterns import PATTERNS
     from .pipeline import import_file, import_pattern
-    from .program import resume_preamble
 
 _LAZY = {
     "PATTERNS": ".patterns",
@@ -29,7 +28,6 @@ _LAZY = {
     "MachineProfile": ".models",
     "import_file": ".pipeline",
     "import_pattern": ".pipeline",
-    "resume_preamble": ".program",
 }
 
 __all__ = [
@@ -41,7 +39,6 @@ __all__ = [
     "eta",
     "import_file",
     "import_pattern",
-    "resume_preamble",
 ]
 
 

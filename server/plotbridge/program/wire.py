@@ -112,9 +112,11 @@ def compact(lines: Iterable[tuple[int, str]],
 
 
 async def compact_async(lines: AsyncIterable[tuple[int, str]],
-                        steps_per_mm: tuple[float, float] = (80.0, 80.0)
+                        settings: dict[int, float] | None = None
                         ) -> AsyncIterator[tuple[int, str]]:
-    """The streaming hook: (line number, text) pairs in, the same numbers with wire text out."""
-    c = Compactor(steps_per_mm)
+    """The streaming hook: (line number, text) pairs in, the same numbers with wire text
+    out; `settings` is the board's $$ (steps/mm from $100, $101)."""
+    s = settings or {}
+    c = Compactor((float(s.get(100, 80.0)), float(s.get(101, 80.0))))
     async for n, text in lines:
         yield n, c.line(text)
