@@ -459,7 +459,6 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     for _ in range(12):
         api.link.step()
         await asyncio.sleep(0.01)
-    await settle(lambda: api.queue.jobs[jid].lines_done == 12)  # a busy machine lags
     api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
     await settle(lambda: api.queue.jobs[jid].state == "interrupted")
