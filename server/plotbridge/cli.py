@@ -45,6 +45,10 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--sim-speed", type=float, default=float(_env("SIM_SPEED", 1.0)),
         help="virtual plotter speed, times real time (0: unthrottled)",
     )  # fmt: skip
+    parser.add_argument(
+        "--board", default=_env("BOARD", "uno-cnc-shield"),
+        help="virtual plotter's board profile (firmware/src/boards/NAME.h)",
+    )  # fmt: skip
     parser.add_argument("--token", default=_env("TOKEN"), help="API token (default: generated)")
     parser.add_argument(
         "--max-upload-mb", type=float, default=float(_env("MAX_UPLOAD_MB", 50)),
@@ -69,6 +73,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         serial=serial,
         baud=args.baud,
         sim_speed=args.sim_speed,
+        board=args.board,
         token=args.token,
         max_upload_mb=args.max_upload_mb,
         auto_start=args.auto_start,
@@ -110,7 +115,8 @@ async def serve(config: Config) -> int:
     if config.virtual:
         from plotbridge.virtual import VirtualPlotter
 
-        virtual = VirtualPlotter(data_dir=config.data_dir / "sim", speed=config.sim_speed)
+        virtual = VirtualPlotter(data_dir=config.data_dir / "sim", speed=config.sim_speed,
+                                 board=config.board)
         await virtual.start()
         device = str(virtual.port)
         log.info("virtual plotter on %s (speed %g)", device, config.sim_speed)

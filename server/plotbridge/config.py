@@ -33,6 +33,7 @@ class Config:
     serial: str | None = None
     baud: int = 115200
     sim_speed: float = 1.0
+    board: str = "uno-cnc-shield"  # the virtual plotter's board profile
     token: str | None = None
     max_upload_mb: float = 50.0
     auto_start: bool = False
