@@ -106,7 +106,6 @@ class Config:
     data_dir: Path = Path(".")
     plotters: list[PlotterConfig] = field(default_factory=lambda: [PlotterConfig("plotter1")])
     sim_speed: float = 1.0
-    board: str = "uno-cnc-shield"  # the virtual plotter's board profile
     token: str | None = None
     max_upload_mb: float = 50.0
     auto_start: bool = False
