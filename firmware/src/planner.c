@@ -14,6 +14,8 @@ static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
+static float last_feed;        /* the last block's feed, and as stored in blocks */
+static uint16_t last_feed_u16;
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
@@ -292,7 +294,11 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     }
     float speed = cruise_speed(feed, flags, axis_s_per_mm(unit), b->events_per_mm);
     float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
-    b->feed = feed < 65535.0f ? (uint16_t)feed : 65535u; /* overrides only: 1 mm/min is fine */
+    if (feed != last_feed) { /* F is modal: converted once per change (overrides only: 1 mm/min is fine) */
+        last_feed = feed;
+        last_feed_u16 = feed < 65535.0f ? (uint16_t)feed : 65535u;
+    }
+    b->feed = last_feed_u16;
     b->nominal_sqr = speed * speed;
     b->accel = accel;
     b->inv_accel = inv_accel;

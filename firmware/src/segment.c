@@ -80,7 +80,7 @@ static float advance(const plan_block_t *b, float dt)
     float ve2 = plan_next_entry_sqr();
     float vn2 = b->nominal_sqr;
     float v2 = v * v;
-    if (v2 > vn2 * 1.0001f) {
+    if (v2 > vn2 && v2 > vn2 * 1.0001f) { /* (the first test spares the multiply) */
         /* above the cruise speed (a feed override lowered it): slow down to
          * it first, where the block leaves room; otherwise the profile below
          * decelerates to the exit */
