@@ -7,7 +7,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from .models import ErrorLog, MachineProfile
-from .ops import ARC, DWELL, MOVE, PEN, arc_extent, arc_points
+from .ops import ARC, DWELL, LAYER, MOVE, PEN, arc_extent, arc_points
 from .placement import Transform
 from .planner import Planner
 from .preview import PreviewBuilder
@@ -45,6 +45,7 @@ class ProgramWriter:
         self._buf: list[str] = []
         self.last = ""
         self._feed_texts: dict[float, str] = {}
+        self.layers: list[dict] = []
         for text in HEADER:
             self._write(text)
         # The pen is up when a job starts: the firmware skips the settle time of a pen
@@ -103,6 +104,26 @@ class ProgramWriter:
             elif kind == DWELL:
                 self._write(f"G4 P{op[2]:.3f}")
                 self.planner.stop(self.line, op[2])
+            elif kind == LAYER:
+                self.layer(op[2], op[3])
+
+    def layer(self, name: str, colour: str) -> None:
+        """Starts a layer. Between layers the program lifts the pen and has an `M0`
+        line: the pen-change pause (docs/INTERNALS.md, "Layers")."""
+        if self.layers:
+            self.pen(None, False)
+            self._end_layer()
+            self._write("M0")
+            self.planner.stop(self.line, 0.0)
+        self.layers.append({"name": name, "colour": colour, "first_line": self.line + 1,
+                            "pen_down_mm": self.pen_down_mm, "strokes": self.pen_lifts})
+        self.preview.colour = colour
+
+    def _end_layer(self) -> None:
+        lay = self.layers[-1]
+        lay["last_line"] = self.line
+        lay["pen_down_mm"] = round(self.pen_down_mm - lay["pen_down_mm"], 3)
+        lay["strokes"] = self.pen_lifts - lay["strokes"]
 
     def pen(self, src_line: int | None, down: bool) -> None:
         if down == self.down:
@@ -189,6 +210,8 @@ class ProgramWriter:
         elif self.last != "M5":
             self._write("M5")
             self.planner.stop(self.line, 0.0)
+        if self.layers:
+            self._end_layer()
         self.planner.flush()
         self.flush()
 
@@ -218,7 +241,7 @@ def resume_preamble(program_path: Path, line: int) -> list[str]:
                         y = float(word[1:])
             elif text.startswith("M3"):
                 down = True
-            elif text.startswith("M5"):
+            elif text.startswith(("M5", "M0")):
                 down = False
     out = ["M5", "G21", "G90", f"G0 X{x:.3f} Y{y:.3f}"]
     if down:
