@@ -20,6 +20,7 @@ from pydantic import ValidationError
 from plotbridge import __version__
 from plotbridge.auth import COOKIE, Auth, origin_allowed
 from plotbridge.config import Config
+from plotbridge.importing.fields import import_fields
 from plotbridge.jobs import JobError, JobManager, public
 from plotbridge.models import (
     ERROR_RESPONSES,
@@ -504,5 +505,6 @@ def parse_upload_fields(params: dict[str, str]) -> tuple[dict[str, Any], dict[st
         options["optimize"] = optimize
     if params.get("layers"):
         options["layers"] = [part.strip() for part in params["layers"].split(",") if part.strip()]
+    options.update(import_fields(params))
     placement_public = {k: v for k, v in options.items() if k in Placement.model_fields}
     return options, placement_public, bool(flag("start"))

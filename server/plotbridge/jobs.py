@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
 import multiprocessing
 import shutil
@@ -42,7 +43,7 @@ SEGMENT_BLOCKS = 8
 PUBLIC_FIELDS = (
     "id", "name", "state", "format", "created_at", "lines_total", "lines_done", "progress",
     "estimate_s", "eta_s", "bounds", "error", "stats", "placement", "resume_line",
-    "started_at", "finished_at",
+    "started_at", "finished_at", "layers", "warnings", "substitutions",
 )  # fmt: skip
 
 
@@ -91,6 +92,10 @@ def job_fields(result: Any) -> dict[str, Any]:
         "bounds": {key: float(value) for key, value in result.bounds.items()},
         "stats": {key: float(value) for key, value in result.stats.items()},
         "timeline": [[int(line), float(seconds)] for line, seconds in result.timeline],
+        # plain types only (see run_import)
+        "layers": json.loads(json.dumps(result.layers)),
+        "warnings": json.loads(json.dumps(result.warnings)),
+        "substitutions": json.loads(json.dumps(result.substitutions)),
     }
 
 

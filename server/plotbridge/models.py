@@ -6,6 +6,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
+from plotbridge.importing.fields import openapi_fields
+
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
@@ -106,6 +108,9 @@ class Job(BaseModel):
     stats: dict[str, float] = {}
     placement: dict = {}
     resume_line: int | None = None
+    layers: list[dict] = []          # the importer's layers (docs/INTERNALS.md, "Layers")
+    warnings: list[dict] = []        # what the importer dropped or changed
+    substitutions: list[dict] = []   # SVG text set in a substitute font
     started_at: float | None = None
     finished_at: float | None = None
 
@@ -139,6 +144,7 @@ def upload_openapi() -> dict[str, Any]:
         "optimize": {"type": "boolean", "description": "merge and reorder strokes"},
         "layers": {"type": "string", "description": "SVG group ids, labels or stroke colours"},
         **Placement.model_json_schema()["properties"],
+        **openapi_fields(),
     }
     query = ("name", "pattern", "start", "optimize", "paper", "fit", "scale", "rotate")
     return {

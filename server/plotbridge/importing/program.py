@@ -46,6 +46,9 @@ class ProgramWriter:
         self.last = ""
         self._feed_texts: dict[float, str] = {}
         self.layers: list[dict] = []
+        # Pen-up travel that left the work area (source line, x, y): clamped to the
+        # area when no stroke follows it (a trailing move home), an error otherwise.
+        self._outside: tuple[int | None, float, float] | None = None
         for text in HEADER:
             self._write(text)
         # The pen is up when a job starts: the firmware skips the settle time of a pen
@@ -129,6 +132,9 @@ class ProgramWriter:
         if down == self.down:
             return
         self.down = down
+        if down and self._outside is not None:
+            self._check(*self._outside)
+            self._outside = None
         self._write("M3" if down else "M5")
         if down:
             self.preview.end_stroke()
@@ -146,9 +152,18 @@ class ProgramWriter:
             return
         a = self._area
         if not (a[0] <= x <= a[2] and a[1] <= y <= a[3]):
-            self._check(src_line, x, y)
-            self.x, self.y = x, y     # the import fails; only keep finding errors
-            return
+            if self.down:
+                self._check(src_line, x, y)
+                self.x, self.y = x, y     # the import fails; only keep finding errors
+                return
+            if self._outside is None:
+                self._outside = (src_line, x, y)
+            x = min(max(x, 0.0), self.profile.width)
+            y = min(max(y, 0.0), self.profile.height)
+            xt, yt = f"{x:.3f}", f"{y:.3f}"
+            x, y = float(xt), float(yt)
+            if x == x0 and y == y0:
+                return
         if feed is None:
             self._write(f"G0 X{xt} Y{yt}")
         else:
@@ -210,6 +225,10 @@ class ProgramWriter:
         elif self.last != "M5":
             self._write("M5")
             self.planner.stop(self.line, 0.0)
+        if self._outside is not None:
+            line, x, y = self._outside
+            self.errors.warn(line, f"pen-up travel after the last stroke to X{x:.3f} "
+                                   f"Y{y:.3f} is outside the work area: clamped to its edge")
         if self.layers:
             self._end_layer()
         self.planner.flush()

@@ -15,9 +15,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .fields import FONTS
+
 EM_UNITS = 32.0
 BASELINE = 9.0
-FONTS = ("futural", "futuram", "rowmans", "rowmand", "scripts", "timesr", "gothiceng")
 DEFAULT_FONT = "futural"
 # font-family names that the Hershey fonts stand for without substitution
 HERSHEY_NAMES = re.compile(r"hershey|futura|rowman|scripts|timesr|gothic", re.I)
