@@ -93,9 +93,9 @@ def job_fields(result: Any) -> dict[str, Any]:
         "stats": {key: float(value) for key, value in result.stats.items()},
         "timeline": [[int(line), float(seconds)] for line, seconds in result.timeline],
         # plain types only (see run_import)
-        "layers": json.loads(json.dumps(result.layers)),
-        "warnings": json.loads(json.dumps(result.warnings)),
-        "substitutions": json.loads(json.dumps(result.substitutions)),
+        "layers": json.loads(json.dumps(getattr(result, "layers", []))),
+        "warnings": json.loads(json.dumps(getattr(result, "warnings", []))),
+        "substitutions": json.loads(json.dumps(getattr(result, "substitutions", []))),
     }
 
 

@@ -120,6 +120,7 @@ class ProgramWriter:
             self.planner.stop(self.line, 0.0)
         self.layers.append({"name": name, "colour": colour, "first_line": self.line + 1,
                             "pen_down_mm": self.pen_down_mm, "strokes": self.pen_lifts})
+        self.preview.end_stroke()
         self.preview.colour = colour
 
     def _end_layer(self) -> None:
