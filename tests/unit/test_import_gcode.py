@@ -82,7 +82,7 @@ def test_all_errors_reported_with_line_numbers(tmp_path):
     text = "\n".join([
         "G0 X10 Y10",
         "M3",
-        "G1 X20",                       # 3: no feed rate ever given
+        "G1 X20 F0",                    # 3: feed rate not positive
         "Q1",                           # 4: unsupported word
         "G1 X500 Y10 F100",             # 5: outside the work area
         "G2 X30 Y10 I3 J0",             # 6: radius 3 at the start, 7 at the end

@@ -18,6 +18,7 @@ MAX_LINE = 256          # characters of commands on a line (comments do not coun
 MAX_RAW_LINE = 1 << 16  # characters of a line with its comments
 PEN_DIALECTS = (*UPLOAD_DIALECTS, "servo-z")
 M280_DOWN_MAX = 50.0    # M280 servo angles at or below this lower the pen
+M300_DOWN_MAX = 40.0    # M300 S30 lowers the pen, S50 (and S255, servo off) lift it
 # Dialects where the motion mode decides the pen: G0 travels, G1/G2/G3 draw (laser: while
 # the laser is on, M3/M4 to M5; none: always).
 MOTION_PEN = ("laser", "none")
@@ -48,8 +49,9 @@ def _num(v: float) -> str:
     return f"{v:g}"
 
 
-def _no_feed(mode: int) -> str:
-    return f"G{mode} with no feed rate: no F on this line or before it"
+def _no_feed(mode: int, feed: float) -> str:
+    return (f"G{mode} with no feed rate before it: drawn at {feed:g} mm/min "
+            "(the import's feed)")
 
 
 def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
@@ -114,6 +116,7 @@ class GcodeReader:
         self.layer_count = 1
         self.pending_layer: str | None = None
         self.tool: float | None = None
+        self.default_feed = options.feed
 
     def ops(self, lines: Iterable[tuple[int, str]]) -> Iterator[tuple]:
         if self.dialect == "servo-z" and self.servo_down is None:
@@ -152,9 +155,10 @@ class GcodeReader:
                             out.clear()
                     if mode == 0:
                         yield (MOVE, line_no, x, y, None)
-                    elif self.feed is None:
-                        self.errors.add(line_no, _no_feed(1))
                     else:
+                        if self.feed is None:
+                            self.errors.warn(line_no, _no_feed(1, self.default_feed))
+                            self.feed = self.default_feed
                         yield (MOVE, line_no, x, y, self.feed)
                     continue
             head = raw.lstrip()
@@ -185,7 +189,9 @@ class GcodeReader:
 
     def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
         if down and self.pending_layer is not None:
-            if self.drawn:
+            if not self.drawn and self.pending_layer and self.layer_count == 1:
+                out.append((LAYER, line_no, self.pending_layer, PALETTE[0]))   # names layer 1
+            elif self.drawn:
                 self.layer_count += 1
                 name = self.pending_layer or f"layer {self.layer_count}"
                 out.append((LAYER, line_no, name, PALETTE[(self.layer_count - 1) % len(PALETTE)]))
@@ -203,7 +209,7 @@ class GcodeReader:
     def _boundary(self, name: str | None) -> None:
         """A pause or tool change: what is drawn after it is a new layer (made when the pen
         next goes down, so a pause before anything is drawn makes none)."""
-        if self.pending_layer is None or name:
+        if not self.pending_layer:     # the first name given (a pause's message) stays
             self.pending_layer = name or ""
 
     def _block(self, out: list[tuple], line_no: int, words: list[tuple[str, str]]) -> None:
@@ -286,13 +292,10 @@ class GcodeReader:
                                      "manages the motors")
             elif m == 300.0:
                 s = vals.get("S")
-                if s == 30.0:
-                    self._pen(out, line_no, True)
-                elif s == 50.0:
-                    self._pen(out, line_no, False)
-                else:
-                    errors.add(line_no, "M300 needs S30 (pen down) or S50 (pen up)")
+                if s is None:
+                    errors.add(line_no, "M300 needs a servo angle S (S30 pen down, S50 up)")
                     return
+                self._pen(out, line_no, s <= M300_DOWN_MAX)
             elif m not in _NOOP_M:
                 errors.add(line_no, f"unsupported command M{_num(m)}")
                 return
@@ -334,9 +337,8 @@ class GcodeReader:
         if self.dialect in MOTION_PEN:
             self._motion_pen(out, line_no, mode)
         if mode != 0 and self.feed is None:
-            errors.add(line_no, _no_feed(mode))
-            self.x, self.y = tx, ty
-            return
+            errors.warn(line_no, _no_feed(mode, self.default_feed))
+            self.feed = self.default_feed
         if mode in (0, 1):
             self.x, self.y = tx, ty
             out.append((MOVE, line_no, tx, ty, None if mode == 0 else self.feed))
@@ -390,17 +392,23 @@ class GcodeReader:
             return
         if g == 28.1:
             return
+        # Only the axes named go home; with none named, all do. The pen goes up first.
+        named = [a for a in "XYZ" if a in vals]
         self._pen(out, line_no, False)
-        if "X" in vals or "Y" in vals:
+        axes = [a for a in "XY" if a in vals] if named else ["X", "Y"]
+        if not axes:
+            return
+        if named:
             if self.relative:
                 ix, iy = self.x + vals.get("X", 0.0) * unit, self.y + vals.get("Y", 0.0) * unit
             else:
                 ix = vals["X"] * unit + self.off_x if "X" in vals else self.x
                 iy = vals["Y"] * unit + self.off_y if "Y" in vals else self.y
             out.append((MOVE, line_no, ix, iy, None))
-        self.x, self.y = (0.0, 0.0) if g == 28.0 else self.g30
+        hx, hy = (0.0, 0.0) if g == 28.0 else self.g30
+        self.x = hx if "X" in axes else self.x
+        self.y = hy if "Y" in axes else self.y
         out.append((MOVE, line_no, self.x, self.y, None))
-        self.motion = 0 if self.motion in (0, 1) else self.motion
 
     def _centre_from_radius(self, line_no: int, x: float, y: float, tx: float, ty: float,
                             r: float, cw: bool) -> tuple[float, float] | None:

@@ -7,7 +7,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from .models import ErrorLog, MachineProfile
-from .ops import ARC, DWELL, LAYER, MOVE, PEN, arc_extent, arc_points
+from .ops import ARC, DWELL, LAYER, MOVE, PALETTE, PEN, arc_extent, arc_points
 from .placement import Transform
 from .planner import Planner
 from .preview import PreviewBuilder
@@ -115,6 +115,11 @@ class ProgramWriter:
         line: the pen-change pause (docs/INTERNALS.md, "Layers")."""
         if self.layers:
             self.pen(None, False)
+            lay = self.layers[-1]
+            if self.pen_lifts == lay["strokes"]:      # nothing drawn in it yet: renamed
+                lay.update(name=name, colour=colour)
+                self.preview.colour = colour
+                return
             self._end_layer()
             self._write("M0")
             self.planner.stop(self.line, 0.0)
@@ -132,6 +137,8 @@ class ProgramWriter:
     def pen(self, src_line: int | None, down: bool) -> None:
         if down == self.down:
             return
+        if down and not self.layers:
+            self.layer("layer 1", PALETTE[0])
         self.down = down
         if down and self._outside is not None:
             self._check(*self._outside)
