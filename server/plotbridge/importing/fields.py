@@ -10,7 +10,7 @@ from typing import Any
 
 PEN_DIALECTS = ("auto", "m3", "z", "m300", "m280", "laser", "none")
 FILLS = ("none", "outline", "hatch")
-FONTS = ("futural", "futuram", "rowmans", "rowmand", "scripts", "timesr", "gothiceng")
+FONTS = ("futural", "futuram", "scripts", "timesr", "gothiceng")   # Hershey-Fonts names
 _TRUE = ("1", "true", "yes", "on")
 _FALSE = ("0", "false", "no", "off", "")
 # field: (kind, choices or bounds, description) -- also the OpenAPI description

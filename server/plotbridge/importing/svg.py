@@ -158,7 +158,8 @@ class SvgReader:
         if root.get("transform"):
             ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(root.get("transform"))))
         ctx = replace(ctx, opacity=opacity(own.get("opacity")))
-        self.children(root, ctx)
+        with np.errstate(all="ignore"):     # huge or degenerate geometry: skipped, not warned
+            self.children(root, ctx)
         return self.result()
 
     def result(self) -> list[Layer]:

@@ -23,9 +23,10 @@ from .models import ImportFailed
 MAX_EXPANSION = 4 << 20      # bytes an entity expansion may add to the document
 MAX_ENTITIES = 256
 _DOCTYPE = re.compile(rb"<!DOCTYPE\s+[^\s\[>]+(?:\s+(?:PUBLIC|SYSTEM)\s*(?:\"[^\"]*\"|'[^']*')"
-                      rb"(?:\s*(?:\"[^\"]*\"|'[^']*'))?)?\s*(?:\[(?P<subset>.*?)\]\s*)?>",
-                      re.S)
-_DECL = re.compile(rb"<!(?P<kind>ENTITY|ELEMENT|ATTLIST|NOTATION)\b(?P<body>[^>]*)>|"
+                      rb"(?:\s*(?:\"[^\"]*\"|'[^']*'))?)?\s*"
+                      rb"(?:\[(?P<subset>(?:[^\]\"']|\"[^\"]*\"|'[^']*')*)\]\s*)?>", re.S)
+_DECL = re.compile(rb"<!(?P<kind>ENTITY|ELEMENT|ATTLIST|NOTATION)\b"
+                   rb"(?P<body>(?:[^>\"']|\"[^\"]*\"|'[^']*')*)>|"
                    rb"<!--.*?-->|<\?.*?\?>|\s+", re.S)
 _ENTITY = re.compile(rb"\s*(?P<pct>%\s*)?(?P<name>[A-Za-z_][\w.\-:]*)\s*"
                      rb"(?P<rest>.*)", re.S)
