@@ -119,6 +119,7 @@ class SvgReader:
         self.substitutions: list[dict] = []
         self.page: tuple[float, float] | None = None
         self._clip_cache: dict[tuple, BaseGeometry] = {}
+        self._page_clip: list[tuple[Layer, int, list[np.ndarray]]] = []
 
     # ---- entry ---------------------------------------------------------------------
 
@@ -160,6 +161,7 @@ class SvgReader:
         ctx = replace(ctx, opacity=opacity(own.get("opacity")))
         with np.errstate(all="ignore"):     # huge or degenerate geometry: skipped, not warned
             self.children(root, ctx)
+            self._clip_to_page()
         return self.result()
 
     def result(self) -> list[Layer]:
@@ -496,8 +498,12 @@ class SvgReader:
         lines = [ln for ln in lines if len(ln) > 1 and np.isfinite(ln).all()]
         if not lines:
             return
+        deferred = False
         if ctx.clip is not None:
-            if ctx.clip_box is None or not fill.inside_rect(lines, ctx.clip_box):
+            if ctx.clip_box is not None:
+                # Clipped to the page only: done for all such shapes at once at the end.
+                deferred = not fill.inside_rect(lines, ctx.clip_box)
+            else:
                 lines = fill.clip_lines(lines, ctx.clip)
             if not lines:
                 return
@@ -505,7 +511,35 @@ class SvgReader:
         layer = self.layers.get(key)
         if layer is None:
             layer = self.layers[key] = Layer(name=key, colour=colour)
-        layer.strokes.extend(list(map(tuple, ln.tolist())) for ln in lines)
+        if deferred:
+            self._page_clip.append((layer, len(layer.strokes), lines))
+            layer.strokes.append(None)      # the clipped lines go here, in drawing order
+        else:
+            layer.strokes.extend(list(map(tuple, ln.tolist())) for ln in lines)
+
+    def _clip_to_page(self) -> None:
+        """Clips the lines that cross the page's edge, all in one shapely call."""
+        if not self._page_clip:
+            return
+        flat = [ln for _, _, lines in self._page_clip for ln in lines]
+        owner = [k for k, (_, _, lines) in enumerate(self._page_clip) for _ in lines]
+        index = np.repeat(np.arange(len(flat)), [len(ln) for ln in flat])
+        lines = shapely.linestrings(np.vstack(flat), indices=index)
+        clipped = shapely.clip_by_rect(lines, 0.0, 0.0, *self.page)
+        pieces: list[list] = [[] for _ in self._page_clip]
+        for k, geom in zip(owner, clipped, strict=True):
+            for part in shapely.get_parts(shapely.line_merge(geom)):
+                coords = shapely.get_coordinates(part)
+                if len(coords) > 1:
+                    pieces[k].append(list(map(tuple, coords.tolist())))
+        slots: dict[int, dict[int, list]] = {}
+        for (layer, index, _), found in zip(self._page_clip, pieces, strict=True):
+            slots.setdefault(id(layer), {})[index] = found
+        for layer in self.layers.values():
+            filled = slots.get(id(layer))
+            if filled:
+                layer.strokes = [p for k, s in enumerate(layer.strokes)
+                                 for p in (filled[k] if s is None else (s,))]
 
     # ---- text ----------------------------------------------------------------------
 
