@@ -1,4 +1,5 @@
-"""Robustness: a thousand (or PLOTBRIDGE_FUZZ_EXAMPLES) generated SVG documents (valid and broken structure,
+"""Robustness: a thousand (or PLOTBRIDGE_FUZZ_EXAMPLES) generated SVG documents (valid
+and broken structure,
 odd attribute values, references to nowhere and to themselves) are either imported or
 refused with ImportFailed: no other exception, each within a time bound, memory
 bounded."""
@@ -61,7 +62,8 @@ DOCS = st.recursive(st.just(""), element, max_leaves=25).map(
 
 
 # make test runs 1000 documents; PLOTBRIDGE_FUZZ_EXAMPLES=5000 for a longer run
-@settings(max_examples=int(os.environ.get("PLOTBRIDGE_FUZZ_EXAMPLES", "1000")), deadline=None, database=None,
+@settings(max_examples=int(os.environ.get("PLOTBRIDGE_FUZZ_EXAMPLES", "1000")), deadline=None,
+          database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(doc=DOCS)
 def test_generated_svgs_import_or_are_refused(tmp_path, doc):
