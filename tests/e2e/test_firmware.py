@@ -10,121 +10,16 @@ from __future__ import annotations
 import itertools
 import math
 import random
-import re
 import time
-from collections.abc import Iterator
 
 import pytest
-import serial
+
+from tests.fixtures.grbl import Grbl, clean, mpos, no_false_acks, unlocked
 
 pytestmark = pytest.mark.e2e
 
 STEP_MM = 1 / 80
 TOL = 0.02  # mm: a step and a bit
-
-
-class Grbl:
-    """A minimal GRBL 1.1 client: one line at a time, all lines kept."""
-
-    def __init__(self, port: str) -> None:
-        self.ser = serial.Serial(port, 115200, timeout=0.05)
-        self.lines: list[str] = []  # everything received
-        self.queue: list[str] = []  # received, not yet looked at by wait_for
-        self.pending = ""
-
-    def read_lines(self, timeout: float) -> list[str]:
-        deadline = time.monotonic() + timeout
-        got: list[str] = []
-        while time.monotonic() < deadline:
-            data = self.ser.read(4096).decode("ascii", errors="replace")
-            if not data:
-                if got:
-                    break
-                continue
-            self.pending += data
-            while "\n" in self.pending:
-                line, self.pending = self.pending.split("\n", 1)
-                line = line.strip("\r")
-                if line:
-                    got.append(line)
-        self.lines += got
-        self.queue += got
-        return got
-
-    def wait_for(self, pattern: str, timeout: float = 20.0) -> list[str]:
-        deadline = time.monotonic() + timeout
-        seen: list[str] = []
-        while time.monotonic() < deadline:
-            if not self.queue:
-                self.read_lines(0.2)
-            while self.queue:
-                line = self.queue.pop(0)
-                seen.append(line)
-                if re.search(pattern, line):
-                    return seen
-        raise AssertionError(f"no line matching {pattern!r} within {timeout} s; got {seen}")
-
-    def send(self, line: str, timeout: float = 60.0) -> list[str]:
-        """Sends one line; returns the lines up to and including its ok/error."""
-        self.ser.write(line.encode() + b"\n")
-        return self.wait_for(r"^(ok|error:\d+)$", timeout)
-
-    def ok(self, line: str, timeout: float = 60.0) -> list[str]:
-        got = self.send(line, timeout)
-        assert got[-1] == "ok", f"{line!r} -> {got}"
-        return got
-
-    def status(self) -> str:
-        self.ser.write(b"?")
-        return self.wait_for(r"^<.*>$", 5.0)[-1]
-
-    def wait_state(self, state: str, timeout: float = 60.0) -> str:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            s = self.status()
-            if s.startswith("<" + state):
-                return s
-            time.sleep(0.05)
-        raise AssertionError(f"state {state} not reached: {s}")
-
-    def close(self) -> None:
-        self.ser.close()
-
-
-def mpos(status: str) -> tuple[float, float]:
-    m = re.search(r"MPos:([-\d.]+),([-\d.]+)", status)
-    assert m, status
-    return float(m.group(1)), float(m.group(2))
-
-
-def no_false_acks(lines: list[str]) -> None:
-    """Only acknowledgements may contain 'ok' or 'error'."""
-    for line in lines:
-        if re.fullmatch(r"ok|error:\d+", line):
-            continue
-        assert "ok" not in line and "error" not in line, line
-
-
-def clean(trace: dict) -> None:
-    assert trace["violations"] == {
-        "short_pulse": 0, "dir_setup": 0, "step_while_disabled": 0, "overspeed": 0
-    }, trace["violations"]
-
-
-@pytest.fixture
-def grbl(plotter) -> Iterator[Grbl]:
-    g = Grbl(plotter.port)
-    # the banner went out before we connected; a soft reset repeats it
-    g.ser.write(b"\x18")
-    g.wait_for(r"^Grbl 1\.1h \['\$' for help\]$", 10)
-    yield g
-    no_false_acks(g.lines)
-    g.close()
-
-
-def unlocked(g: Grbl) -> Grbl:
-    g.ok("$X")
-    return g
 
 
 def stroke_points(trace: dict) -> list[list[tuple[float, float]]]:
@@ -311,6 +206,7 @@ def test_hard_limit_hit(plotter, grbl: Grbl) -> None:
 
 
 def test_feed_hold_and_resume(plotter, grbl: Grbl) -> None:
+    """The hold is pen-safe: stopped on the path, pen lifted; on resume lowered at the same point."""
     unlocked(grbl)
     grbl.ok("G0 X10 Y10")
     grbl.ok("M3")
@@ -318,20 +214,24 @@ def test_feed_hold_and_resume(plotter, grbl: Grbl) -> None:
     time.sleep(0.2)
     grbl.ser.write(b"!")
     held = grbl.wait_state("Hold:0", 30)
+    plotter.wait_trace(lambda t: t["pen"] == "up", 10)
     x_held = plotter.trace()["position"]["x"]
     assert 10 < x_held < 210
     time.sleep(0.3)
     assert plotter.trace()["position"]["x"] == x_held  # really stopped
     assert mpos(held)[0] == pytest.approx(x_held, abs=0.001)
+    assert "|A:S" in grbl.status()  # the program's pen is still down: it comes back on resume
     grbl.ser.write(b"~")
     grbl.wait_state("Run", 10)
     grbl.ok("M5")
     grbl.wait_state("Idle", 60)
     trace = plotter.trace()
     clean(trace)
-    (stroke,) = [s for s in stroke_points(trace) if len(s) > 1]
-    # one straight line, through the stop, ending exactly at the target
-    assert len(stroke) == 2 and math.dist(stroke[-1], (210, 10)) < TOL
+    first, second = [s for s in stroke_points(trace) if len(s) > 1]
+    # two straight pieces meeting at the hold point (within a step), ending exactly at the target
+    assert math.dist(first[-1], (x_held, 10)) <= STEP_MM + 1e-9
+    assert math.dist(second[0], (x_held, 10)) <= STEP_MM + 1e-9
+    assert len(second) == 2 and math.dist(second[-1], (210, 10)) < TOL
 
 
 def test_soft_reset_mid_move(plotter, grbl: Grbl) -> None:
