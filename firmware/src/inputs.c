@@ -10,24 +10,24 @@ static volatile uint8_t homing;
 
 void inputs_init(void)
 {
-    DDRB &= ~LIMIT_MASK;
-    PORTB |= LIMIT_MASK;
-    DDRC &= ~BUTTON_MASK;
-    PORTC |= BUTTON_MASK;
-    DDRC |= 1 << LED_BIT;
-    PCMSK0 = LIMIT_MASK;   /* PCINT1, PCINT2 */
-    PCMSK1 = BUTTON_MASK;  /* PCINT8..10 */
+    IO_INPUT_PULLUP(X_LIMIT);
+    IO_INPUT_PULLUP(Y_LIMIT);
+    IO_INPUT_PULLUP(BUTTON_ESTOP);
+    IO_INPUT_PULLUP(BUTTON_PAUSE);
+    IO_INPUT_PULLUP(BUTTON_RESUME);
+    IO_OUTPUT(LED_STOP);
+    PCMSK0 = IO_MASK(X_LIMIT) | IO_MASK(Y_LIMIT); /* PCINT1, PCINT2 */
+    PCMSK1 = IO_MASK(BUTTON_ESTOP) | IO_MASK(BUTTON_PAUSE) | IO_MASK(BUTTON_RESUME); /* PCINT8..10 */
     PCIFR = (1 << PCIF0) | (1 << PCIF1);
     PCICR = (1 << PCIE0) | (1 << PCIE1);
 }
 
 uint8_t inputs_limits(void)
 {
-    uint8_t raw = (uint8_t)(~PINB); /* closed switch pulls low */
-    uint8_t r = 0;
-    if (raw & (1 << X_LIMIT_BIT))
+    uint8_t r = 0; /* a closed switch pulls low */
+    if (!IO_READ(X_LIMIT))
         r |= PIN_X_LIMIT;
-    if (raw & (1 << Y_LIMIT_BIT))
+    if (!IO_READ(Y_LIMIT))
         r |= PIN_Y_LIMIT;
     return r ^ (settings.limit_invert & 3);
 }
@@ -35,12 +35,11 @@ uint8_t inputs_limits(void)
 uint8_t inputs_read(void)
 {
     uint8_t r = inputs_limits();
-    uint8_t c = (uint8_t)(~PINC);
-    if (c & (1 << ESTOP_BIT))
+    if (!IO_READ(BUTTON_ESTOP))
         r |= PIN_ESTOP;
-    if (c & (1 << PAUSE_BIT))
+    if (!IO_READ(BUTTON_PAUSE))
         r |= PIN_PAUSE;
-    if (c & (1 << RESUME_BIT))
+    if (!IO_READ(BUTTON_RESUME))
         r |= PIN_RESUME;
     return r;
 }
@@ -49,10 +48,7 @@ void inputs_homing(uint8_t on) { homing = on; }
 
 void inputs_led(uint8_t on)
 {
-    if (on)
-        PORTC |= 1 << LED_BIT;
-    else
-        PORTC &= ~(1 << LED_BIT);
+    IO_SET(LED_STOP, on);
 }
 
 /* a limit closing: stop within this step period */

@@ -79,6 +79,19 @@ static float advance(const plan_block_t *b, float dt)
     float ve2 = plan_next_entry_sqr();
     float vn2 = b->nominal_sqr;
     float v2 = v * v;
+    if (v2 > vn2 * 1.0001f) {
+        /* above the cruise speed (a feed override lowered it): slow down to
+         * it first, where the block leaves room; otherwise the profile below
+         * decelerates to the exit */
+        float tn = (v - sqrtf(vn2)) * prep.inv_accel;
+        float tt = dt < tn ? dt : tn;
+        float ds = v * tt - 0.5f * a * tt * tt;
+        if (ds < remaining) {
+            prep.s += ds;
+            prep.v = v - a * tt;
+            return tt;
+        }
+    }
     if (v2 >= vn2 && ve2 >= v2 && v > 0.0f) {
         /* cruising on at the block's speed to an exit no slower: the
          * profile below comes down to this, without its dozen float steps */

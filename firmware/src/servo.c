@@ -68,8 +68,8 @@ uint32_t timebase_ms(void)
 
 void servo_init(void)
 {
-    DDRB |= 1 << SERVO_BIT;
-    PORTB &= ~(1 << SERVO_BIT);
+    IO_OUTPUT(SERVO);
+    IO_LOW(SERVO);
     servo_set_us(1000);
     high = 0;
     remaining = 1000; /* a short low part first */

@@ -145,7 +145,7 @@ static void step_rise(struct machine *mc, int axis, uint64_t cycle)
 		mc->v.step_while_disabled++;
 		return;
 	}
-	m->pos += m->dir ? 1 : -1;
+	m->pos += m->dir ? -1 : 1; /* GRBL's convention: a LOW direction pin is positive */
 	struct path_point from = mc->path.anchor, v;
 	if (path_simplify_add(&mc->path, here(mc, cycle), &v))
 		keep_vertex(mc, from, v);

@@ -23,7 +23,7 @@ struct machine_config {
 struct motor {
 	int64_t pos;            /* signed position in steps */
 	uint64_t pulses;        /* step pulses seen, moving or not */
-	int dir, high;
+	int dir, high;          /* dir: the pin level (HIGH = negative at $3=0) */
 	uint64_t rise, fall, dir_change, last_step;
 	int have_fall, have_step, dir_fresh;
 	double max_rate;
