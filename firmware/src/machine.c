@@ -136,6 +136,18 @@ void machine_report_status(void)
         }
         report_fixed(gc.z_offset / div, 3);
     }
+    /* Ov likewise: after a change, then every 20th report while busy, every 10th idle */
+    if (mach.ov_countdown) {
+        mach.ov_countdown--;
+    } else {
+        mach.ov_countdown = machine_moving() ? 19 : 9;
+        RPT("|Ov:");
+        for (uint8_t i = 0; i < 3; i++) {
+            if (i)
+                RPT(",");
+            report_uint(rt_ov[i]);
+        }
+    }
     RPT(">\r\n");
 }
 
@@ -172,6 +184,10 @@ void machine_poll(void)
     if (f & RT_RESET) {
         mach.reset = RESET_NOW;
         mach.abort = 1;
+    }
+    if (f & RT_OVERRIDE) {
+        planner_set_overrides(rt_ov[OV_FEED], rt_ov[OV_RAPID]);
+        mach.ov_countdown = 0;
     }
     if (f & RT_STATUS)
         machine_report_status();

@@ -25,6 +25,7 @@ typedef struct {
     uint8_t pen_lifted;    /* a hold lifted the pen (pen_down stays set) */
     uint8_t resuming;      /* pen lowered again after a hold: waiting out the settle */
     uint8_t wco_countdown; /* status reports until WCO is shown again (0: next one) */
+    uint8_t ov_countdown;  /* the same for Ov */
     uint32_t resume_at;    /* machine_ms() when motion may go on */
 } machine_t;
 
