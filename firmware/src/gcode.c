@@ -58,7 +58,7 @@ static uint8_t arc_center_from_radius(const float *s, const float *t, float r, u
     float h2 = 4.0f * r * r - d2;
     if (h2 < 0.0f) {
         if (h2 < -ARC_RADIUS_ABS_TOL * d2)
-            return ERR_INVALID_TARGET;
+            return ERR_ARC_RADIUS;
         h2 = 0.0f;
     }
     float h = -sqrtf(h2) / sqrtf(d2);
@@ -280,7 +280,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         if (moving && st.motion == MOTION_NONE)
             return ERR_AXIS_WORDS_UNUSED;
         if (!moving && (motion == MOTION_G2 || motion == MOTION_G3))
-            return ERR_NO_AXIS_WORDS;
+            return seen & WB(W_Z) ? ERR_ARC_NO_PLANE_AXIS : ERR_NO_AXIS_WORDS;
         if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
             if (st.motion != MOTION_G0) {
                 float f = jog ? blk->feed : st.feed;

@@ -124,7 +124,7 @@ void test_gcode_arcs(void)
     /* errors */
     CHECK(parse("G2X5Y5") == ERR_NO_OFFSETS);
     CHECK(parse("G2I5") == ERR_NO_AXIS_WORDS);
-    CHECK(parse("G2X50Y0R1") == ERR_INVALID_TARGET);          /* radius too small for the chord */
+    CHECK(parse("G2X50Y0R1") == ERR_ARC_RADIUS); /* GRBL: radius too small for the chord */          /* radius too small for the chord */
     CHECK(parse("G2X20Y0I5J0") == ERR_INVALID_TARGET);        /* end not on the circle */
     CHECK(parse("G2X10Y10R10I1") == ERR_UNUSED_WORDS);
     CHECK(parse("G2X10Y10R-999999999") == ERR_INVALID_TARGET); /* found by the fuzzer */
