@@ -81,7 +81,7 @@ uint8_t dollar_execute(const char *line)
 {
     const char *arg = line + 1;
     if (arg[0] == 0) {
-        RPT("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\n");
+        RPT("[HLP:$$ $# $G $I $x=val $J=line $C $X $H ~ ! ? ctrl-x]\r\n");
         return STATUS_OK;
     }
     if (arg[0] == 'J' && arg[1] == '=') {

@@ -62,7 +62,10 @@ static void soft_reset(void)
     mach.alarm = alarm;
     mach.homed = homed;
     machine_pen_up_now(); /* as GRBL stops the spindle on every reset */
-    mach.wco_countdown = 0;
+    mach.wco_countdown = mach.ov_countdown = 0;
+    /* overrides back to 100% on every reset, as GRBL */
+    rt_ov[OV_FEED] = rt_ov[OV_RAPID] = rt_ov[OV_SPINDLE] = 100;
+    planner_set_overrides(100, 100);
     report_banner();
     if (mach.alarm)
         report_unlock_hint();

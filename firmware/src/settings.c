@@ -111,7 +111,7 @@ uint8_t settings_set(settings_t *s, uint8_t id, float value)
         return ERR_NEGATIVE;
     float fixed;
     if (fixed_value(id, &fixed))
-        return value == fixed ? STATUS_OK : ERR_INVALID_DOLLAR;
+        return value > fixed - 0.001f && value < fixed + 0.001f ? STATUS_OK : ERR_INVALID_DOLLAR;
     if (id == 20 && value != 0.0f && !s->homing_enable)
         return ERR_SOFT_LIMIT_NO_HOME;
     float *f = float_field(s, id);
