@@ -206,7 +206,7 @@ def test_hard_limit_hit(plotter, grbl: Grbl) -> None:
 
 
 def test_feed_hold_and_resume(plotter, grbl: Grbl) -> None:
-    """The hold is pen-safe: stopped on the path, pen lifted; on resume lowered at the same point."""
+    """A pen-safe hold: stopped on the path, pen lifted; lowered at the same point on resume."""
     unlocked(grbl)
     grbl.ok("G0 X10 Y10")
     grbl.ok("M3")

@@ -9,6 +9,7 @@ trace must match the program within one step.
 
 from __future__ import annotations
 
+import itertools
 import math
 import queue
 import time
@@ -114,7 +115,7 @@ def test_grbl_streamer_plots_holds_overrides_and_resets(plotter) -> None:
         assert math.dist(points[-1], (20, 20)) <= ONE_STEP
         # the plotted length is the program's: two 40 mm lines and two half circles
         drawn = sum(math.dist(a, b) for s in trace["strokes"]
-                    for a, b in zip(s, s[1:], strict=False))
+                    for a, b in itertools.pairwise(s))
         assert drawn == pytest.approx(80 + 2 * math.pi * 20, rel=0.01)
         sender.softreset()
         wait_event("on_boot", 20)
