@@ -6,6 +6,7 @@ HOST ?= 0.0.0.0
 PORT ?= 8000
 SERIAL ?=
 SIM_SPEED ?= 1
+BOARD ?= uno-cnc-shield
 DATA_DIR ?= data
 ARGS ?=
 
@@ -13,7 +14,7 @@ ARGS ?=
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
-	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED)) $(ARGS)
+	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED) --board $(BOARD)) $(ARGS)
 
 test: setup-test firmware sim
 	$(MAKE) -C firmware test
@@ -37,7 +38,7 @@ $(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt
 	touch $@
 
 firmware:
-	$(MAKE) -C firmware all
+	$(MAKE) -C firmware BOARD=$(BOARD) all
 
 sim:
 	$(MAKE) -C firmware sim
@@ -46,7 +47,7 @@ lint: setup-test
 	$(VENV)/bin/ruff check server tests bench
 
 flash: .stamps/system-run firmware
-	$(MAKE) -C firmware flash PORT=$(or $(SERIAL),/dev/ttyUSB0)
+	$(MAKE) -C firmware flash BOARD=$(BOARD) PORT=$(or $(SERIAL),/dev/ttyUSB0)
 
 install-service: setup firmware sim
 	scripts/install-service $(CURDIR)

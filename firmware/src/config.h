@@ -10,7 +10,11 @@
 #define RX_SIZE 128          /* receive ring: GRBL's character-counting size */
 #define TX_SIZE 128          /* transmit ring (power of two) */
 #define LINE_SIZE 80         /* longest accepted line after stripping */
+#if defined(__AVR_ATmega2560__)
+#define PLAN_SIZE 34         /* 8 KiB of RAM: 33 usable blocks (>= 32 look-ahead) */
+#else
 #define PLAN_SIZE 18         /* planner ring: 17 usable blocks (>= 16 look-ahead) */
+#endif
 #define SEG_SIZE 8           /* step segment ring (7 usable) */
 
 /* Step timer: Timer1 at F_CPU/8 = 2 MHz. */

@@ -110,16 +110,10 @@ void machine_report_status(void)
     RPT(",0");
     if (in) {
         RPT("|Pn:");
-        if (in & PIN_X_LIMIT)
-            RPT("X");
-        if (in & PIN_Y_LIMIT)
-            RPT("Y");
-        if (in & PIN_ESTOP)
-            RPT("R");
-        if (in & PIN_PAUSE)
-            RPT("H");
-        if (in & PIN_RESUME)
-            RPT("S");
+        /* one letter per PIN_* bit, lowest first: X Y limits, R stop, H pause, S resume */
+        for (uint8_t b = 0; b < 5; b++, in >>= 1)
+            if (in & 1)
+                serial_write(pgm_read_byte(PSTR("XYRHS") + b));
     }
     if (mach.pen_down)
         RPT("|A:S");

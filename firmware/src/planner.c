@@ -14,6 +14,8 @@ static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
+static float last_feed;        /* the last block's feed, and as stored in blocks */
+static uint16_t last_feed_u16;
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
@@ -57,6 +59,17 @@ void plan_get_position(int32_t *steps) { memcpy(steps, position, sizeof(position
 uint8_t plan_free(void) { return (uint8_t)(PLAN_SIZE - 1 - count); }
 uint8_t plan_count(void) { return count; }
 plan_block_t *plan_current(void) { return count ? &ring[tail] : 0; }
+
+uint16_t plan_events(const plan_block_t *b)
+{
+    uint16_t events = 0;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        uint16_t m = (uint16_t)(b->steps[a] < 0 ? -b->steps[a] : b->steps[a]);
+        if (m > events)
+            events = m;
+    }
+    return events;
+}
 
 plan_sqr_t plan_sqr_from_float(float v_sqr)
 {
@@ -181,12 +194,12 @@ static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float event
 }
 
 /* The tightest axis speed limit along a move: max over moving axes of
- * |u_axis| / max rate (s/mm), from its cartesian mm per axis. */
-static float axis_s_per_mm(const float *d_mm, float inv_mm)
+ * |u_axis| / max rate (s/mm), from the unit vector. */
+static float axis_s_per_mm(const float *unit)
 {
     float s_per_mm = 0.0f;
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        float u = fabsf(d_mm[a] * inv_mm);
+        float u = fabsf(unit[a]);
         if (u > 1.0e-6f) {
             float r = u * axis.s_per_mm[a];
             if (r > s_per_mm)
@@ -212,12 +225,11 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
     for (plan_block_t *b = oldest; b != end; b = b == last ? ring : b + 1) {
         if (!(b->flags & PB_JOG)) {
             int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
-            float d_mm[N_AXIS];
+            float unit[N_AXIS], inv_mm = 1.0f / b->mm;
             plan_cart_from_motor(motor, cart);
             for (uint8_t a = 0; a < N_AXIS; a++)
-                d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
-            float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(d_mm, 1.0f / b->mm),
-                                       b->events_per_mm);
+                unit[a] = (float)cart[a] * axis.mm_per_step[a] * inv_mm;
+            float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), b->events_per_mm);
             b->nominal_sqr = speed * speed;
         }
         /* a junction is never faster than the cruise speeds on either side */
@@ -263,7 +275,6 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->flags = flags;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    b->events = (uint16_t)events;
     b->mm = sqrtf(mm2);
     float inv_mm = 1.0f / b->mm;
     b->events_per_mm = (float)events * inv_mm;
@@ -281,9 +292,13 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
                 inv_accel = r;
         }
     }
-    float speed = cruise_speed(feed, flags, axis_s_per_mm(d_mm, inv_mm), b->events_per_mm);
+    float speed = cruise_speed(feed, flags, axis_s_per_mm(unit), b->events_per_mm);
     float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
-    b->feed = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
+    if (feed != last_feed) { /* F is modal: converted once per change (overrides only: 1 mm/min is fine) */
+        last_feed = feed;
+        last_feed_u16 = feed < 65535.0f ? (uint16_t)feed : 65535u;
+    }
+    b->feed = last_feed_u16;
     b->nominal_sqr = speed * speed;
     b->accel = accel;
     b->inv_accel = inv_accel;

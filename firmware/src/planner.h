@@ -20,8 +20,8 @@ float plan_sqr_to_float(plan_sqr_t v);
 #define PB_JOG 0x02
 
 typedef struct {
-    int16_t steps[N_AXIS];  /* signed motor steps, |steps| <= PLAN_MAX_EVENTS */
-    uint16_t events;        /* step events: the largest |steps| */
+    int16_t steps[N_AXIS];  /* signed motor steps, |steps| <= PLAN_MAX_EVENTS;
+                             * step events: the largest |steps| (plan_events) */
     float mm;               /* length in mm */
     float events_per_mm;
     float nominal_sqr;      /* cruise speed squared, (mm/s)^2, overrides applied */
@@ -50,6 +50,7 @@ uint8_t plan_count(void);
 #define PLAN_TOO_LONG 2
 uint8_t plan_line(const float *target, float feed, uint8_t flags);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
+uint16_t plan_events(const plan_block_t *b); /* step events of a block */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
 /* Into how many equal pieces a move to target must be cut (see plan_line). */

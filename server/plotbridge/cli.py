@@ -58,6 +58,11 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--sim-speed", type=float, default=float(_env("SIM_SPEED", 1.0)),
         help="virtual plotter speed, times real time (0: unthrottled)",
     )  # fmt: skip
+    parser.add_argument(
+        "--board", default=_env("BOARD", "uno-cnc-shield"),
+        help="board profile of the plotters (firmware/src/boards/NAME.h); "
+             "a virtual plotter runs that board's firmware build",
+    )  # fmt: skip
     parser.add_argument("--token", default=_env("TOKEN"), help="API token (default: generated)")
     parser.add_argument(
         "--max-upload-mb", type=float, default=float(_env("MAX_UPLOAD_MB", 50)),
@@ -82,13 +87,13 @@ def plotters_from_args(args: argparse.Namespace, data_dir: Path) -> list[Plotter
             return read_plotters_file(data_dir / PLOTTERS_FILE)
         serial = [d for d in str(_env("SERIAL", "")).split(",") if d.strip()] or None
     if serial:
-        plotters = [PlotterConfig(f"plotter{n}", d.strip(), baud=args.baud)
+        plotters = [PlotterConfig(f"plotter{n}", d.strip(), board=args.board, baud=args.baud)
                     for n, d in enumerate(serial, 1)]  # fmt: skip
     else:
         count = 1 if args.virtual is None else args.virtual
         if count < 1 or count > 16:
             raise ConfigError(f"--virtual {count}: between 1 and 16 virtual plotters")
-        plotters = [PlotterConfig(f"plotter{n}") for n in range(1, count + 1)]
+        plotters = [PlotterConfig(f"plotter{n}", board=args.board) for n in range(1, count + 1)]
     return check_names(plotters, "the command line")
 
 
@@ -146,7 +151,8 @@ async def serve(config: Config) -> int:
             device = plotter.device
             if device is None:
                 virtual = VirtualPlotter(data_dir=sim_dir(config, index, plotter.name),
-                                         speed=config.sim_speed)  # fmt: skip
+                                         speed=config.sim_speed,
+                                         board=plotter.board or "uno-cnc-shield")
                 await virtual.start()
                 device = str(virtual.port)
                 log.info("%s: virtual plotter on %s (speed %g)", plotter.name, device,

@@ -26,9 +26,13 @@
 /* pen servo on OC2A: its edges come from the timer hardware */
 #define SERVO B, 3      /* D11 */
 #define SERVO_OC2A 1
+/* switches and buttons act from pin-change interrupts: PCINT0 group
+ * (port B: the switches), PCINT1 group (port C: the buttons) */
+#define INPUTS_PCINT 1
 
-/* bench builds raise this pin for the body of the step interrupt */
+/* bench builds raise these pins for the bodies of the step interrupts */
 #define BENCH_ISR C, 5  /* A5 */
+#define BENCH_ISR_END C, 4 /* A4: the step pulse's end interrupt */
 
 /* defaults for $-settings */
 #define DEFAULT_STEPS_PER_MM 80.0f
@@ -36,7 +40,7 @@
 #define DEFAULT_ACCEL 1000.0f      /* mm/s^2 */
 #define DEFAULT_TRAVEL_X 300.0f
 #define DEFAULT_TRAVEL_Y 220.0f
-#define DEFAULT_HOMING 1           /* $22: switches exist, so home first */
+#define DEFAULT_HOMING 1           /* $20 $21 $22: switches exist, so home first */
 #define DEFAULT_BAUD 115200UL
 
 #endif
