@@ -107,8 +107,10 @@ def lines_per_s(p: Plotter, g: Grbl, spm: float, max_feed: float) -> float:
     per_turn = int(2 * math.pi * r / 0.5)
     g.ok(f"G0 X{100 + r:.2f} Y100")
     g.ok("G4 P0")
-    lines = [f"G1 X{100 + r * math.cos(2 * math.pi * k / per_turn):.2f}"
-             f"Y{100 + r * math.sin(2 * math.pi * k / per_turn):.2f}F{max_feed:.0f}"
+    g.ok(f"G1 F{max_feed:.0f}")
+    # short modal lines, as senders stream them
+    lines = [f"X{100 + r * math.cos(2 * math.pi * k / per_turn):.2f}"
+             f"Y{100 + r * math.sin(2 * math.pi * k / per_turn):.2f}"
              for k in range(1, n + 1)]
     inflight: list[int] = []
     t_first = t_last = None
