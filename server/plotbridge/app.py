@@ -18,8 +18,9 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import ValidationError
 
 from plotbridge import __version__
-from plotbridge.auth import COOKIE, Auth, origin_allowed
+from plotbridge.auth import COOKIE, SESSION_TTL, Auth
 from plotbridge.config import Config
+from plotbridge.guard.middleware import Guard
 from plotbridge.jobs import JobError, JobManager, public
 from plotbridge.models import (
     ERROR_RESPONSES,
@@ -44,6 +45,7 @@ log = logging.getLogger("plotbridge.app")
 
 WS_MESSAGE_MAX = 4096  # characters; the longest real message (a console line) is ~200
 WS_COMMANDS_WAITING = 16  # per WebSocket client: jog and console lines not yet answered
+VALIDATION_ERRORS_SHOWN = 20  # never the input itself: it may be megabytes
 TRUE = ("1", "true", "yes", "on")
 FALSE = ("0", "false", "no", "off", "")
 
@@ -58,7 +60,7 @@ def _upload_error(status: int, message: str) -> JSONResponse:
 
 def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> FastAPI:
     """Build the app around a `Link` (and the `VirtualPlotter` in virtual mode)."""
-    auth = Auth(token)
+    auth = Auth(token, config.token_file)
     hub = Hub()
     config.jobs_dir.mkdir(parents=True, exist_ok=True)
     (config.data_dir / "tmp").mkdir(exist_ok=True)
@@ -83,6 +85,9 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         title="plotbridge", version=__version__, lifespan=lifespan, docs_url="/docs",
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
     )  # fmt: skip
+    app.add_middleware(
+        Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
+    )
     app.state.manager = manager
     app.state.hub = hub
     app.state.link = link
@@ -95,8 +100,12 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
     @app.exception_handler(RequestValidationError)
     async def validation_error(_: Request, exc: RequestValidationError) -> JSONResponse:
         errors = [
-            {"loc": list(err.get("loc", ())), "msg": err.get("msg"), "type": err.get("type")}
-            for err in exc.errors()
+            {
+                "loc": [str(part)[:64] for part in err.get("loc", ())],
+                "msg": err.get("msg"),
+                "type": err.get("type"),
+            }
+            for err in exc.errors()[:VALIDATION_ERRORS_SHOWN]
         ]
         return _error(422, errors)
 
@@ -118,7 +127,10 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
     guard = [Depends(authenticated)]
 
     def set_cookie(response: Response) -> None:
-        response.set_cookie(COOKIE, auth.session, httponly=True, samesite="strict", path="/")
+        response.set_cookie(
+            COOKIE, auth.new_session(), httponly=True, samesite="strict", path="/",
+            max_age=int(SESSION_TTL),
+        )  # fmt: skip
 
     # ---- health, login, server ------------------------------------------------
 
@@ -143,7 +155,8 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
         return response
 
     @app.post("/api/logout", status_code=204)
-    async def logout() -> Response:
+    async def logout(request: Request) -> Response:
+        auth.end_session(request.cookies.get(COOKIE))
         response = Response(status_code=204)
         response.delete_cookie(COOKIE, path="/")
         return response
@@ -351,16 +364,7 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
 
     @app.websocket("/api/ws")
     async def websocket(ws: WebSocket) -> None:
-        allowed = auth.check_session(ws.cookies.get(COOKIE)) or auth.check_token(
-            ws.query_params.get("token")
-        )
-        if not allowed:
-            await ws.close(code=4401, reason="missing or wrong token")
-            return
-        if not origin_allowed(ws.headers.get("origin"), ws.headers.get("host")):
-            await ws.close(code=4403, reason="origin not allowed")
-            return
-        await ws.accept()
+        await ws.accept()  # the guard has checked the session or token and the Origin
         client = hub.add(ws)
         for message in manager.snapshot_messages():
             hub.send(client, message)

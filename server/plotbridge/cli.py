@@ -45,7 +45,23 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--sim-speed", type=float, default=float(_env("SIM_SPEED", 1.0)),
         help="virtual plotter speed, times real time (0: unthrottled)",
     )  # fmt: skip
-    parser.add_argument("--token", default=_env("TOKEN"), help="API token (default: generated)")
+    parser.add_argument(
+        "--token", help="API token, at least 16 characters; visible in `ps`, so prefer "
+        "--token-file or PLOTBRIDGE_TOKEN (default: generated into DATA_DIR/token)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--token-file", type=Path, default=_env("TOKEN_FILE"),
+        help="read the API token from this file (re-read when it changes)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--allowed-host", action="append", default=[
+            n for n in str(_env("ALLOWED_HOSTS", "")).split(",") if n.strip()
+        ], help="a further Host name to serve (beside this machine's names and addresses)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--client-connections", type=int, default=int(_env("CLIENT_CONNECTIONS", 32)),
+        help="open connections one client address may hold (503 beyond)",
+    )  # fmt: skip
     parser.add_argument(
         "--max-upload-mb", type=float, default=float(_env("MAX_UPLOAD_MB", 50)),
         help="largest accepted upload, MB",
@@ -70,6 +86,9 @@ def config_from_args(args: argparse.Namespace) -> Config:
         baud=args.baud,
         sim_speed=args.sim_speed,
         token=args.token,
+        token_file=args.token_file.expanduser().resolve() if args.token_file else None,
+        allowed_hosts=tuple(args.allowed_host),
+        client_connections=args.client_connections,
         max_upload_mb=args.max_upload_mb,
         auto_start=args.auto_start,
         log_level=args.log_level,
@@ -77,11 +96,45 @@ def config_from_args(args: argparse.Namespace) -> Config:
     )
 
 
-def _login_url(config: Config, token: str) -> str:
-    host = config.host
+def _login_url(host: str, port: int, token: str) -> str:
     if host in ("0.0.0.0", "::", ""):
         host = socket.gethostname()
-    return f"http://{host}:{config.port}/login?token={token}"
+    return f"http://{host}:{port}/login?token={token}"
+
+
+def print_login(host: str, port: int, token: str) -> None:
+    """The login link and its QR code (for a phone's camera) on the console."""
+    import io
+
+    import segno
+
+    url = _login_url(host, port, token)
+    qr = io.StringIO()
+    segno.make(url, error="l").terminal(out=qr, compact=True)
+    print(f"plotbridge: open {url}\n{qr.getvalue()}", flush=True)
+
+
+def resolve_token(config: Config) -> tuple[str, bool]:
+    """The token and whether it was just generated. Sources, first found: --token
+    (warned: it shows in `ps`), --token-file, PLOTBRIDGE_TOKEN, DATA_DIR/token."""
+    from plotbridge.auth import check_token_rules, load_or_create_token, read_token_file
+
+    if config.token:
+        log.warning("--token shows in `ps` to every user; use --token-file or PLOTBRIDGE_TOKEN")
+        return check_token_rules(config.token), False
+    if config.token_file is not None:
+        return read_token_file(config.token_file), False
+    if _env("TOKEN"):
+        return check_token_rules(_env("TOKEN")), False
+    config.token_file = config.data_dir / "token"
+    return load_or_create_token(config.token_file)
+
+
+def private_data_dir(path: Path) -> None:
+    """Data directory 0700; everything the server creates in it 0600/0700 (umask)."""
+    os.umask(0o077)
+    path.mkdir(parents=True, exist_ok=True, mode=0o700)
+    path.chmod(0o700)
 
 
 def keep_pauses_short() -> None:
@@ -100,11 +153,13 @@ async def serve(config: Config) -> int:
     import uvicorn
 
     from plotbridge.app import create_app
-    from plotbridge.auth import load_or_create_token
+    from plotbridge.guard import connections
     from plotbridge.link import Link
 
-    config.data_dir.mkdir(parents=True, exist_ok=True)
-    token = config.token or load_or_create_token(config.data_dir)
+    private_data_dir(config.data_dir)
+    token, generated = resolve_token(config)
+    file_limit = connections.raise_file_limit()
+    connections.configure(config.client_connections, file_limit)
     virtual = None
     device = config.serial
     if config.virtual:
@@ -120,16 +175,54 @@ async def serve(config: Config) -> int:
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning",
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
+            http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
+            timeout_keep_alive=5,
         )  # fmt: skip
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
         server = uvicorn.Server(settings)
-        print(f"plotbridge: open {_login_url(config, token)}", flush=True)
-        log.info("serving on %s:%d, data in %s", config.host, config.port, config.data_dir)
+        if generated:  # later starts keep it out of logs: `plotbridge token` prints it
+            print_login(config.host, config.port, token)
+        log.info(
+            "serving on %s:%d, data in %s, open-file limit %d",
+            config.host, config.port, config.data_dir, file_limit,
+        )  # fmt: skip
         await server.serve()
     finally:
         if virtual is not None:
             await virtual.stop()
+    return 0
+
+
+def add_token_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--data-dir", type=Path, default=Path(_env("DATA_DIR", default_data_dir())),
+        help="the server's data directory (its token file is DATA_DIR/token)",
+    )  # fmt: skip
+    parser.add_argument("--token-file", type=Path, default=_env("TOKEN_FILE"),
+                        help="the server's --token-file instead")  # fmt: skip
+    parser.add_argument("--rotate", action="store_true",
+                        help="write a new token: every session ends (a running server notices)")
+    parser.add_argument("--host", default=_env("HOST", "0.0.0.0"), help="host in the link")
+    parser.add_argument("--port", type=int, default=int(_env("PORT", 8000)), help="link's port")
+
+
+def token_command(args: argparse.Namespace) -> int:
+    from plotbridge.auth import TokenRefused, load_or_create_token, new_token, write_private
+
+    path = args.token_file or args.data_dir.expanduser() / "token"
+    try:
+        if args.rotate:
+            path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+            token = new_token()
+            write_private(path, token + "\n")
+            print(f"plotbridge: new token in {path}; every session has ended", flush=True)
+        else:
+            token, _ = load_or_create_token(path)
+    except (OSError, TokenRefused) as exc:
+        print(f"plotbridge token: {exc}", file=sys.stderr)
+        return 1
+    print_login(args.host, args.port, token)
     return 0
 
 
@@ -138,6 +231,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="plotbridge", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     add_serve_arguments(commands.add_parser("serve", help="run the server"))
+    token_parser = commands.add_parser("token", help="print the login link, or --rotate the token")
+    add_token_arguments(token_parser)
     submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
     if argv[:1] == ["submit"]:  # its client libraries (httpx, rich) stay out of the server
         from plotbridge import submit
@@ -146,6 +241,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "submit":
         return submit.run(args)
+    if args.command == "token":
+        return token_command(args)
     logsetup.setup(args.log_level)
     try:
         return asyncio.run(serve(config_from_args(args)))

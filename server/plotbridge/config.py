@@ -34,6 +34,9 @@ class Config:
     baud: int = 115200
     sim_speed: float = 1.0
     token: str | None = None
+    token_file: Path | None = None  # where the token came from (watched for rotation)
+    allowed_hosts: tuple[str, ...] = ()  # Host names accepted beside our own
+    client_connections: int = 32  # open connections per client address
     max_upload_mb: float = 50.0
     auto_start: bool = False
     log_level: str = "info"

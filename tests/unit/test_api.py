@@ -22,7 +22,7 @@ from plotbridge.jobs import JobManager, job_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-TOKEN = "test-token-123"
+TOKEN = "test-token-0123456789"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
 
@@ -131,7 +131,8 @@ async def fake_import(self, kind, source, filename, dest, options):
 
 def make_app(tmp_path: Path, **config: Any):
     link = FakeLink()
-    cfg = Config(data_dir=tmp_path, serial="/dev/fake", **config)
+    cfg = Config(data_dir=tmp_path, serial="/dev/fake", allowed_hosts=("test", "testserver"),
+                 **config)
     return create_app(cfg, link, TOKEN), link
 
 
@@ -542,13 +543,14 @@ def sync_client(tmp_path, monkeypatch):
 
 
 def test_ws_requires_token_and_same_origin(sync_client):
-    with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect("/api/ws"):
-        pass
+    """Refusals are close codes after the handshake (a browser sees no HTTP status)."""
+    with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect("/api/ws") as ws:
+        ws.receive_text()
     assert info.value.code == 4401
     with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect(
         f"/api/ws?token={TOKEN}", headers={"origin": "http://evil.example"}
-    ):
-        pass
+    ) as ws:
+        ws.receive_text()
     assert info.value.code == 4403
     with sync_client.websocket_connect(
         f"/api/ws?token={TOKEN}", headers={"origin": "http://testserver"}

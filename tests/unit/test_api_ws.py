@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import asyncio
 
-from plotbridge.auth import origin_allowed
+from plotbridge.guard.hosts import origin_allowed
 from plotbridge.ws import QUEUE_SIZE, Hub
 
 
