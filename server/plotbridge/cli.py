@@ -66,6 +66,12 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--max-upload-mb", type=float, default=float(_env("MAX_UPLOAD_MB", 50)),
         help="largest accepted upload, MB",
     )  # fmt: skip
+    imports = parser.add_argument_group("import limits")
+    for flag, kind, default, what in IMPORT_LIMITS:
+        imports.add_argument(
+            f"--{flag}", type=kind, default=kind(_env(flag.upper().replace("-", "_"), default)),
+            help=what,
+        )  # fmt: skip
     parser.add_argument(
         "--auto-start", action="store_true", default=_env_flag("AUTO_START"),
         help="start the next queued job automatically",
@@ -76,7 +82,18 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
+IMPORT_LIMITS = (  # flag, type, default, help: the defaults keep a 2 GB Raspberry Pi 4 responsive
+    ("import-workers", int, 2, "import worker processes (one stays free for small uploads)"),
+    ("import-time-limit", float, 120.0, "seconds one import may take"),
+    ("import-memory-mb", int, 512, "memory (address space) one import may use, MB"),
+    ("job-quota-mb", float, 200.0, "disk space one job's files may take, MB"),
+    ("total-quota-mb", float, 2048.0, "disk space all jobs' files may take, MB"),
+)
+
+
 def config_from_args(args: argparse.Namespace) -> Config:
+    from plotbridge.importing.workers import Limits
+
     serial = None if args.virtual else args.serial
     return Config(
         host=args.host,
@@ -93,6 +110,11 @@ def config_from_args(args: argparse.Namespace) -> Config:
         auto_start=args.auto_start,
         log_level=args.log_level,
         web_dir=find_web_dir(),
+        import_limits=Limits(
+            workers=max(1, args.import_workers), time_limit=args.import_time_limit,
+            memory_mb=args.import_memory_mb, job_quota_mb=args.job_quota_mb,
+            total_quota_mb=args.total_quota_mb,
+        ),
     )
 
 

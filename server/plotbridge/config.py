@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+from plotbridge.importing.workers import Limits
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -41,6 +43,7 @@ class Config:
     auto_start: bool = False
     log_level: str = "info"
     web_dir: Path | None = None
+    import_limits: Limits = field(default_factory=Limits)
 
     @property
     def virtual(self) -> bool:

@@ -11,17 +11,18 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import multiprocessing
+import os
 import shutil
 import time
 import uuid
 from collections.abc import Callable
-from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
 from plotbridge.config import Config
 from plotbridge.importing.eta import eta  # numpy-free, unlike the rest of the importer
+from plotbridge.importing.workers import ImportLimit, ImportService
 from plotbridge.program_reader import ProgramReader
 from plotbridge.resume import first_unexecuted_line
 from plotbridge.store import JobStore
@@ -140,7 +141,7 @@ class JobManager:
         self.active: str | None = None
         self._task: asyncio.Task[None] | None = None
         self._db = ThreadPoolExecutor(1, thread_name_prefix="plotbridge-db")
-        self._pool: ProcessPoolExecutor | None = None
+        self.imports = ImportService(config.import_limits)
         self._motion = bytearray()
         self._run_floor = 1
         self._planner_blocks = DEFAULT_PLANNER_BLOCKS
@@ -180,8 +181,7 @@ class JobManager:
             self._task.cancel()
             with contextlib.suppress(BaseException):
                 await self._task
-        if self._pool:
-            self._pool.shutdown(wait=False, cancel_futures=True)
+        self.imports.close()
         self._db.shutdown(wait=True)
 
     # ---- persistence and broadcast ----------------------------------------
@@ -341,17 +341,28 @@ class JobManager:
         return job
 
     async def _worker(self, function: Callable[..., Any], *args: Any) -> Any:
-        """Run `function` in the import process (which keeps the importer's heavy
-        modules out of the server process)."""
-        if self._pool is None:  # created on first use; spawn, as forking a threaded loop is unsafe
-            self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
-        return await asyncio.get_running_loop().run_in_executor(self._pool, function, *args)
+        """Run `function` in an import worker (importing/workers.py: supervised, limited;
+        keeps the importer's heavy modules out of the server process)."""
+        try:
+            return await self.imports.call(function, *args)
+        except ImportLimit as exc:
+            raise _failed(exc.status, str(exc)) from exc
 
     async def _import(
         self, kind: str, source: str, filename: str, dest: Path, options: dict[str, Any]
     ) -> tuple:
         settings = dict(getattr(self.link, "settings", {}) or {})
-        return await self._worker(run_import, kind, source, filename, str(dest), options, settings)
+        size = await asyncio.to_thread(os.path.getsize, source) if kind == "file" else 0
+        try:
+            await self.imports.check_room(self.config.jobs_dir, size)
+            outcome = await self.imports.call(
+                run_import, kind, source, filename, str(dest), options, settings, size=size
+            )
+            if outcome[0] == "ok":
+                await self.imports.check_job(dest)
+        except ImportLimit as exc:
+            return ("failed", exc.status, [{"line": None, "message": str(exc)}])
+        return outcome
 
     async def _preamble(self, program: Path, line: int) -> list[str]:
         return await self._worker(resume_preamble, str(program), line)
