@@ -397,9 +397,12 @@ def create_app(config: Config, link: Any, token: str, virtual: Any = None) -> Fa
                 if text is None:
                     text = (message.get("bytes") or b"").decode("utf-8", "replace")
                 kind, body = _parse_message(text)
-                if kind == "estop":  # first thing, before anything else
+                if kind == "estop":  # first thing, before anything else (never rate-limited)
                     manager.estop("WebSocket")
                     hub.send(client, {"type": "ack", "command": "estop"})
+                elif not client.rate.take():
+                    await ws.close(code=1008, reason="too many messages")
+                    return
                 elif body is None:
                     hub.send(client, {"type": "error", "command": None, "detail": kind})
                 elif kind in ("jog", "command"):

@@ -761,3 +761,14 @@ def test_leftovers_of_a_crash_are_removed_at_start(tmp_path):
     make_app(tmp_path)
     assert list((tmp_path / "jobs").iterdir()) == []
     assert list((tmp_path / "tmp").iterdir()) == []
+
+
+def test_a_flooding_ws_client_is_closed_and_its_stops_are_never_limited(sync_client):
+    with sync_client.websocket_connect(f"/api/ws?token={TOKEN}") as ws:
+        for n in range(400):
+            ws.send_json({"type": "estop"} if n % 40 == 0 else {"type": "pause"})
+        with pytest.raises(WebSocketDisconnect) as closed:
+            while True:
+                ws.receive_text()
+    assert closed.value.code == 1008
+    assert sync_client.link.estop_calls >= 3  # the stops before the close all went out

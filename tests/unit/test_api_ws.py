@@ -47,3 +47,4 @@ def test_origin_check():
     assert not origin_allowed("http://plot.local:8001", "plot.local:8000")
     assert not origin_allowed("null", "plot.local:8000")
     assert not origin_allowed("http://plot.local:8000", None)
+
