@@ -35,7 +35,10 @@ def target(tmp_path_factory) -> Iterator[ServerProcess]:
     args = ["--virtual", "--sim-speed", "2", "--client-connections", "16"]
     with running_server(data, args) as server:
         server.home()
-        yield server
+        url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
+        with connect(url) as idle:  # held through every attack: see the last test
+            server.idle_ws = idle
+            yield server
 
 
 def run_beside(server: ServerProcess, attack: attacks.Attack) -> None:
@@ -111,3 +114,9 @@ def test_a_killed_import_worker_and_a_degenerate_svg(target):
     run_beside(target, uploads)
     assert uploads.statuses[201] > 0, uploads.statuses
     assert len(attacks.import_workers(target.proc.pid)) <= 2
+
+
+def test_an_idle_websocket_outlives_every_deadline(target):
+    """The socket opened before the first attack (a minute ago) still answers: the
+    header deadline and the limits only ever cut the attackers."""
+    assert attacks.ws_stop(target.idle_ws) < STOP_BOUND

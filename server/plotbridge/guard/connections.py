@@ -118,6 +118,10 @@ class GuardedH11(H11Protocol):
         if self._deadline is not None and self.cycle is not self._waiting_for:
             self._disarm()  # the request's headers are complete
 
+    def handle_websocket_upgrade(self, event: Any) -> None:
+        self._disarm()  # the headers are complete; the WebSocket protocol takes over
+        super().handle_websocket_upgrade(event)
+
     def on_response_complete(self) -> None:
         super().on_response_complete()
         if not self.transport.is_closing():
