@@ -21,7 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from plotbridge.link import Link, LinkEvent
+from plotbridge.plotter.link import Link, LinkEvent
 from plotbridge.virtual import VirtualPlotter
 
 

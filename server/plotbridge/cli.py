@@ -13,7 +13,16 @@ from pathlib import Path
 from typing import Any
 
 from plotbridge import log as logsetup
-from plotbridge.config import Config, default_data_dir, find_web_dir
+from plotbridge.config import (
+    PLOTTERS_FILE,
+    Config,
+    ConfigError,
+    PlotterConfig,
+    check_names,
+    default_data_dir,
+    find_web_dir,
+    read_plotters_file,
+)
 
 log = logging.getLogger("plotbridge")
 
@@ -36,10 +45,14 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="jobs, database and token (default ~/.local/share/plotbridge)",
     )  # fmt: skip
     link = parser.add_mutually_exclusive_group()
-    link.add_argument("--serial", default=_env("SERIAL") or None, help="serial device of a board")
     link.add_argument(
-        "--virtual", action="store_true", help="drive the simulated plotter (the default)"
-    )
+        "--serial", action="append", default=None, metavar="DEVICE",
+        help="serial device of a board; repeat for several plotters",
+    )  # fmt: skip
+    link.add_argument(
+        "--virtual", nargs="?", type=int, const=1, default=None, metavar="N",
+        help="drive N simulated plotters (default: 1; the default without --serial)",
+    )  # fmt: skip
     parser.add_argument("--baud", type=int, default=int(_env("BAUD", 115200)), help="serial baud")
     parser.add_argument(
         "--sim-speed", type=float, default=float(_env("SIM_SPEED", 1.0)),
@@ -91,16 +104,34 @@ IMPORT_LIMITS = (  # flag, type, default, help: the defaults keep a 2 GB Raspber
 )
 
 
+def plotters_from_args(args: argparse.Namespace, data_dir: Path) -> list[PlotterConfig]:
+    """--serial (repeatable), --virtual N, else the data directory's plotters.toml, else
+    PLOTBRIDGE_SERIAL (devices separated by commas), else one virtual plotter."""
+    serial = args.serial
+    if serial is None and args.virtual is None:
+        if (data_dir / PLOTTERS_FILE).exists():
+            return read_plotters_file(data_dir / PLOTTERS_FILE)
+        serial = [d for d in str(_env("SERIAL", "")).split(",") if d.strip()] or None
+    if serial:
+        plotters = [PlotterConfig(f"plotter{n}", d.strip(), baud=args.baud)
+                    for n, d in enumerate(serial, 1)]  # fmt: skip
+    else:
+        count = 1 if args.virtual is None else args.virtual
+        if count < 1 or count > 16:
+            raise ConfigError(f"--virtual {count}: between 1 and 16 virtual plotters")
+        plotters = [PlotterConfig(f"plotter{n}") for n in range(1, count + 1)]
+    return check_names(plotters, "the command line")
+
+
 def config_from_args(args: argparse.Namespace) -> Config:
     from plotbridge.importing.workers import Limits
 
-    serial = None if args.virtual else args.serial
+    data_dir = args.data_dir.expanduser().resolve()
     return Config(
         host=args.host,
         port=args.port,
-        data_dir=args.data_dir.expanduser().resolve(),
-        serial=serial,
-        baud=args.baud,
+        data_dir=data_dir,
+        plotters=plotters_from_args(args, data_dir),
         sim_speed=args.sim_speed,
         token=args.token,
         token_file=args.token_file.expanduser().resolve() if args.token_file else None,
@@ -174,31 +205,36 @@ def keep_pauses_short() -> None:
 async def serve(config: Config) -> int:
     import uvicorn
 
-    from plotbridge.app import create_app
+    from plotbridge.app import Board, create_app
     from plotbridge.guard import connections
-    from plotbridge.link import Link
+    from plotbridge.plotter.link import Link
+    from plotbridge.plotter.plotter import WorkArea
+    from plotbridge.virtual import VirtualPlotter
 
     private_data_dir(config.data_dir)
     token, generated = resolve_token(config)
     file_limit = connections.raise_file_limit()
     connections.configure(config.client_connections, file_limit)
-    virtual = None
-    device = config.serial
-    if config.virtual:
-        from plotbridge.virtual import VirtualPlotter
-
-        virtual = VirtualPlotter(data_dir=config.data_dir / "sim", speed=config.sim_speed)
-        await virtual.start()
-        device = str(virtual.port)
-        log.info("virtual plotter on %s (speed %g)", device, config.sim_speed)
+    boards: list[Board] = []
     try:
-        link = Link(device, config.baud)
-        app = create_app(config, link, token, virtual)
+        for index, plotter in enumerate(config.plotters):
+            area = WorkArea(*plotter.work_area) if plotter.work_area else None
+            virtual = None
+            device = plotter.device
+            if device is None:
+                virtual = VirtualPlotter(data_dir=sim_dir(config, index, plotter.name),
+                                         speed=config.sim_speed)  # fmt: skip
+                await virtual.start()
+                device = str(virtual.port)
+                log.info("%s: virtual plotter on %s (speed %g)", plotter.name, device,
+                         config.sim_speed)  # fmt: skip
+            boards.append(Board(plotter.name, Link(device, plotter.baud), virtual, area))
+        app = create_app(config, boards, token)
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning",
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
             http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
-            timeout_keep_alive=5,
+            timeout_keep_alive=5, backlog=connections.BACKLOG,
         )  # fmt: skip
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
@@ -206,14 +242,22 @@ async def serve(config: Config) -> int:
         if generated:  # later starts keep it out of logs: `plotbridge token` prints it
             print_login(config.host, config.port, token)
         log.info(
-            "serving on %s:%d, data in %s, open-file limit %d",
+            "serving on %s:%d, data in %s, open-file limit %d, plotters: %s",
             config.host, config.port, config.data_dir, file_limit,
+            ", ".join(p.name for p in config.plotters),
         )  # fmt: skip
         await server.serve()
     finally:
-        if virtual is not None:
-            await virtual.stop()
+        for board in boards:
+            if board.virtual is not None:
+                await board.virtual.stop()
     return 0
+
+
+def sim_dir(config: Config, index: int, name: str) -> Path:
+    """A virtual plotter's files: `sim/` for the first (where a single-plotter server
+    kept them, so its EEPROM settings stay), `sim-NAME/` for the others."""
+    return config.data_dir / ("sim" if index == 0 else f"sim-{name}")
 
 
 def add_token_arguments(parser: argparse.ArgumentParser) -> None:
@@ -270,7 +314,7 @@ def main(argv: list[str] | None = None) -> int:
         return asyncio.run(serve(config_from_args(args)))
     except KeyboardInterrupt:
         return 0
-    except (RuntimeError, OSError) as exc:  # no virtual plotter, unusable data dir, port taken
+    except (RuntimeError, OSError, ConfigError) as exc:  # no simulator, bad config, port taken
         log.error("cannot serve: %s", exc)
         return 1
 

@@ -6,6 +6,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
+from plotbridge.papers import PAPER_PATTERN
+
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
@@ -48,7 +50,7 @@ def _quarter_turn(value: int) -> int:
 
 
 class Placement(Strict):
-    paper: str | None = Field(None, pattern=r"^(A[3-6]|letter)(-landscape)?$")
+    paper: str | None = Field(None, pattern="(?i)" + PAPER_PATTERN)
     margin: float = Field(10.0, ge=0, le=200)
     fit: bool = False
     rotate: Annotated[int, AfterValidator(_quarter_turn)] = 0
@@ -60,13 +62,6 @@ class Placement(Strict):
 class PatchJobBody(Strict):
     name: str | None = Field(None, min_length=1, max_length=200)
     placement: Placement | None = None
-
-
-class Bounds(BaseModel):
-    min_x: float
-    min_y: float
-    max_x: float
-    max_y: float
 
 
 class Position(BaseModel):
@@ -83,31 +78,7 @@ class Machine(BaseModel):
     alarm: int | None = None
     feed: float | None = None
     pins: str | None = None
-
-
-JobState = Literal[
-    "queued", "running", "paused", "done", "failed", "cancelled", "stopped", "interrupted"
-]
-
-
-class Job(BaseModel):
-    id: str
-    name: str
-    state: JobState
-    format: str
-    created_at: float
-    lines_total: int
-    lines_done: int
-    progress: float
-    estimate_s: float
-    eta_s: float | None
-    bounds: Bounds | None
-    error: str | None
-    stats: dict[str, float] = {}
-    placement: dict = {}
-    resume_line: int | None = None
-    started_at: float | None = None
-    finished_at: float | None = None
+    planner_free: int | None = None
 
 
 class ErrorBody(BaseModel):

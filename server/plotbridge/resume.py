@@ -1,19 +1,10 @@
-"""Where an interrupted program can safely continue (pure logic)."""
+"""Where an interrupted program can safely continue, and how to get there (pure logic)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from pathlib import Path
 
-MOTION_WORDS = ("G0", "G1", "G2", "G3", "G00", "G01", "G02", "G03")
-
-
-def motion_flags(lines: Iterable[str]) -> bytearray:
-    """One flag per program line: 1 when the line queues a planner block (a move)."""
-    flags = bytearray()
-    for line in lines:
-        word = line.split(maxsplit=1)[0].upper() if line.strip() else ""
-        flags.append(1 if word in MOTION_WORDS else 0)
-    return flags
+from plotbridge.program.reader import state_before
 
 
 def first_unexecuted_line(motion: bytes, acked: int, queued_blocks: int, floor: int = 1) -> int:
@@ -31,3 +22,14 @@ def first_unexecuted_line(motion: bytes, acked: int, queued_blocks: int, floor: 
         if line - 1 < len(motion) and motion[line - 1]:
             remaining -= 1
     return max(line, floor)
+
+
+def resume_preamble(program: Path, line: int) -> list[str]:
+    """G-code that puts the machine in the state in which program line `line` (1-based)
+    starts: pen up, millimetres, absolute, at the position the line starts from, then
+    the pen as it was. Every G1/G2/G3 of the program carries its own F. Blocking."""
+    state = state_before(program, line)
+    out = ["M5", "G21", "G90", f"G0 X{state.x:.3f} Y{state.y:.3f}"]
+    if state.pen_down:
+        out.append("M3")
+    return out

@@ -10,12 +10,18 @@ import os
 import tempfile
 from collections.abc import AsyncIterator
 from pathlib import Path
+from typing import Any
 
+from pydantic import ValidationError
 from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
+from plotbridge.models import Placement
+
 CHUNK = 64 * 1024
+TRUE = ("1", "true", "yes", "on")
+FALSE = ("0", "false", "no", "off", "")
 SNIFF = 8192
 
 
@@ -101,3 +107,35 @@ def refuse_unusable(path: Path) -> None:
         raise UploadRefused(
             415, "the upload is a binary file; send G-code, SVG or coordinate text"
         )
+
+
+def parse_upload_fields(params: dict[str, str]) -> tuple[dict[str, Any], dict[str, Any], bool]:
+    """Import options, placement and `start` from form fields or query parameters."""
+
+    def flag(key: str) -> bool | None:
+        if key not in params:
+            return None
+        value = params[key].strip().lower()
+        if value in TRUE:
+            return True
+        if value in FALSE:
+            return False
+        raise ValueError(f"{key}: expected true or false, got {params[key]!r}")
+
+    raw: dict[str, Any] = {k: params[k] for k in Placement.model_fields if k in params}
+    if "fit" in raw:
+        raw["fit"] = flag("fit")
+    try:
+        placement = Placement(**raw)
+    except ValidationError as exc:
+        first = exc.errors(include_url=False)[0]
+        field = ".".join(str(part) for part in first.get("loc", ()))
+        raise ValueError(f"{field}: {first.get('msg')}") from exc
+    options: dict[str, Any] = placement.model_dump()
+    optimize = flag("optimize")
+    if optimize is not None:
+        options["optimize"] = optimize
+    if params.get("layers"):
+        options["layers"] = [part.strip() for part in params["layers"].split(",") if part.strip()]
+    placement_public = {k: v for k, v in options.items() if k in Placement.model_fields}
+    return options, placement_public, bool(flag("start"))

@@ -9,7 +9,7 @@ import time
 from collections.abc import AsyncIterator, Callable
 
 import pytest
-from plotbridge.link import Link, LinkEvent, StreamAborted
+from plotbridge.plotter.link import Link, LinkEvent, StreamAborted
 
 pytestmark = pytest.mark.e2e
 

@@ -16,9 +16,14 @@ import httpx
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from plotbridge.app import create_app, parse_upload_fields
-from plotbridge.config import Config
-from plotbridge.jobs import JobManager, job_fields
+from plotbridge.app import Board, create_app
+from plotbridge.config import Config, PlotterConfig
+from plotbridge.errors import Refused
+from plotbridge.jobs.imports import Importer
+from plotbridge.jobs.model import Imported
+from plotbridge.plotter.board import BoardFacts
+from plotbridge.plotter.link import LinkEvent, MachineStatus
+from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
@@ -29,8 +34,10 @@ AUTH = {"Authorization": f"Bearer {TOKEN}"}
 class FakeLink:
     """Acknowledges streamed lines one per `step()` (or all with auto_ack); records output."""
 
-    def __init__(self) -> None:
-        self.status = SimpleNamespace(
+    def __init__(self, device: str = "/dev/fake") -> None:
+        self.device = device
+        self.facts = BoardFacts()
+        self.status = MachineStatus(
             connected=True, state="Idle", x=0.0, y=0.0, pen="up", firmware="1.1h", alarm=None,
             planner_free=15, rx_free=128, feed=0.0, pins="", updated_at=time.time(),
         )  # fmt: skip
@@ -53,8 +60,10 @@ class FakeLink:
         return lambda: self.subscribers.remove(callback)
 
     def emit(self, kind: str, **fields: Any) -> None:
+        if kind == "status":
+            fields["status"] = self.status
         for callback in list(self.subscribers):
-            callback(SimpleNamespace(kind=kind, **fields))
+            callback(LinkEvent(kind, **fields))
 
     def set_state(self, state: str, **fields: Any) -> None:
         self.status.state = state
@@ -71,7 +80,7 @@ class FakeLink:
             self.set_state("Run")
 
     def estop(self) -> None:
-        from plotbridge.link import StreamAborted
+        from plotbridge.plotter.link import StreamAborted
 
         self.estop_calls += 1
         self.abort(StreamAborted("estop", 0, None, "reset"))
@@ -83,7 +92,7 @@ class FakeLink:
             self._tick.set()
 
     def cancel_stream(self) -> None:
-        from plotbridge.link import StreamAborted
+        from plotbridge.plotter.link import StreamAborted
 
         self.abort(StreamAborted("cancelled", 0, None, "cancelled"))
 
@@ -117,7 +126,7 @@ async def fake_import(self, kind, source, filename, dest, options):
     """Stands in for the worker-process import: a program of 20 lines."""
     text = Path(source).read_text() if kind == "file" else "pattern"  # noqa: ASYNC240
     if "INVALID" in text:
-        return ("failed", 422, [{"line": 3, "message": "unknown command"}])
+        raise Refused(422, {"errors": [{"line": 3, "message": "unknown command"}]})
     program = ["G21", "G90", "M5"] + [f"G1 X{i}.000 Y0.000 F3000" for i in range(16)] + ["M5"]
     Path(dest, "program.gcode").write_text("\n".join(program) + "\n")  # noqa: ASYNC240
     Path(dest, "preview.json").write_text(json.dumps({"strokes": [[[0, 0], [1, 0]]]}))  # noqa: ASYNC240
@@ -126,14 +135,14 @@ async def fake_import(self, kind, source, filename, dest, options):
         bounds={"min_x": 0, "min_y": 0, "max_x": 15, "max_y": 0},
         stats={"pen_down_mm": 15.0}, timeline=[(len(program), 10.0)],
     )  # fmt: skip
-    return ("ok", job_fields(result))
+    return Imported.of(result)
 
 
 def make_app(tmp_path: Path, **config: Any):
     link = FakeLink()
-    cfg = Config(data_dir=tmp_path, serial="/dev/fake", allowed_hosts=("test", "testserver"),
-                 **config)
-    return create_app(cfg, link, TOKEN), link
+    cfg = Config(data_dir=tmp_path, plotters=[PlotterConfig("plotter1", "/dev/fake")],
+                 allowed_hosts=("test", "testserver"), **config)
+    return create_app(cfg, [Board("plotter1", link)], TOKEN), link
 
 
 @contextlib.asynccontextmanager
@@ -150,10 +159,11 @@ async def serving(app: Any) -> AsyncIterator[httpx.AsyncClient]:
 
 @pytest.fixture
 async def api(tmp_path, monkeypatch):
-    monkeypatch.setattr(JobManager, "_import", fake_import)
+    monkeypatch.setattr(Importer, "_import", fake_import)
     app, link = make_app(tmp_path, max_upload_mb=1)
     async with serving(app) as client:
-        yield SimpleNamespace(app=app, link=link, client=client, manager=app.state.manager)
+        queue = app.state.components.queue
+        yield SimpleNamespace(app=app, link=link, client=client, queue=queue)
 
 
 async def upload(client: httpx.AsyncClient, text: str = "G1 X1 Y1\n", **data: str):
@@ -331,7 +341,7 @@ async def test_start_runs_to_done(api):
     api.link.auto_ack = True
     response = await api.client.post(f"/api/jobs/{job['id']}/start")
     assert response.status_code == 200 and response.json()["state"] == "running"
-    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "done")
+    await settle(lambda: api.queue.jobs[job["id"]].state == "done")
     done = (await api.client.get(f"/api/jobs/{job['id']}")).json()
     assert done["lines_done"] == 20 and done["progress"] == 1.0 and done["eta_s"] == 0
     assert [n for n, _ in api.link.streamed] == list(range(1, 21))
@@ -377,19 +387,19 @@ async def test_estop_does_not_wait_for_a_stuck_disk(api, monkeypatch):
     await api.client.post(f"/api/jobs/{job['id']}/start")
     api.link.step()
     disk = threading.Event()
-    monkeypatch.setattr(api.manager.store, "save", lambda *_: disk.wait(10))
-    api.manager._save(api.manager.jobs[job["id"]])  # the store's one thread is now stuck
+    monkeypatch.setattr(api.queue.store, "write", lambda *_: disk.wait(10))
+    api.queue.store.save(api.queue.jobs[job["id"]], 0)  # the store's one thread is now stuck
     began = time.monotonic()
     response = await api.client.post("/api/machine/estop")
     took = time.monotonic() - began
     disk.set()
     assert response.status_code == 202 and api.link.estop_calls == 1
     assert took < 0.5, f"the stop waited {took:.2f} s"
-    assert api.manager.jobs[job["id"]]["state"] == "stopped"
+    assert api.queue.jobs[job["id"]].state == "stopped"
 
 
 async def test_program_unreadable_mid_job_fails_it_and_stops_the_board(api, monkeypatch):
-    import plotbridge.program_reader as reader
+    import plotbridge.program.reader as reader
 
     def unreadable(file, count):
         raise OSError(5, "Input/output error")
@@ -397,11 +407,11 @@ async def test_program_unreadable_mid_job_fails_it_and_stops_the_board(api, monk
     monkeypatch.setattr(reader, "_read_block", unreadable)
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
-    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "failed")
-    assert "Input/output error" in api.manager.jobs[job["id"]]["error"]
+    await settle(lambda: api.queue.jobs[job["id"]].state == "failed")
+    assert "Input/output error" in api.queue.jobs[job["id"]].error
     await settle(lambda: "M5" in api.link.commands)  # hold, reset, pen up
     assert api.link.realtime_bytes == [b"!"] and api.link.estop_calls == 1
-    assert api.manager.active is None
+    assert api.queue.first.job is None
 
 
 async def test_estop_when_idle_is_accepted(api):
@@ -426,14 +436,14 @@ async def test_pause_resume_cancel(api):
 
 
 async def test_board_error_fails_job_with_line(api):
-    from plotbridge.link import StreamAborted
+    from plotbridge.plotter.link import StreamAborted
 
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
     api.link.step()
     await asyncio.sleep(0.01)
     api.link.abort(StreamAborted("error", 1, 2, "error:33 invalid target"))
-    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "failed")
+    await settle(lambda: api.queue.jobs[job["id"]].state == "failed")
     failed = (await api.client.get(f"/api/jobs/{job['id']}")).json()
     assert "line 2" in failed["error"] and "error:33" in failed["error"]
     # what the board still held is stopped: hold, reset, unlock, pen up
@@ -442,7 +452,7 @@ async def test_board_error_fails_job_with_line(api):
 
 
 async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
-    from plotbridge.link import StreamAborted
+    from plotbridge.plotter.link import StreamAborted
 
     job = (await upload(api.client)).json()
     jid = job["id"]
@@ -452,18 +462,18 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
         await asyncio.sleep(0.01)
     api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
-    await settle(lambda: api.manager.jobs[jid]["state"] == "interrupted")
+    await settle(lambda: api.queue.jobs[jid].state == "interrupted")
     interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
     assert interrupted["resume_line"] == 5  # the last SEGMENT_BLOCKS moves are not known done
-    async def preamble(self, program, line):
+    def preamble(program, line):
         return ["M5", "G0 X6 Y0"]
 
-    monkeypatch.setattr(JobManager, "_preamble", preamble)
+    monkeypatch.setattr("plotbridge.plotter.runner.resume_preamble", preamble)
     api.link.set_state("Idle", planner_free=15)
     api.link.auto_ack = True
     response = await api.client.post(f"/api/jobs/{jid}/resume")
     assert response.status_code == 200
-    await settle(lambda: api.manager.jobs[jid]["state"] == "done")
+    await settle(lambda: api.queue.jobs[jid].state == "done")
     resumed = api.link.streamed[12:]
     assert resumed[:2] == [(0, "M5"), (0, "G0 X6 Y0")] and resumed[2][0] == 5
 
@@ -513,7 +523,7 @@ async def test_server_info(api, tmp_path):
 
 
 async def test_restart_marks_running_job_interrupted(tmp_path, monkeypatch):
-    monkeypatch.setattr(JobManager, "_import", fake_import)
+    monkeypatch.setattr(Importer, "_import", fake_import)
     app, link = make_app(tmp_path)
     async with serving(app) as client:
         jid = (await upload(client)).json()["id"]
@@ -522,9 +532,10 @@ async def test_restart_marks_running_job_interrupted(tmp_path, monkeypatch):
         for _ in range(4):
             link.step()
             await asyncio.sleep(0.01)
-        app.state.manager._save(app.state.manager.jobs[jid]).result()
+        queue = app.state.components.queue
+        queue.store.save(queue.jobs[jid], 0).result()
     again, _ = make_app(tmp_path)
-    jobs = {job["id"]: job for job in again.state.manager.list()}
+    jobs = {job["id"]: job for job in again.state.components.queue.list()}
     assert jobs[jid]["state"] == "interrupted" and jobs[jid]["resume_line"] >= 1
     assert jobs[queued]["state"] == "queued"
     assert list(jobs) == [jid, queued]
@@ -535,7 +546,7 @@ async def test_restart_marks_running_job_interrupted(tmp_path, monkeypatch):
 
 @pytest.fixture
 def sync_client(tmp_path, monkeypatch):
-    monkeypatch.setattr(JobManager, "_import", fake_import)
+    monkeypatch.setattr(Importer, "_import", fake_import)
     app, link = make_app(tmp_path)
     with TestClient(app) as client:  # its WebSocket requests say Host: testserver
         client.link = link
@@ -620,9 +631,9 @@ async def test_machine_buttons_pause_and_resume_the_job(api):
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
     api.link.set_state("Hold")
-    assert api.manager.jobs[job["id"]]["state"] == "paused"
+    assert api.queue.jobs[job["id"]].state == "paused"
     api.link.set_state("Run")
-    assert api.manager.jobs[job["id"]]["state"] == "running"
+    assert api.queue.jobs[job["id"]].state == "running"
 
 
 async def test_real_import_runs_in_a_worker_process(tmp_path):
@@ -669,21 +680,21 @@ async def test_patch_renames_and_reimports_queued_job(api):
     assert bad.status_code == 422
     api.link.auto_ack = True
     await api.client.post(f"/api/jobs/{job['id']}/start")
-    await settle(lambda: api.manager.jobs[job["id"]]["state"] == "done")
+    await settle(lambda: api.queue.jobs[job["id"]].state == "done")
     late = await api.client.patch(f"/api/jobs/{job['id']}", json={"name": "x"})
     assert late.status_code == 409
 
 
 async def test_auto_start_runs_the_queue(tmp_path, monkeypatch):
-    monkeypatch.setattr(JobManager, "_import", fake_import)
+    monkeypatch.setattr(Importer, "_import", fake_import)
     app, link = make_app(tmp_path, auto_start=True)
     link.auto_ack = True
     async with serving(app) as client:
         first = (await upload(client)).json()["id"]
         second = (await upload(client)).json()["id"]
-        manager = app.state.manager
-        await settle(lambda: manager.jobs[second]["state"] == "done")
-        assert manager.jobs[first]["state"] == "done"
+        queue = app.state.components.queue
+        await settle(lambda: queue.jobs[second].state == "done")
+        assert queue.jobs[first].state == "done"
 
 
 JSON = st.recursive(

@@ -21,18 +21,19 @@ def test_server_modules_and_a_running_job_do_not_import_numpy(tmp_path):
     out = run_python(f"""
         import sys
         from pathlib import Path
-        import plotbridge.app, plotbridge.cli, plotbridge.jobs
-        from plotbridge.app import create_app
+        import plotbridge.app, plotbridge.cli, plotbridge.queue
+        from plotbridge.app import Board, create_app
         from plotbridge.config import Config
-        from plotbridge.jobs import JobManager
-        from plotbridge.link import Link
+        from plotbridge.jobs.model import Job
+        from plotbridge.plotter.link import Link
+        from plotbridge.plotter.runner import Runner
 
-        config = Config(data_dir=Path({str(tmp_path)!r}), serial="/dev/null")
-        create_app(config, Link("/dev/null"), "t" * 16)
-        job = {{"lines_total": 10, "lines_done": 4, "estimate_s": 10.0,
-                "timeline": [[10, 10.0]]}}
-        JobManager._progress(None, job)  # the eta of a running job, as the server computes it
-        assert job["eta_s"] == 6.0, job
+        config = Config(data_dir=Path({str(tmp_path)!r}))
+        create_app(config, [Board("p", Link("/dev/null"))], "t" * 16)
+        job = Job(id="j", name="j", format="gcode", lines_total=10, lines_done=4,
+                  estimate_s=10.0, timeline=[(10, 10.0)])
+        Runner._progress(None, job)  # the eta of a running job, as the server computes it
+        assert job.eta_s == 6.0, job
         print(sorted(m for m in sys.modules if m.split(".")[0] in {HEAVY!r}))
     """)
     assert out == "[]", f"loaded in the server process: {out}"

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from hypothesis import given
 from hypothesis import strategies as st
-from plotbridge.resume import first_unexecuted_line, motion_flags
+from plotbridge.program.reader import motion_flags
+from plotbridge.resume import first_unexecuted_line
 
 PROGRAM = ["G21", "G90", "M5", "G0 X1 Y1", "M3", "G1 X2 Y1 F3000", "G1 X3 Y1 F3000", "M5",
            "G0 X5 Y5", "M3", "G2 X6 Y6 I1 J0 F3000", "M5"]  # fmt: skip

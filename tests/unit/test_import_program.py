@@ -8,9 +8,9 @@ import math
 
 import numpy as np
 import pytest
-from plotbridge.importing import resume_preamble
 from plotbridge.importing.preview import PreviewBuilder
 from plotbridge.importing.simplify import simplify
+from plotbridge.resume import resume_preamble
 
 from .import_helpers import program_lines, run_import
 

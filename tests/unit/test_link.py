@@ -1,4 +1,4 @@
-"""The serial link (plotbridge.link) against a scripted GRBL board.
+"""The serial link (plotbridge.plotter.link) against a scripted GRBL board.
 
 The fake board below stands in for the port: it records every write in
 order, keeps a 128-byte receive buffer that fails the test if it overflows,
@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable
 
 import pytest
-from plotbridge.link import (
+from plotbridge.plotter.link import (
     CommandError,
     Link,
     LinkDown,

@@ -9,9 +9,8 @@ import tracemalloc
 from pathlib import Path
 
 import pytest
-from plotbridge.link import StreamAborted
-from plotbridge.program_reader import ProgramReader
-from plotbridge.resume import motion_flags
+from plotbridge.plotter.link import StreamAborted
+from plotbridge.program.reader import ProgramReader, motion_flags
 
 from tests.unit.test_link import FakeBoard, feed_slowly, running
 
@@ -58,7 +57,7 @@ async def test_start_past_the_end_and_odd_line_ends(tmp_path):
 
 
 async def test_disk_reads_happen_off_the_event_loop(tmp_path, monkeypatch):
-    import plotbridge.program_reader as module
+    import plotbridge.program.reader as module
 
     write_program(tmp_path / "p.gcode", 300)
     threads: set[str] = set()

@@ -12,7 +12,7 @@ import contextlib
 import os
 import time
 
-from plotbridge.link import Link, StreamAborted
+from plotbridge.plotter.link import Link, StreamAborted
 
 
 class PtyBoard:

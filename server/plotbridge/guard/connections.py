@@ -23,6 +23,9 @@ log = logging.getLogger("plotbridge.guard")
 
 HEADER_TIMEOUT = 10.0  # s for a request line and headers to arrive
 MAX_HEADER_BYTES = 16 * 1024  # h11's incomplete-event bound: bigger headers get 400
+# Connections waiting to be accepted: the event loop accepts a whole burst before
+# the refused ones are closed, so a long backlog could exhaust the descriptors.
+BACKLOG = 128
 FILES_RESERVED = 128  # descriptors kept free of connections (database, programs, serial, pipes)
 _BUSY_BODY = b'{"detail": "too many open connections; try again shortly"}'
 BUSY = (

@@ -20,7 +20,6 @@ if TYPE_CHECKING:
     from .models import ImportFailed, ImportOptions, ImportResult, MachineProfile
     from .patterns import PATTERNS
     from .pipeline import import_file, import_pattern
-    from .program import resume_preamble
 
 _LAZY = {
     "PATTERNS": ".patterns",
@@ -30,7 +29,6 @@ _LAZY = {
     "MachineProfile": ".models",
     "import_file": ".pipeline",
     "import_pattern": ".pipeline",
-    "resume_preamble": ".program",
 }
 
 __all__ = [
@@ -42,7 +40,6 @@ __all__ = [
     "eta",
     "import_file",
     "import_pattern",
-    "resume_preamble",
 ]
 
 

@@ -4,15 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .models import ImportFailed, ImportOptions, MachineProfile
+from plotbridge.papers import PAPERS
 
-PAPERS: dict[str, tuple[float, float]] = {   # portrait width x height, mm
-    "A6": (105.0, 148.0),
-    "A5": (148.0, 210.0),
-    "A4": (210.0, 297.0),
-    "A3": (297.0, 420.0),
-    "LETTER": (215.9, 279.4),
-}
+from .models import ImportFailed, ImportOptions, MachineProfile
 
 Bounds = tuple[float, float, float, float]   # min_x, min_y, max_x, max_y
 

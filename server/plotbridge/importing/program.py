@@ -1,10 +1,9 @@
-"""Writing the normalized program (docs/INTERNALS.md) and reading it back for a resume."""
+"""Writing the normalized program (docs/INTERNALS.md); `plotbridge.program.reader` reads it."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from pathlib import Path
 
 from .models import ErrorLog, MachineProfile
 from .ops import ARC, DWELL, MOVE, PEN, arc_extent, arc_points
@@ -199,28 +198,3 @@ class ProgramWriter:
         return {"min_x": round(b[0], 3), "min_y": round(b[1], 3),
                 "max_x": round(b[2], 3), "max_y": round(b[3], 3)}
 
-
-def resume_preamble(program_path: Path, line: int) -> list[str]:
-    """G-code that puts the machine in the state in which program line `line` (1-based)
-    starts: pen up, millimetres, absolute, at the position the line starts from, then
-    the pen as it was. Every G1/G2/G3 of the program carries its own F."""
-    x = y = 0.0
-    down = False
-    with program_path.open("r", encoding="ascii") as f:
-        for n, text in enumerate(f, 1):
-            if n >= line:
-                break
-            if text.startswith(("G0 ", "G1 ", "G2 ", "G3 ")):
-                for word in text.split()[1:3]:
-                    if word[0] == "X":
-                        x = float(word[1:])
-                    elif word[0] == "Y":
-                        y = float(word[1:])
-            elif text.startswith("M3"):
-                down = True
-            elif text.startswith("M5"):
-                down = False
-    out = ["M5", "G21", "G90", f"G0 X{x:.3f} Y{y:.3f}"]
-    if down:
-        out.append("M3")
-    return out

@@ -25,7 +25,7 @@ from typing import Any
 import serial
 import serial_asyncio
 
-from .grbl import (
+from plotbridge.grbl import (
     FEED_HOLD,
     RX_BUFFER_SIZE,
     SOFT_RESET,
@@ -41,11 +41,11 @@ from .grbl import (
     line_problem,
     version_from_feedback,
 )
+from plotbridge.plotter.board import BoardFacts
 
-log = logging.getLogger("plotbridge.link")
+log = logging.getLogger("plotbridge.plotter.link")
 
 REALTIME_BYTES = frozenset(b"?!~\x18") | frozenset(range(0x80, 0x100))
-MOVING_STATES = frozenset({"Run", "Jog", "Home"})
 
 
 Lines = Iterable[tuple[int, str]] | AsyncIterable[tuple[int, str]]
@@ -175,6 +175,7 @@ class Link:
         self.poll_hz = poll_hz
         self.status = MachineStatus()
         self.settings: dict[int, float] = {}
+        self.facts = BoardFacts()  # what the board said about itself ($I, Bf:)
         self._subscribers: list[Callable[[LinkEvent], None]] = []
         self._transport: Any = None
         self._ready = False
@@ -483,19 +484,18 @@ class Link:
             if kind == "feedback" and (version := version_from_feedback(payload)):
                 self.status.firmware = version
             elif kind == "feedback" and (sizes := buffers_from_feedback(payload)):
-                self._use_rx_buffer(sizes[1])
+                self._learn_options(*sizes)
             elif kind == "msg" and payload.strip().lower() == "reset to continue":
                 # Stock GRBL after a limit alarm ignores everything until reset.
                 self._soft_reset("alarm")
             if isinstance(front, _Command):
                 front.responses.append(line)
 
-    def _use_rx_buffer(self, size: int) -> None:
+    def _learn_options(self, planner_blocks: int, rx_buffer: int) -> None:
         """Count against the board's own receive buffer when it is smaller than GRBL's."""
-        capacity = min(size, RX_BUFFER_SIZE)
-        if capacity >= 16 and capacity != self._counter.capacity:
-            log.info("board receive buffer: %d bytes", size)
-            self._counter.capacity = capacity
+        if self.facts.learn_options(planner_blocks, rx_buffer):
+            log.info("board receive buffer: %d bytes", rx_buffer)
+            self._counter.capacity = self.facts.rx_buffer
 
     def _front(self) -> Any:
         return self._counter.peek()
@@ -573,6 +573,7 @@ class Link:
         s.sub_state = report.sub_state
         s.pen = "down" if ("S" in report.accessories or "C" in report.accessories) else "up"
         s.planner_free = report.planner_free
+        self.facts.learn_free(report.planner_free)
         s.rx_free = report.rx_free
         s.feed = report.feed
         s.pins = report.pins

@@ -1,0 +1,124 @@
+"""Job routes: upload, list, control, preview, patterns."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query, Request
+from fastapi.responses import FileResponse, JSONResponse, Response
+
+from plotbridge.api.deps import GUARD, Parts, upload_error
+from plotbridge.errors import Refused
+from plotbridge.jobs.model import Job
+from plotbridge.models import MoveBody, PatchJobBody, upload_openapi
+from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
+
+router = APIRouter(prefix="/api", dependencies=GUARD)
+Target = Annotated[
+    str | None, Query(max_length=64, description="the plotter to run it on (default: any free)")
+]
+
+
+@router.get("/jobs", response_model=list[Job])
+async def list_jobs(c: Parts) -> list[dict[str, Any]]:
+    return c.queue.list()
+
+
+@router.post("/jobs", status_code=201, response_model=Job, openapi_extra=upload_openapi())
+async def upload(request: Request, c: Parts) -> Any:
+    config = c.config
+    try:
+        path, filename, fields = await receive(request, config.tmp_dir, config.upload_limit)
+    except UploadRefused as exc:
+        return upload_error(exc.status, exc.message)
+    try:
+        params = {**dict(request.query_params), **fields}
+        try:
+            options, placement, start = parse_upload_fields(params)
+        except ValueError as exc:
+            return upload_error(422, str(exc))
+        pattern = params.get("pattern")
+        if pattern:
+            kind, source, filename = "pattern", pattern, pattern
+        elif path is None:
+            return upload_error(422, "no file: send multipart field 'file' or a raw body")
+        else:
+            refuse_unusable(path)
+            kind, source = "file", path
+            filename = filename or params.get("filename") or params.get("name") or "upload"
+        name = (params.get("name") or Path(filename).name or "untitled")[:200]
+        options["name"] = name
+        job = await c.queue.create(kind=kind, source=source, filename=filename, name=name,
+                                   options=options, placement=placement,
+                                   target=params.get("plotter") or None)  # fmt: skip
+    except UploadRefused as exc:
+        return upload_error(exc.status, exc.message)
+    finally:
+        if path is not None:
+            path.unlink(missing_ok=True)
+    answer = job.public()
+    if start and job.state == "queued":
+        try:
+            answer = c.queue.start(job.id).public()
+        except Refused as exc:  # the upload stands; say why it did not start
+            answer["start_error"] = exc.detail
+    return JSONResponse(answer, status_code=201)
+
+
+@router.get("/jobs/{job_id}", response_model=Job)
+async def get_job(job_id: str, c: Parts) -> dict[str, Any]:
+    return c.queue.get(job_id).public()
+
+
+@router.patch("/jobs/{job_id}", response_model=Job)
+async def patch_job(job_id: str, body: PatchJobBody,
+                    c: Parts) -> dict[str, Any]:  # fmt: skip
+    placement = body.placement.model_dump() if body.placement else None
+    return (await c.queue.reimport(job_id, body.name, placement)).public()
+
+
+@router.delete("/jobs/{job_id}", status_code=204)
+async def delete_job(job_id: str, c: Parts) -> Response:
+    await c.queue.delete(job_id)
+    return Response(status_code=204)
+
+
+@router.post("/jobs/{job_id}/start", response_model=Job)
+async def start_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
+    return c.queue.start(job_id, plotter).public()
+
+
+@router.post("/jobs/{job_id}/pause", response_model=Job)
+async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
+    return c.queue.pause(job_id).public()
+
+
+@router.post("/jobs/{job_id}/resume", response_model=Job)
+async def resume_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
+    return c.queue.resume(job_id, plotter).public()
+
+
+@router.post("/jobs/{job_id}/cancel", response_model=Job)
+async def cancel_job(job_id: str, c: Parts) -> dict[str, Any]:
+    return (await c.queue.cancel(job_id)).public()
+
+
+@router.post("/jobs/{job_id}/move", response_model=list[Job])
+async def move_job(job_id: str, body: MoveBody,
+                   c: Parts) -> list[dict[str, Any]]:  # fmt: skip
+    return c.queue.move(job_id, body.position)
+
+
+@router.get("/jobs/{job_id}/preview")
+async def preview(job_id: str, c: Parts) -> Response:
+    path = c.queue.preview_path(job_id)
+    if not path.exists():
+        raise Refused(404, f"job {job_id} has no preview")
+    return FileResponse(path, media_type="application/json")
+
+
+@router.get("/patterns")
+async def patterns(c: Parts) -> dict[str, Any]:
+    known = await c.queue.importer.patterns()
+    return {"patterns": [{"name": k, "description": v} for k, v in known.items()]}

@@ -1,0 +1,145 @@
+"""The WebSocket route: events out, commands in (docs/INTERNALS.md, "WebSocket messages")."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+from typing import Any
+
+from fastapi import APIRouter, WebSocket
+from pydantic import ValidationError
+
+from plotbridge.api.deps import Components
+from plotbridge.errors import Refused
+from plotbridge.models import JogBody
+from plotbridge.ws import Client
+
+log = logging.getLogger("plotbridge.api.ws")
+
+WS_MESSAGE_MAX = 4096  # characters; the longest real message (a console line) is ~200
+WS_COMMANDS_WAITING = 16  # per WebSocket client: jog and console lines not yet answered
+
+router = APIRouter()
+Command = tuple[str, dict[str, Any]]
+
+
+@router.websocket("/api/ws")
+async def websocket(ws: WebSocket) -> None:
+    c: Components = ws.app.state.components
+    await ws.accept()  # the guard has checked the session or token, the Origin and the Host
+    client = c.clients.add(ws)
+    for message in c.queue.snapshot_messages():
+        c.clients.send(client, message)
+    client.task = asyncio.create_task(client.pump())
+    receiver = asyncio.create_task(_receive(c, ws, client))
+    try:
+        await asyncio.wait({client.task, receiver}, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        c.clients.remove(client)
+        for task in (client.task, receiver):
+            task.cancel()
+        with contextlib.suppress(Exception):
+            await ws.close()
+
+
+async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
+    """Read the client's messages; never awaits anything but the next one.
+
+    Stop, pause and resume are realtime bytes, handled at once. Commands that
+    wait for the board (jog, console lines) run in order in their own task,
+    so a slow one never holds back an emergency stop sent after it.
+    """
+    waiting: asyncio.Queue[Command] = asyncio.Queue(WS_COMMANDS_WAITING)
+    worker = asyncio.create_task(_board_commands(c, client, waiting))
+    try:
+        while True:
+            message = await ws.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            text = message.get("text")
+            if text is None:
+                text = (message.get("bytes") or b"").decode("utf-8", "replace")
+            kind, body = parse_message(text)
+            if kind == "estop":  # first thing, before anything else (never rate-limited)
+                _estop(c, body)
+                c.clients.send(client, {"type": "ack", "command": "estop"})
+            elif not client.rate.take():
+                await ws.close(code=1008, reason="too many messages")
+                return
+            elif body is None:
+                c.clients.send(client, {"type": "error", "command": None, "detail": kind})
+            elif kind in ("jog", "command"):
+                try:
+                    waiting.put_nowait((kind, body))
+                except asyncio.QueueFull:
+                    c.clients.send(client, {"type": "error", "command": kind, "detail":
+                                            "too many commands waiting for the board"})
+            else:
+                c.clients.send(client, await _command(c, kind, body))
+    finally:
+        worker.cancel()
+
+
+def _estop(c: Components, body: dict[str, Any] | None) -> None:
+    """`{"type": "estop"}` stops the first plotter (or the named one), `"all": true` all."""
+    body = body or {}
+    if body.get("all") is True:
+        c.queue.estop_all("WebSocket, all plotters")
+        return
+    name = body.get("plotter")
+    try:
+        plotter = c.queue.plotter(name if isinstance(name, str) else None)
+    except Refused:  # a stop must never be lost: a wrong name stops them all
+        c.queue.estop_all(f"WebSocket, unknown plotter {name!r}")
+        return
+    plotter.estop("WebSocket")
+
+
+async def _board_commands(c: Components, client: Client, waiting: asyncio.Queue[Command]) -> None:
+    while True:
+        kind, body = await waiting.get()
+        try:
+            answer = await _command(c, kind, body)
+        except Exception as exc:  # a bug; the client's later commands must still run
+            log.exception("WebSocket %s failed", kind)
+            answer = {"type": "error", "command": kind, "detail": f"internal error: {exc}"}
+        c.clients.send(client, answer)
+
+
+async def _command(c: Components, kind: Any, message: dict[str, Any]) -> dict[str, Any]:
+    name = message.get("plotter")
+    try:
+        target = name if isinstance(name, str) else None
+        if kind == "pause":
+            c.queue.pause(message.get("job"), target)
+        elif kind == "resume":
+            c.queue.resume(message.get("job"), target)
+        elif kind == "jog":
+            body = JogBody(**{k: v for k, v in message.items() if k not in ("type", "plotter")})
+            await c.queue.plotter(target).jog(body.dx, body.dy, body.feed)
+        elif kind == "command":
+            responses = await c.queue.plotter(target).console(str(message.get("line", "")))
+            return {"type": "ack", "command": kind, "responses": responses}
+        else:
+            return {"type": "error", "command": kind, "detail": f"unknown type {kind!r}"}
+    except Refused as exc:
+        return {"type": "error", "command": kind, "detail": exc.detail}
+    except ValidationError as exc:
+        return {"type": "error", "command": kind, "detail": exc.errors(include_url=False)}
+    return {"type": "ack", "command": kind}
+
+
+def parse_message(text: str) -> tuple[Any, dict[str, Any] | None]:
+    """(type, message), or (what is wrong, None). A message longer than any real
+    one is refused unread: parsing megabytes would hold up the event loop."""
+    if len(text) > WS_MESSAGE_MAX:
+        return f"message longer than {WS_MESSAGE_MAX} characters", None
+    try:
+        message = json.loads(text)
+    except ValueError:
+        message = None
+    if not isinstance(message, dict):
+        return "send a JSON object with a type", None
+    return message.get("type"), message

@@ -1,0 +1,113 @@
+"""The job: one typed shape from the store to the API.
+
+Fields marked `exclude=True` are the server's own (where the job came from, how
+to resume it): the store keeps them, the API never shows them.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+from pydantic_core import to_jsonable_python
+
+JobState = Literal[
+    "queued", "waiting", "running", "paused", "done", "failed", "cancelled", "stopped",
+    "interrupted",
+]  # fmt: skip
+
+ACTIVE: frozenset[str] = frozenset({"running", "paused"})
+FINISHED: frozenset[str] = frozenset({"done", "failed", "cancelled", "stopped"})
+RESUMABLE: frozenset[str] = frozenset({"interrupted", "stopped"})
+
+
+class Bounds(BaseModel):
+    min_x: float
+    min_y: float
+    max_x: float
+    max_y: float
+
+    def fits(self, width: float, height: float) -> bool:
+        """Inside a work area of `width` x `height` mm from the origin."""
+        eps = 1e-6
+        return (self.min_x >= -eps and self.min_y >= -eps
+                and self.max_x <= width + eps and self.max_y <= height + eps)
+
+
+class Imported(BaseModel):
+    """What the importer tells about a program (worker process to server, plain types)."""
+
+    format: str
+    lines_total: int
+    estimate_s: float
+    bounds: Bounds
+    stats: dict[str, float] = {}
+    timeline: list[tuple[int, float]] = []
+
+    @classmethod
+    def of(cls, result: Any) -> Imported:
+        """From an `importing.ImportResult` (in the worker process)."""
+        return cls(
+            format=str(result.format),
+            lines_total=int(result.lines_total),
+            estimate_s=round(float(result.estimate_s), 1),
+            bounds={key: float(value) for key, value in result.bounds.items()},
+            stats={key: float(value) for key, value in result.stats.items()},
+            timeline=[(int(line), float(seconds)) for line, seconds in result.timeline],
+        )
+
+
+class Job(BaseModel):
+    model_config = ConfigDict(validate_assignment=False)
+
+    id: str
+    name: str
+    state: JobState = "queued"
+    format: str
+    created_at: float = Field(default_factory=time.time)
+    lines_total: int
+    lines_done: int = 0
+    progress: float = 0.0
+    estimate_s: float
+    eta_s: float | None = None
+    bounds: Bounds | None = None
+    error: str | None = None
+    stats: dict[str, float] = {}
+    placement: dict[str, Any] = {}
+    resume_line: int | None = None
+    started_at: float | None = None
+    finished_at: float | None = None
+    plotter: str | None = None
+    """The plotter that runs (or ran) the job, or will run it once it waits for it."""
+    target: str | None = None
+    """The plotter asked for on upload or start; None: the first free one it fits."""
+    waiting: str | None = None
+    """Why a `waiting` job does not run yet."""
+    # the server's own:
+    kind: Literal["file", "pattern"] = Field("file", exclude=True)
+    source: str = Field("", exclude=True)
+    filename: str = Field("", exclude=True)
+    options: dict[str, Any] = Field(default_factory=dict, exclude=True)
+    timeline: list[tuple[int, float]] = Field(default_factory=list, exclude=True)
+    safe_line: int | None = Field(None, exclude=True)
+
+    def public(self) -> dict[str, Any]:
+        """The API's job object."""
+        return self.model_dump(mode="json")
+
+    def record(self) -> dict[str, Any]:
+        """Everything, for the store."""
+        return {name: to_jsonable_python(getattr(self, name)) for name in type(self).model_fields}
+
+    def imported(self, result: Imported) -> None:
+        self.format = result.format
+        self.lines_total = result.lines_total
+        self.estimate_s = self.eta_s = result.estimate_s
+        self.bounds = result.bounds
+        self.stats = result.stats
+        self.timeline = result.timeline
+
+    @property
+    def active(self) -> bool:
+        return self.state in ACTIVE

@@ -1,0 +1,264 @@
+"""One board as a unit: its link task, its runner, its machine state, its stop.
+
+A plotter publishes its machine reports and console lines (each carrying its
+name) and tells the queue when it becomes free to take a job (`on_ready`).
+Nothing here knows other plotters: an emergency stop on one touches only it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from plotbridge.errors import Refused
+from plotbridge.events import EventHub
+from plotbridge.jobs.model import Job
+from plotbridge.plotter.board import MOVING_STATES, READY_STATE
+from plotbridge.plotter.link import CommandError, Link, LinkDown, LinkEvent
+from plotbridge.plotter.runner import Report, Runner
+from plotbridge.settings_meta import SETTINGS
+from plotbridge.virtual import VirtualPlotter
+
+log = logging.getLogger("plotbridge.plotter")
+
+MACHINE_INTERVAL = 0.1  # s between machine reports while moving (the contract asks >= 5 Hz)
+CONSOLE_FORBIDDEN = "?!~\x18\r\n"  # realtime bytes and line ends: not a console line
+
+
+@dataclass(frozen=True)
+class WorkArea:
+    width: float
+    height: float
+
+    def __str__(self) -> str:
+        return f"{self.width:g} x {self.height:g} mm"
+
+
+class Plotter:
+    def __init__(self, name: str, link: Link, events: EventHub, jobs_dir: Path, *,
+                 virtual: VirtualPlotter | None = None,
+                 work_area: WorkArea | None = None) -> None:  # fmt: skip
+        self.name = name
+        self.link = link
+        self.events = events
+        self.virtual = virtual
+        self.configured_area = work_area
+        self.on_ready: Callable[[Plotter], None] = lambda _: None
+        self.on_job: Report = lambda _job, _save: None
+        self.runner = Runner(name, link, jobs_dir, self._job_changed, self._job_finished)
+        self._task: asyncio.Task[None] | None = None
+        self._unsubscribe: Callable[[], None] | None = None
+        self._last_machine: dict[str, Any] | None = None
+        self._last_machine_sent = 0.0
+
+    # ---- lifecycle ------------------------------------------------------------------
+
+    def start(self) -> None:
+        self._unsubscribe = self.link.subscribe(self._on_link_event)
+        self._task = asyncio.create_task(self.link.run(), name=f"link-{self.name}")
+
+    async def stop(self) -> None:
+        if self._unsubscribe:
+            self._unsubscribe()
+        await self.runner.close()
+        if self._task:
+            self._task.cancel()
+            with contextlib.suppress(BaseException):
+                await self._task
+
+    # ---- state ----------------------------------------------------------------------
+
+    @property
+    def job(self) -> Job | None:
+        return self.runner.job
+
+    @property
+    def state(self) -> str:
+        status = self.link.status
+        return (status.state if status.connected else None) or "Disconnected"
+
+    @property
+    def work_area(self) -> WorkArea | None:
+        """The configured work area, else the board's max travel ($130, $131)."""
+        if self.configured_area is not None:
+            return self.configured_area
+        width, height = self.link.settings.get(130), self.link.settings.get(131)
+        if width and height:
+            return WorkArea(width, height)
+        return None
+
+    def fits(self, job: Job) -> bool:
+        area = self.work_area
+        return area is None or job.bounds is None or job.bounds.fits(area.width, area.height)
+
+    def not_ready(self) -> str | None:
+        """Why no job can start on this plotter now, or None when one can."""
+        if self.job is not None:
+            return f"{self.name} runs job {self.job.id} ({self.job.name})"
+        state = self.state
+        if state == "Disconnected":
+            return f"{self.name} is not connected; check the cable or power"
+        if state == "Alarm":
+            return f"{self.name} is in Alarm: home it ($H) or unlock it ($X) first"
+        if state != READY_STATE:
+            return f"{self.name} is {state}; wait until it is Idle"
+        return None
+
+    def machine(self) -> dict[str, Any]:
+        """The machine object (DESIGN.md)."""
+        status = self.link.status
+        return {
+            "connected": status.connected,
+            "state": self.state,
+            "position": {"x": round(status.x, 3), "y": round(status.y, 3)},
+            "pen": "down" if status.pen == "down" else "up",
+            "firmware": status.firmware,
+            "alarm": status.alarm,
+            "feed": status.feed,
+            "pins": status.pins or None,
+            "planner_free": status.planner_free,
+        }
+
+    def describe(self) -> dict[str, Any]:
+        """The `/api/plotters` entry."""
+        area = self.work_area
+        job = self.job
+        return {
+            "name": self.name,
+            "device": self.link.device,
+            "virtual": self.virtual is not None,
+            "work_area": {"width": area.width, "height": area.height} if area else None,
+            "job": job.id if job else None,
+            "progress": job.progress if job else None,
+            "machine": self.machine(),
+        }
+
+    # ---- stop ---------------------------------------------------------------------------
+
+    def estop(self, source: str) -> None:
+        """Emergency stop: the reset byte goes out first, before any other work."""
+        self.reset_now()
+        self.stopped(source)
+
+    def reset_now(self) -> None:
+        """The emergency stop's soft reset byte, written at once."""
+        self.link.estop()
+
+    def stopped(self, source: str) -> None:
+        """The emergency stop's bookkeeping: the job is `stopped`, the clients told."""
+        log.warning("EMERGENCY STOP of %s (%s)", self.name, source)
+        self.runner.stopped()
+        self._send_machine(force=True)
+
+    # ---- board verbs (while no job runs) -------------------------------------------------
+
+    async def send(self, action: str, line: str, wait: float = 10.0) -> list[str]:
+        """One line to the board while no job runs; the lines it answered before `ok`."""
+        if self.job is not None:
+            raise Refused(409, f"cannot {action} while job {self.job.id} is running")
+        try:
+            return await self.link.command(line, timeout=wait)
+        except CommandError as exc:  # error:9 is GRBL's "not in this state" (Alarm, Jog)
+            status = 409 if exc.code == 9 else 422
+            raise Refused(status, f"the board refused {line!r}: {exc}") from exc
+        except LinkDown as exc:
+            raise Refused(409, f"{self.name} is not connected") from exc
+        except TimeoutError as exc:
+            raise Refused(409, f"the board did not answer {line!r} within {wait:g} s") from exc
+
+    async def jog(self, dx: float, dy: float, feed: float) -> list[str]:
+        if self.job is not None:
+            raise Refused(409, f"cannot jog while job {self.job.id} is running")
+        if self.state not in (READY_STATE, "Jog"):
+            raise Refused(409, f"cannot jog while the machine is {self.state}")
+        return await self.send("jog", f"$J=G91 G21 X{dx:.3f} Y{dy:.3f} F{feed:.0f}")
+
+    async def console(self, line: str) -> list[str]:
+        """A console line; its answer ends with the `ok` the link keeps to itself."""
+        if self.job is not None:
+            raise Refused(409, f"cannot send commands while job {self.job.id} is running")
+        line = line.strip()
+        if not line or any(ch in line for ch in CONSOLE_FORBIDDEN) or not line.isprintable():
+            raise Refused(422, "one printable G-code or $ line, without realtime characters")
+        return [*await self.send("send commands", line, wait=30), "ok"]
+
+    def settings(self) -> list[dict[str, Any]]:
+        """The board's settings with their names, units and descriptions where known."""
+        view = []
+        for number in sorted(self.link.settings):
+            meta = SETTINGS.get(number)
+            view.append({
+                "id": number, "value": self.link.settings[number],
+                "name": meta.name if meta else None, "unit": meta.unit if meta else None,
+                "description": meta.description if meta else None,
+            })  # fmt: skip
+        return view
+
+    async def write_settings(self, values: dict[int, float]) -> list[str]:
+        responses: list[str] = []
+        for number, value in values.items():
+            text = f"{value:g}" if value != int(value) else str(int(value))
+            responses += await self.send("change settings", f"${number}={text}")
+        return responses
+
+    async def trace(self) -> dict[str, Any]:
+        """What the virtual plotter's pen drew (mm)."""
+        if self.virtual is None:
+            raise Refused(404, f"{self.name} is not a virtual plotter: it drives a real board")
+        trace = await asyncio.to_thread(self.virtual.trace)
+        strokes = [[[p[0], p[1]] for p in stroke] for stroke in trace.get("strokes", [])]
+        return {**trace, "strokes": strokes}
+
+    # ---- link events --------------------------------------------------------------------
+
+    def _on_link_event(self, event: LinkEvent) -> None:
+        if event.kind == "status" and event.status is not None:
+            self.runner.on_status(event.status)
+            self._send_machine()
+            if event.status.state == READY_STATE and self.job is None:
+                self.on_ready(self)
+        elif event.kind == "log":
+            self._on_log(event.direction or "rx", event.line or "")
+        elif event.kind == "alarm":
+            log.warning("%s: board alarm %s", self.name, event.code)
+            self._send_machine(force=True)
+        elif event.kind == "connected":
+            log.info("%s connected: %s", self.name, self.link.status.firmware)
+            self._send_machine(force=True)
+            self.on_ready(self)
+        elif event.kind == "disconnected":
+            log.warning("%s disconnected: %s", self.name, event.message)
+            self.runner.lost()
+            self._send_machine(force=True)
+
+    def _send_machine(self, force: bool = False) -> None:
+        machine = self.machine()
+        now = time.monotonic()
+        due = machine["state"] in MOVING_STATES and now - self._last_machine_sent > MACHINE_INTERVAL
+        if force or due or machine != self._last_machine:
+            self._last_machine = machine
+            self._last_machine_sent = now
+            self.events.publish({"type": "machine", "plotter": self.name, "machine": machine})
+
+    def _on_log(self, direction: str, line: str) -> None:
+        if not line or line.startswith("<") or line == "?":
+            return
+        if self.job is not None and (direction == "tx" or line == "ok"):
+            return  # a streaming job would flood the consoles; errors and messages still go
+        self.events.publish({"type": "log", "plotter": self.name, "direction": direction,
+                             "line": line})  # fmt: skip
+
+    # ---- the runner's reports --------------------------------------------------------
+
+    def _job_changed(self, job: Job, save: bool) -> None:
+        self.on_job(job, save)
+
+    def _job_finished(self, job: Job) -> None:
+        if self.state == READY_STATE:
+            self.on_ready(self)

@@ -1,0 +1,294 @@
+"""Streams one job at a time to one board, and settles how it ended.
+
+The runner owns the job while it is `running` or `paused` on its plotter: it
+streams the program through the link (from line 1, or from a resume line after
+a preamble that puts the machine where that line starts), counts progress,
+follows the board's pause and resume buttons, and when the stream ends sets the
+job `done`, `failed`, `cancelled`, `stopped` (emergency stop) or `interrupted`
+(link lost) with the line it can safely resume from.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from plotbridge.errors import Refused
+from plotbridge.importing.eta import eta  # numpy-free, unlike the rest of the importer
+from plotbridge.jobs.model import Job
+from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
+from plotbridge.program.reader import ProgramReader
+from plotbridge.resume import first_unexecuted_line, resume_preamble
+
+log = logging.getLogger("plotbridge.runner")
+
+PROGRESS_INTERVAL = 0.2  # s between job progress messages (5 Hz)
+SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
+SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
+
+Report = Callable[[Job, bool], None]
+"""Called with the job and whether to save it (else only publish it)."""
+
+
+class Runner:
+    def __init__(self, plotter: str, link: Link, jobs_dir: Path, report: Report,
+                 finished: Callable[[Job], None]) -> None:  # fmt: skip
+        self.plotter = plotter
+        self.link = link
+        self.jobs_dir = jobs_dir
+        self.report = report
+        self.finished = finished
+        self.job: Job | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._motion = bytearray()
+        self._floor = 1
+        self._last_progress = 0.0
+        self._last_save = 0.0
+        self._control_at = 0.0
+
+    # ---- starting and stopping -----------------------------------------------
+
+    def begin(self, job: Job, line: int) -> None:
+        """Start streaming `job` from `line` (1: from the start; more: a resume)."""
+        resumed = line > 1
+        self.job = job
+        job.state, job.error, job.waiting = "running", None, None
+        job.plotter = self.plotter
+        job.started_at, job.finished_at, job.safe_line = time.time(), None, line
+        if not resumed:
+            job.lines_done, job.progress, job.resume_line = 0, 0.0, None
+        self._floor = line
+        self._motion = bytearray()
+        self.report(job, True)
+        log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
+                 "resumed" if resumed else "started", self.plotter, line)  # fmt: skip
+        self._task = asyncio.create_task(self._run(job, line), name=f"run-{self.plotter}")
+
+    async def close(self) -> None:
+        if self._task:
+            self._task.cancel()
+            with contextlib.suppress(BaseException):
+                await self._task
+
+    def pause(self) -> Job:
+        return self._hold_or_go(b"!", "running", "paused")
+
+    def resume(self) -> Job:
+        return self._hold_or_go(b"~", "paused", "running")
+
+    async def cancel(self, job: Job) -> None:
+        """Cancel the running job: what the board holds is stopped too."""
+        self._control_at = time.monotonic()
+        self._finish(job, "cancelled", None)
+        await self.halt()
+
+    def stopped(self) -> None:
+        """After an emergency stop: the job (if any) is `stopped`, resumable."""
+        job = self.job
+        if job is not None and job.active:
+            job.resume_line = self._resume_line(job)
+            self._finish(job, "stopped", "emergency stop")
+
+    def lost(self) -> None:
+        """The plotter dropped out: its job is `interrupted`, resumable."""
+        if self.job is not None:
+            self._interrupt(self.job)
+
+    async def halt(self) -> None:
+        """Stop what the board still has queued: hold, soft reset once the hold has
+        stopped motion, then lift the pen (`$X` first if the reset left an alarm)."""
+        with contextlib.suppress(Exception):
+            self.link.realtime(b"!")
+        await self._wait_state(lambda s: s in ("Hold", "Idle", "Alarm", "Disconnected"), 5.0)
+        await asyncio.sleep(0.3)  # let the deceleration complete
+        self.link.estop()
+        if await self._wait_state(lambda s: s in ("Idle", "Alarm"), 5.0) == "Alarm":
+            await self._quiet_command("$X")
+        await self._quiet_command("M5")
+
+    # ---- what the board reports --------------------------------------------------
+
+    def on_status(self, status: MachineStatus) -> None:
+        job = self.job
+        if job is None or not job.active:
+            return
+        queued = self.link.facts.queued_blocks(status.planner_free)
+        if queued is not None:
+            job.safe_line = first_unexecuted_line(self._motion, job.lines_done, queued,
+                                                  self._floor)  # fmt: skip
+        self._follow_buttons(job, status.state)
+
+    def _follow_buttons(self, job: Job, state: str) -> None:
+        """The board's pause and resume buttons change the job state too."""
+        settled = time.monotonic() - self._control_at > SETTLE_S
+        if job.state == "running" and state == "Hold" and settled:
+            job.state = "paused"
+            self.report(job, True)
+            log.info("job %s paused at the machine", job.id)
+        elif job.state == "paused" and state == "Run" and settled:
+            job.state = "running"
+            self.report(job, True)
+            log.info("job %s resumed at the machine", job.id)
+
+    # ---- streaming -------------------------------------------------------------------
+
+    async def _run(self, job: Job, line: int) -> None:
+        program = self.jobs_dir / job.id / "program.gcode"
+        try:
+            preamble = await asyncio.to_thread(resume_preamble, program, line) if line > 1 else []
+            reader = ProgramReader(program, line, preamble)
+            self._motion = reader.motion  # filled as the reader goes
+            start_time = time.time()
+            async with contextlib.aclosing(reader.lines()) as lines:
+                await self.link.stream(lines, self._on_ack)
+            state = await self._wait_done(start_time)
+            if not job.active:
+                return  # settled meanwhile (estop, cancel)
+            if state == "Idle":
+                job.lines_done = job.lines_total
+                self._finish(job, "done", None)
+            elif state == "Alarm":
+                self._finish(job, "failed", f"the board raised an alarm: {self._alarm_text()}")
+            else:
+                self._interrupt(job)
+        except StreamAborted as exc:
+            settled = not job.active
+            self._aborted(job, exc)
+            if exc.reason == "error" and not settled:
+                await self.halt()  # the board would go on with the lines it holds
+        except LinkDown:
+            self._interrupt(job)
+        except asyncio.CancelledError:
+            raise
+        except Exception as exc:  # keep the queue consistent whatever went wrong
+            log.exception("job %s crashed", job.id)
+            settled = not job.active
+            self._finish(job, "failed", f"server error while streaming: {exc}")
+            if not settled:  # e.g. the program could not be read on: stop what was sent
+                with contextlib.suppress(Exception):
+                    await self.halt()
+        finally:
+            if self.job is job:
+                self.job = None
+            self.finished(job)
+
+    async def _wait_done(self, since: float) -> str:
+        """After the last ok: wait until the board is Idle (or fails)."""
+        while True:
+            status = self.link.status
+            state = status.state if status.connected else "Disconnected"
+            if state in ("Alarm", "Disconnected"):
+                return state
+            if state == "Idle" and status.updated_at > since:
+                return state
+            await asyncio.sleep(0.05)
+
+    def _alarm_text(self) -> str:
+        code = self.link.status.alarm
+        return f"ALARM:{code}" if code is not None else "alarm"
+
+    def _on_ack(self, line: int) -> None:
+        job = self.job
+        if line <= 0 or job is None:
+            return
+        job.lines_done = line
+        now = time.monotonic()
+        save = now - self._last_save >= SAVE_INTERVAL
+        if save or now - self._last_progress >= PROGRESS_INTERVAL:
+            self._last_progress = now
+            self._progress(job)
+            if save:
+                self._last_save = now
+            self.report(job, save)
+
+    def _aborted(self, job: Job, exc: StreamAborted) -> None:
+        if not job.active:
+            return  # already settled (estop, cancel)
+        if exc.last_acked is not None and exc.last_acked > 0:
+            job.lines_done = max(job.lines_done, exc.last_acked)
+        if exc.reason == "disconnected":
+            self._interrupt(job)
+        elif exc.reason == "estop":
+            job.resume_line = self._resume_line(job)
+            self._finish(job, "stopped", "emergency stop")
+        elif exc.reason == "cancelled":
+            self._finish(job, "cancelled", None)
+        else:  # error or alarm from the board
+            line = exc.error_line or job.lines_done + 1
+            self._finish(job, "failed", f"line {line}: {exc.message or exc}")
+
+    def _interrupt(self, job: Job) -> None:
+        if not job.active:
+            return
+        job.resume_line = self._resume_line(job)
+        self._finish(job, "interrupted", "the link to the plotter was lost")
+
+    def _resume_line(self, job: Job) -> int:
+        """Two safe bounds, the later wins: the last status report's (acked minus the
+        blocks it still had queued) and now's (acked minus full planner and segment
+        buffers: a line is acknowledged only once it is in the planner)."""
+        full = first_unexecuted_line(self._motion, job.lines_done,
+                                     self.link.facts.most_queued, self._floor)  # fmt: skip
+        return max(job.safe_line or self._floor, full)
+
+    def _progress(self, job: Job) -> None:
+        total = max(job.lines_total, 1)
+        job.progress = round(min(job.lines_done / total, 1.0), 4)
+        try:
+            job.eta_s = round(float(eta(job.timeline, job.estimate_s, job.lines_done)), 1)
+        except Exception:
+            job.eta_s = round(job.estimate_s * (1 - job.progress), 1)
+
+    def _finish(self, job: Job, state: str, error: str | None) -> None:
+        job.state = state  # type: ignore[assignment]
+        job.error = error
+        job.finished_at = time.time()
+        self._progress(job)
+        if state == "done":
+            job.eta_s = 0.0
+        if self.job is job:
+            self.job = None
+        self.report(job, True)
+        at = f" at line {job.lines_done}" if state != "done" else ""
+        log.info("job %s %s on %s%s%s", job.id, state, self.plotter, at,
+                 f": {error}" if error else "")  # fmt: skip
+
+    # ---- hold and cycle start ------------------------------------------------------
+
+    def _hold_or_go(self, byte: bytes, before: str, after: str) -> Job:
+        """Feed hold (`!`) or cycle start (`~`) for the running job in state `before`."""
+        job = self.job
+        if job is None:
+            raise Refused(409, f"no job is running on {self.plotter}")
+        if job.state != before:
+            raise Refused(409, f"job {job.id} is {job.state}, not {before}")
+        self._control_at = time.monotonic()
+        try:
+            self.link.realtime(byte)
+        except LinkDown as exc:
+            raise Refused(409, "the plotter is not connected") from exc
+        job.state = after  # type: ignore[assignment]
+        self.report(job, True)
+        log.info("job %s %s", job.id, "paused" if after == "paused" else "resumed")
+        return job
+
+    async def _quiet_command(self, line: str) -> None:
+        try:
+            await self.link.command(line)
+        except Exception as exc:
+            log.warning("%s after stopping a job failed: %s", line, exc)
+
+    async def _wait_state(self, predicate: Callable[[str], bool], limit: float) -> str:
+        """Wait (at most `limit` s) for the machine state to satisfy `predicate`."""
+        deadline = time.monotonic() + limit
+        while True:
+            status = self.link.status
+            state = status.state if status.connected else "Disconnected"
+            if predicate(state) or time.monotonic() > deadline:
+                return state
+            await asyncio.sleep(0.02)
+

@@ -1,0 +1,282 @@
+"""The queue: every job in order, and which plotter runs which.
+
+The queue keeps the jobs in memory (the truth while running) and mirrors each
+change to the store and the event hub. It sends a started job to a free, ready
+plotter whose work area fits it (or to the one the job names); with several
+plotters a job nothing can run yet `waits` with the reason and starts by itself
+when a plotter frees, in queue order. With one plotter, starting a job the
+plotter cannot take now is refused (409), as it always was.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from plotbridge.errors import Refused
+from plotbridge.events import EventHub
+from plotbridge.jobs.imports import Importer
+from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job
+from plotbridge.jobs.store import JobStore
+from plotbridge.plotter.plotter import Plotter
+
+log = logging.getLogger("plotbridge.queue")
+
+
+class JobQueue:
+    def __init__(self, plotters: list[Plotter], store: JobStore, importer: Importer,
+                 events: EventHub, auto_start: bool = False) -> None:  # fmt: skip
+        if not plotters:
+            raise ValueError("a server needs at least one plotter")
+        self.plotters = {plotter.name: plotter for plotter in plotters}
+        self.store = store
+        self.importer = importer
+        self.events = events
+        self.auto_start = auto_start
+        self.jobs: dict[str, Job] = {}  # in queue order
+        for plotter in plotters:
+            plotter.on_ready = lambda _plotter: self.dispatch()
+            plotter.on_job = self._changed
+
+    @property
+    def first(self) -> Plotter:
+        return next(iter(self.plotters.values()))
+
+    def plotter(self, name: str | None) -> Plotter:
+        """The named plotter (404 if none), or the first one."""
+        if name is None:
+            return self.first
+        plotter = self.plotters.get(name)
+        if plotter is None:
+            raise Refused(404, f"no plotter named {name!r}; there are: "
+                               + ", ".join(self.plotters))  # fmt: skip
+        return plotter
+
+    # ---- lifecycle -------------------------------------------------------------------
+
+    def load(self) -> None:
+        """Read the store; a job that was running when the server died is interrupted."""
+        for job in self.store.load_all():
+            if job.state in ACTIVE:
+                job.state = "interrupted"
+                job.resume_line = job.safe_line or 1
+                job.error = "the server stopped while this job was running"
+                self.store.write(job.record(), len(self.jobs))
+                log.info("job %s (%s) interrupted by a server restart", job.id, job.name)
+            elif job.state == "waiting":  # waits again once the plotters are there
+                job.waiting = "the server restarted"
+            self.jobs[job.id] = job
+
+    # ---- reading ------------------------------------------------------------------------
+
+    def get(self, job_id: str) -> Job:
+        job = self.jobs.get(job_id)
+        if job is None:
+            raise Refused(404, f"no job with id {job_id!r}")
+        return job
+
+    def list(self) -> list[dict[str, Any]]:
+        return [job.public() for job in self.jobs.values()]
+
+    def preview_path(self, job_id: str) -> Path:
+        self.get(job_id)
+        return self.importer.preview_path(job_id)
+
+    # ---- changes -----------------------------------------------------------------------
+
+    def _changed(self, job: Job, save: bool = True) -> None:
+        if save and job.id in self.jobs:
+            self.store.save(job, list(self.jobs).index(job.id))
+        self.events.publish({"type": "job", "job": job.public()})
+        if job.state in FINISHED or job.state == "interrupted":
+            self.dispatch()
+
+    async def create(self, *, kind: str, source: Path | str, filename: str, name: str,
+                     options: dict[str, Any], placement: dict[str, Any],
+                     target: str | None = None) -> Job:  # fmt: skip
+        """Import an upload (a file already on disk) or a pattern into a new queued job."""
+        if target is not None:
+            self.plotter(target)
+        job_id, kept, result = await self.importer.create(kind, source, filename, options)
+        job = Job(id=job_id, name=name, kind=kind, source=kept, filename=filename,
+                  options=options, placement=placement, target=target,
+                  format=result.format, lines_total=result.lines_total,
+                  estimate_s=result.estimate_s)  # fmt: skip
+        job.imported(result)
+        self.jobs[job_id] = job
+        await asyncio.wrap_future(self.store.save(job, len(self.jobs) - 1))
+        self.events.publish({"type": "job", "job": job.public()})
+        log.info("job %s (%s) queued: %d lines", job_id, name, job.lines_total)
+        self.dispatch()
+        return job
+
+    async def reimport(self, job_id: str, name: str | None,
+                       placement: dict[str, Any] | None) -> Job:  # fmt: skip
+        job = self.get(job_id)
+        if job.state != "queued":
+            raise Refused(409, f"job {job_id} is {job.state}; only a queued job can be changed")
+        if placement is not None:
+            options = {**job.options, **placement}
+            result = await self.importer.reimport(
+                job_id, job.kind, job.source, job.filename, options,
+                still_wanted=lambda: job.state == "queued",
+            )  # fmt: skip
+            job.imported(result)
+            job.options = options
+            job.placement = {**job.placement, **placement}
+        if name is not None:
+            job.name = name
+        self._changed(job)
+        return job
+
+    def move(self, job_id: str, position: int) -> list[dict[str, Any]]:
+        job = self.get(job_id)
+        if job.state not in ("queued", "waiting"):
+            raise Refused(409, f"job {job_id} is {job.state}; only waiting jobs can be moved")
+        ids = list(self.jobs)
+        movable = ("queued", "waiting")
+        waiting = [i for i in ids if self.jobs[i].state in movable and i != job_id]
+        position = min(position, len(waiting))
+        waiting.insert(position, job_id)
+        slots = iter(waiting)
+        order = [next(slots) if self.jobs[i].state in movable else i for i in ids]
+        self.jobs = {i: self.jobs[i] for i in order}
+        self.store.set_order(order)
+        self.events.publish({"type": "queue", "order": order})
+        log.info("job %s moved to waiting position %d", job_id, position)
+        self.dispatch()
+        return self.list()
+
+    async def delete(self, job_id: str) -> None:
+        job = self.get(job_id)
+        if job.active:
+            raise Refused(409, f"job {job_id} is {job.state}; cancel it before deleting it")
+        del self.jobs[job_id]
+        await asyncio.wrap_future(self.store.delete(job_id))
+        await self.importer.delete(job_id)
+        self.events.publish({"type": "job_deleted", "id": job_id})
+        log.info("job %s deleted", job_id)
+
+    # ---- starting and dispatch -----------------------------------------------------------
+
+    def start(self, job_id: str, target: str | None = None) -> Job:
+        """Start (or resume, when interrupted or stopped) a job; `target` names a plotter."""
+        job = self.get(job_id)
+        if job.active:
+            raise Refused(409, f"job {job_id} is already {job.state}")
+        if target is not None:
+            self.plotter(target)
+            job.target = target
+        plotter, reason = self._place(job)
+        if plotter is not None:
+            self._begin(job, plotter)
+        elif len(self.plotters) == 1 or job.state in RESUMABLE:
+            raise Refused(409, reason)
+        else:
+            job.state, job.waiting, job.error = "waiting", reason, None
+            self._changed(job)
+            log.info("job %s waits: %s", job.id, reason)
+        return job
+
+    def dispatch(self) -> None:
+        """Start what waits (and, with auto-start, what is queued) on free plotters, in order."""
+        for job in list(self.jobs.values()):
+            if job.state == "waiting" or (self.auto_start and job.state == "queued"):
+                plotter, reason = self._place(job)
+                if plotter is not None:
+                    self._begin(job, plotter)
+                elif job.state == "waiting" and reason != job.waiting:
+                    job.waiting = reason
+                    self._changed(job, save=False)
+
+    def _candidates(self, job: Job) -> Iterable[Plotter]:
+        if job.target is not None:
+            return [self.plotter(job.target)]
+        if job.state in RESUMABLE and job.plotter in self.plotters:
+            return [self.plotters[job.plotter]]
+        return self.plotters.values()
+
+    def _place(self, job: Job) -> tuple[Plotter | None, str]:
+        """The plotter to run `job` on now, or None and why not."""
+        candidates = list(self._candidates(job))
+        reasons = []
+        for plotter in candidates:
+            if not plotter.fits(job):
+                reasons.append(f"the job does not fit {plotter.name}'s work area "
+                               f"({plotter.work_area})")  # fmt: skip
+                continue
+            if job.state in RESUMABLE and not self._same_size(job, plotter):
+                reasons.append(f"the job was interrupted on {job.plotter}, whose work area "
+                               f"differs from {plotter.name}'s")  # fmt: skip
+                continue
+            why = plotter.not_ready()
+            if why is None:
+                return plotter, ""
+            reasons.append(why)
+        if len(reasons) == 1:
+            return None, reasons[0]
+        return None, "no plotter can take it now: " + "; ".join(reasons)
+
+    def _same_size(self, job: Job, plotter: Plotter) -> bool:
+        previous = self.plotters.get(job.plotter or "")
+        return previous is None or previous is plotter or previous.work_area == plotter.work_area
+
+    def _begin(self, job: Job, plotter: Plotter) -> None:
+        line = (job.resume_line or 1) if job.state in RESUMABLE else 1
+        plotter.runner.begin(job, line)
+
+    # ---- control -------------------------------------------------------------------------
+
+    def _running_on(self, job_id: str | None, plotter: str | None = None) -> Plotter:
+        """The plotter running the given job, or the one running a job (the first if several)."""
+        if job_id is not None:
+            job = self.get(job_id)
+            if not job.active or job.plotter not in self.plotters:
+                raise Refused(409, f"job {job_id} is {job.state}, not running or paused")
+            return self.plotters[job.plotter]
+        if plotter is not None:
+            return self.plotter(plotter)
+        for candidate in self.plotters.values():
+            if candidate.job is not None:
+                return candidate
+        raise Refused(409, "no job is running")
+
+    def pause(self, job_id: str | None = None, plotter: str | None = None) -> Job:
+        return self._running_on(job_id, plotter).runner.pause()
+
+    def resume(self, job_id: str | None = None, plotter: str | None = None) -> Job:
+        if job_id is not None and self.get(job_id).state in RESUMABLE:
+            return self.start(job_id, plotter)
+        return self._running_on(job_id, plotter).runner.resume()
+
+    async def cancel(self, job_id: str) -> Job:
+        job = self.get(job_id)
+        if job.state in FINISHED:
+            raise Refused(409, f"job {job_id} is already {job.state}")
+        if not job.active:
+            job.state, job.error, job.waiting = "cancelled", None, None
+            job.finished_at = time.time()
+            self._changed(job)
+            return job
+        await self._running_on(job_id).runner.cancel(job)
+        return job
+
+    def estop_all(self, source: str) -> None:
+        """Every plotter's reset byte first, then the bookkeeping."""
+        for plotter in self.plotters.values():
+            plotter.reset_now()
+        for plotter in self.plotters.values():
+            plotter.stopped(source)
+
+    def snapshot_messages(self) -> list[dict[str, Any]]:
+        """What a new WebSocket client is sent first."""
+        messages: list[dict[str, Any]] = [
+            {"type": "machine", "plotter": p.name, "machine": p.machine()}
+            for p in self.plotters.values()
+        ]
+        messages.append({"type": "jobs", "jobs": self.list()})
+        return messages

@@ -1,0 +1,57 @@
+"""Which plotters a server drives: command line and the plotters.toml file."""
+
+from __future__ import annotations
+
+import argparse
+
+import pytest
+from plotbridge.cli import add_serve_arguments, plotters_from_args
+from plotbridge.config import ConfigError, PlotterConfig, read_plotters_file
+
+
+def parse(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    add_serve_arguments(parser)
+    return parser.parse_args(list(argv))
+
+
+def test_serial_repeats_and_virtual_counts(tmp_path, monkeypatch):
+    monkeypatch.delenv("PLOTBRIDGE_SERIAL", raising=False)
+    two = plotters_from_args(parse("--serial", "/dev/a", "--serial", "/dev/b"), tmp_path)
+    assert [(p.name, p.device) for p in two] == [("plotter1", "/dev/a"), ("plotter2", "/dev/b")]
+    assert [p.name for p in plotters_from_args(parse("--virtual", "3"), tmp_path)] == [
+        "plotter1", "plotter2", "plotter3"]
+    assert plotters_from_args(parse(), tmp_path) == [PlotterConfig("plotter1")]
+    with pytest.raises(ConfigError, match="between 1 and 16"):
+        plotters_from_args(parse("--virtual", "0"), tmp_path)
+
+
+def test_plotters_file(tmp_path, monkeypatch):
+    monkeypatch.delenv("PLOTBRIDGE_SERIAL", raising=False)
+    (tmp_path / "plotters.toml").write_text(
+        '[[plotter]]\nname = "left"\ndevice = "/dev/ttyUSB0"\nbaud = 9600\n'
+        'board = "uno-uln2003"\nwidth = 200\nheight = 150\n\n'
+        '[[plotter]]\nname = "sim"\nvirtual = true\n'
+    )
+    left, sim = plotters_from_args(parse(), tmp_path)
+    assert left == PlotterConfig("left", "/dev/ttyUSB0", "uno-uln2003", 9600, (200.0, 150.0))
+    assert sim.virtual and sim.name == "sim"
+    assert plotters_from_args(parse("--virtual", "1"), tmp_path)[0].name == "plotter1"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[[plotter]]\nname = 'x'\n", "needs device"),
+    ("[[plotter]]\nvirtual = true\ndevice = '/dev/a'\n", "either device or virtual"),
+    ("[[plotter]]\nvirtual = true\nwidth = 100\n", "width and height"),
+    ("[[plotter]]\nvirtual = true\ncolour = 'red'\n", "unknown keys colour"),
+    ("[[plotter]]\nvirtual = true\n[[plotter]]\nvirtual = true\nname = 'plotter1'\n", "differ"),
+    ("[[plotter]]\nvirtual = true\nname = 'a b'\n", "letters, digits"),
+    ("[[plotter]\n", "plotters.toml"),
+    ("title = 'no plotters'\n", "no [[plotter]]"),
+])  # fmt: skip
+def test_bad_plotters_file_says_what_and_where(tmp_path, text, message):
+    path = tmp_path / "plotters.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=r"plotters\.toml") as info:
+        read_plotters_file(path)
+    assert message in str(info.value)
