@@ -6,14 +6,17 @@ HOST ?= 0.0.0.0
 PORT ?= 8000
 SERIAL ?=
 SIM_SPEED ?= 1
+BOARD ?= uno-cnc-shield
 DATA_DIR ?= data
 ARGS ?=
 
-.PHONY: run test setup setup-test firmware sim lint flash install-service bench clean
+INKSCAPE_EXTENSIONS ?= $(HOME)/.config/inkscape/extensions
+
+.PHONY: run test setup setup-test firmware sim lint flash install-service bench clean inkscape-extension
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
-	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED)) $(ARGS)
+	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED) --board $(BOARD)) $(ARGS)
 
 test: setup-test firmware sim
 	$(MAKE) -C firmware test
@@ -32,12 +35,13 @@ $(VENV)/.stamp: requirements.txt server/pyproject.toml
 	$(PY) -m pip install -q --disable-pip-version-check --no-deps -e server
 	touch $@
 
-$(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt
+$(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt requirements-inkex.txt
 	$(PY) -m pip install -q --disable-pip-version-check -r requirements-dev.txt
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps -r requirements-inkex.txt
 	touch $@
 
 firmware:
-	$(MAKE) -C firmware all
+	$(MAKE) -C firmware BOARD=$(BOARD) all
 
 sim:
 	$(MAKE) -C firmware sim
@@ -46,10 +50,15 @@ lint: setup-test
 	$(VENV)/bin/ruff check server tests bench
 
 flash: .stamps/system-run firmware
-	$(MAKE) -C firmware flash PORT=$(or $(SERIAL),/dev/ttyUSB0)
+	$(MAKE) -C firmware flash BOARD=$(BOARD) PORT=$(or $(SERIAL),/dev/ttyUSB0)
 
 install-service: setup firmware sim
 	scripts/install-service $(CURDIR)
+
+inkscape-extension:
+	mkdir -p "$(INKSCAPE_EXTENSIONS)"
+	cp integrations/inkscape/plotbridge_send.inx integrations/inkscape/plotbridge_send.py "$(INKSCAPE_EXTENSIONS)/"
+	@echo "installed into $(INKSCAPE_EXTENSIONS): restart Inkscape, then Extensions > plotbridge > Send to plotter"
 
 bench: setup-test firmware sim
 	for b in bench/*.py; do $(PY) $$b || exit 1; done

@@ -1,4 +1,5 @@
-/* Build-time constants: pins (DESIGN.md pin map), buffer sizes, timing. */
+/* Build-time constants: buffer sizes, timing, and the selected board's header
+ * (boards/NAME.h, the only place a pin is named). */
 #ifndef CONFIG_H
 #define CONFIG_H
 
@@ -9,7 +10,11 @@
 #define RX_SIZE 128          /* receive ring: GRBL's character-counting size */
 #define TX_SIZE 128          /* transmit ring (power of two) */
 #define LINE_SIZE 80         /* longest accepted line after stripping */
+#if defined(__AVR_ATmega2560__)
+#define PLAN_SIZE 34         /* 8 KiB of RAM: 33 usable blocks (>= 32 look-ahead) */
+#else
 #define PLAN_SIZE 18         /* planner ring: 17 usable blocks (>= 16 look-ahead) */
+#endif
 #define SEG_SIZE 8           /* step segment ring (7 usable) */
 
 /* Step timer: Timer1 at F_CPU/8 = 2 MHz. */
@@ -17,24 +22,16 @@
 #define STEP_PERIOD_MIN 40U  /* 50 kHz ceiling */
 #define SEGMENT_S 0.008f     /* target duration of one step segment */
 
-/* Port D: step and direction. */
-#define X_STEP_BIT 2
-#define Y_STEP_BIT 3
-#define X_DIR_BIT 5
-#define Y_DIR_BIT 6
-#define STEP_MASK ((1 << X_STEP_BIT) | (1 << Y_STEP_BIT))
-#define DIR_MASK ((1 << X_DIR_BIT) | (1 << Y_DIR_BIT))
-/* Port B: enable (active low), limits, servo on OC2A. */
-#define ENABLE_BIT 0
-#define X_LIMIT_BIT 1
-#define Y_LIMIT_BIT 2
-#define SERVO_BIT 3
-#define LIMIT_MASK ((1 << X_LIMIT_BIT) | (1 << Y_LIMIT_BIT))
-/* Port C: buttons (active low) and the stop LED. */
-#define ESTOP_BIT 0
-#define PAUSE_BIT 1
-#define RESUME_BIT 2
-#define LED_BIT 3
-#define BUTTON_MASK ((1 << ESTOP_BIT) | (1 << PAUSE_BIT) | (1 << RESUME_BIT))
+/* Drive kinds (the board header picks one as DRIVE_KIND). */
+#define DRIVE_STEPDIR 1      /* step/dir drivers (A4988, DRV8825, TMC in step mode) */
+#define DRIVE_UNIPOLAR 2     /* four coils, half-step 8-state (ULN2003 + 28BYJ-48) */
+#define DRIVE_BIPOLAR 3      /* two H-bridges as four wires (L298N, L293D) */
+
+/* The board: its pins and defaults (make BOARD=NAME picks the header). */
+#ifndef BOARD_HEADER
+#define BOARD_HEADER "boards/uno-cnc-shield.h"
+#endif
+#include "io.h"
+#include BOARD_HEADER
 
 #endif

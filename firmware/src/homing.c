@@ -66,7 +66,7 @@ static uint8_t move_until(uint8_t mask, uint8_t toward, uint8_t want_closed, flo
         machine_poll();
         if (mach.abort)
             return mask;
-        uint8_t closed = inputs_limits();
+        uint8_t closed = inputs_home_switches();
         for (uint8_t a = 0; a < N_AXIS; a++) {
             if (!(mask & (1 << a)))
                 continue;

@@ -1,5 +1,5 @@
-/* Limit switches (PB1, PB2) and buttons (PC0 stop, PC1 pause, PC2 resume),
- * all to ground with pull-ups; pin-change interrupts act on them at once. */
+/* Limit switches and buttons of the board header (boards/NAME.h), all to
+ * ground with pull-ups. */
 #ifndef INPUTS_H
 #define INPUTS_H
 #include <stdint.h>
@@ -12,7 +12,9 @@
 
 void inputs_init(void);
 uint8_t inputs_read(void);          /* PIN_* bits of active inputs */
-uint8_t inputs_limits(void);        /* PIN_X_LIMIT | PIN_Y_LIMIT as active */
+uint8_t inputs_limits(void);        /* PIN_X_LIMIT | PIN_Y_LIMIT: any switch of the axis closed */
+uint8_t inputs_home_switches(void); /* the same for the switch at the homing end ($23) only */
+void inputs_poll(void);             /* boards without pin-change wiring: from the 1 ms timer */
 void inputs_homing(uint8_t on);     /* while homing, switches do not raise alarms */
 void inputs_led(uint8_t on);
 #endif

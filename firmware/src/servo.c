@@ -9,11 +9,15 @@
  * simavr drives PB3 from the compare unit too, but it restarts the counter on
  * every OCR2A/TCCR2A write, so in the simulator each interval is stretched by
  * the interrupt latency (a few us per edge); the chip has no such error.
- * The same interrupt keeps the millisecond timebase. */
+ * Boards whose servo pin is not OC2A set the pin from this interrupt instead
+ * (SERVO_OC2A unset in the board header).
+ * The same interrupt keeps the millisecond timebase, and samples the inputs
+ * on boards without pin-change wiring. */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <util/atomic.h>
 #include "config.h"
+#include "inputs.h"
 #include "servo.h"
 
 #define TICK_US 4
@@ -41,11 +45,21 @@ static void load_next(void)
     uint8_t edge = next == remaining;  /* the part ends with this match */
     uint8_t set = edge ? !high : high; /* edge: change level; otherwise keep it */
     OCR2A = (uint8_t)(next - 1);
+#ifdef SERVO_OC2A
     TCCR2A = (uint8_t)((1 << WGM21) | (set ? COM_SET : COM_CLEAR));
+#else
+    (void)set;
+    TCCR2A = 1 << WGM21;
+#endif
 }
 
 ISR(TIMER2_COMPA_vect)
 {
+#ifndef SERVO_OC2A
+    /* a pin without the compare output: set the level the match just made
+     * (a few us late, the same for both edges, so the width holds) */
+    IO_SET(SERVO, high ^ (remaining == interval));
+#endif
     us_frac += (uint16_t)interval * TICK_US;
     while (us_frac >= 1000) {
         us_frac -= 1000;
@@ -57,6 +71,9 @@ ISR(TIMER2_COMPA_vect)
         remaining = high ? pulse_ticks : (uint16_t)(FRAME_TICKS - pulse_ticks);
     }
     load_next();
+#ifndef INPUTS_PCINT
+    inputs_poll();
+#endif
 }
 
 uint32_t timebase_ms(void)
@@ -68,8 +85,8 @@ uint32_t timebase_ms(void)
 
 void servo_init(void)
 {
-    DDRB |= 1 << SERVO_BIT;
-    PORTB &= ~(1 << SERVO_BIT);
+    IO_OUTPUT(SERVO);
+    IO_LOW(SERVO);
     servo_set_us(1000);
     high = 0;
     remaining = 1000; /* a short low part first */

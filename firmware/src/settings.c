@@ -12,12 +12,12 @@ void settings_defaults(settings_t *s)
 {
     memset(s, 0, sizeof(*s));
     for (uint8_t i = 0; i < N_AXIS; i++) {
-        s->steps_per_mm[i] = 80.0f;
-        s->max_rate[i] = 6000.0f;
-        s->accel[i] = 1000.0f;
+        s->steps_per_mm[i] = DEFAULT_STEPS_PER_MM;
+        s->max_rate[i] = DEFAULT_MAX_RATE;
+        s->accel[i] = DEFAULT_ACCEL;
     }
-    s->max_travel[0] = 300.0f;
-    s->max_travel[1] = 220.0f;
+    s->max_travel[0] = DEFAULT_TRAVEL_X;
+    s->max_travel[1] = DEFAULT_TRAVEL_Y;
     s->junction_deviation = 0.02f;
     s->arc_tolerance = 0.002f;
     s->homing_feed = 300.0f;
@@ -30,9 +30,9 @@ void settings_defaults(settings_t *s)
     s->pulse_us = 4;
     s->idle_delay_ms = 255;
     s->report_mask = 3;
-    s->soft_limits = 1;
-    s->hard_limits = 1;
-    s->homing_enable = 1;
+    s->soft_limits = DEFAULT_HOMING; /* the board header: switches or not */
+    s->hard_limits = DEFAULT_HOMING;
+    s->homing_enable = DEFAULT_HOMING;
     s->homing_dir_mask = 3;
 }
 

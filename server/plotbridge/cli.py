@@ -1,4 +1,5 @@
-"""Command line: `plotbridge serve` and `plotbridge submit`."""
+"""Command line: `plotbridge serve`, and the client verbs (submit, status, queue, stop,
+pause, resume, home) built on `plotbridge.client`."""
 
 from __future__ import annotations
 
@@ -59,6 +60,11 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="virtual plotter speed, times real time (0: unthrottled)",
     )  # fmt: skip
     parser.add_argument(
+        "--board", default=_env("BOARD", "uno-cnc-shield"),
+        help="board profile of the plotters (firmware/src/boards/NAME.h); "
+             "a virtual plotter runs that board's firmware build",
+    )  # fmt: skip
+    parser.add_argument(
         "--token", help="API token, at least 16 characters; visible in `ps`, so prefer "
         "--token-file or PLOTBRIDGE_TOKEN (default: generated into DATA_DIR/token)",
     )  # fmt: skip
@@ -90,6 +96,11 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="start the next queued job automatically",
     )  # fmt: skip
     parser.add_argument(
+        "--zeroconf", action=argparse.BooleanOptionalAction,
+        default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
+        help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
+    )  # fmt: skip
+    parser.add_argument(
         "--log-level", default=_env("LOG_LEVEL", "info"), choices=logsetup.LEVELS,
         help="console log level",
     )  # fmt: skip
@@ -113,13 +124,13 @@ def plotters_from_args(args: argparse.Namespace, data_dir: Path) -> list[Plotter
             return read_plotters_file(data_dir / PLOTTERS_FILE)
         serial = [d for d in str(_env("SERIAL", "")).split(",") if d.strip()] or None
     if serial:
-        plotters = [PlotterConfig(f"plotter{n}", d.strip(), baud=args.baud)
+        plotters = [PlotterConfig(f"plotter{n}", d.strip(), board=args.board, baud=args.baud)
                     for n, d in enumerate(serial, 1)]  # fmt: skip
     else:
         count = 1 if args.virtual is None else args.virtual
         if count < 1 or count > 16:
             raise ConfigError(f"--virtual {count}: between 1 and 16 virtual plotters")
-        plotters = [PlotterConfig(f"plotter{n}") for n in range(1, count + 1)]
+        plotters = [PlotterConfig(f"plotter{n}", board=args.board) for n in range(1, count + 1)]
     return check_names(plotters, "the command line")
 
 
@@ -140,6 +151,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         max_upload_mb=args.max_upload_mb,
         auto_start=args.auto_start,
         log_level=args.log_level,
+        zeroconf=args.zeroconf,
         web_dir=find_web_dir(),
         import_limits=Limits(
             workers=max(1, args.import_workers), time_limit=args.import_time_limit,
@@ -205,6 +217,7 @@ def keep_pauses_short() -> None:
 async def serve(config: Config) -> int:
     import uvicorn
 
+    from plotbridge import mdns
     from plotbridge.app import Board, create_app
     from plotbridge.guard import connections
     from plotbridge.plotter.link import Link
@@ -223,7 +236,8 @@ async def serve(config: Config) -> int:
             device = plotter.device
             if device is None:
                 virtual = VirtualPlotter(data_dir=sim_dir(config, index, plotter.name),
-                                         speed=config.sim_speed)  # fmt: skip
+                                         speed=config.sim_speed,
+                                         board=plotter.board or "uno-cnc-shield")
                 await virtual.start()
                 device = str(virtual.port)
                 log.info("%s: virtual plotter on %s (speed %g)", plotter.name, device,
@@ -246,7 +260,8 @@ async def serve(config: Config) -> int:
             config.host, config.port, config.data_dir, file_limit,
             ", ".join(p.name for p in config.plotters),
         )  # fmt: skip
-        await server.serve()
+        async with mdns.announced(config.host, config.port, config.zeroconf):
+            await server.serve()
     finally:
         for board in boards:
             if board.virtual is not None:
@@ -300,15 +315,19 @@ def main(argv: list[str] | None = None) -> int:
     token_parser = commands.add_parser("token", help="print the login link, or --rotate the token")
     add_token_arguments(token_parser)
     submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
-    if argv[:1] == ["submit"]:  # its client libraries (httpx, rich) stay out of the server
+    if argv[:1] != ["serve"]:  # the client modules stay out of the server's process
+        from plotbridge import commands as verbs
         from plotbridge import submit
 
         submit.add_arguments(submit_parser)
+        verbs.add_verbs(commands)
     args = parser.parse_args(argv)
     if args.command == "submit":
         return submit.run(args)
     if args.command == "token":
         return token_command(args)
+    if args.command != "serve":
+        return verbs.run(args)
     logsetup.setup(args.log_level)
     try:
         return asyncio.run(serve(config_from_args(args)))

@@ -115,6 +115,7 @@ class Config:
     max_upload_mb: float = 50.0
     auto_start: bool = False
     log_level: str = "info"
+    zeroconf: bool = True  # announce on the LAN (plotbridge.mdns)
     web_dir: Path | None = None
     import_limits: Limits = field(default_factory=Limits)
 

@@ -59,7 +59,7 @@ class VirtualPlotter:
     backoff_max = 5.0
 
     def __init__(self, data_dir: Path, speed: float = 1.0, firmware: Path | None = None,
-                 extra_args: list[str] | None = None) -> None:
+                 extra_args: list[str] | None = None, board: str = "uno-cnc-shield") -> None:
         self.data_dir = Path(data_dir)
         self.speed = speed
         self.firmware_dir = firmware or firmware_dir()
@@ -70,7 +70,9 @@ class VirtualPlotter:
         if len(str(self.control_path)) > 100:  # Unix socket paths are limited to 107 bytes
             self.control_path = Path(tempfile.mkdtemp(prefix="plotbridge-")) / "control.sock"
         self.eeprom_path = self.data_dir / "eeprom.bin"
-        self.elf = self.firmware_dir / "build" / "plotbridge.elf"
+        self.board = board
+        build = "build" if board == "uno-cnc-shield" else f"build/{board}"  # firmware/Makefile
+        self.elf = self.firmware_dir / build / "plotbridge.elf"
         self.plotsim = self.firmware_dir / "sim" / "build" / "plotsim"
         self._proc: asyncio.subprocess.Process | None = None
         self._supervisor: asyncio.Task[None] | None = None
@@ -82,7 +84,7 @@ class VirtualPlotter:
         """`make -C firmware all sim`; a failed build is fatal only without binaries."""
         try:
             proc = await asyncio.create_subprocess_exec(
-                "make", "-C", str(self.firmware_dir), "all", "sim",
+                "make", "-C", str(self.firmware_dir), f"BOARD={self.board}", "all", "sim",
                 stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT)
             output, _ = await proc.communicate()
             failed = proc.returncode != 0
@@ -124,7 +126,8 @@ class VirtualPlotter:
     def command_line(self) -> list[str]:
         return [str(self.plotsim), "--pty-link", str(self.port), "--speed", f"{self.speed:g}",
                 "--trace", str(self.trace_path), "--control", str(self.control_path),
-                "--eeprom", str(self.eeprom_path), *self.extra_args, str(self.elf)]
+                "--eeprom", str(self.eeprom_path), "--board", self.board, *self.extra_args,
+                str(self.elf)]
 
     async def _supervise(self) -> None:
         delay = self.backoff_min

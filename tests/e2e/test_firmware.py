@@ -15,80 +15,13 @@ import time
 from collections.abc import Iterator
 
 import pytest
-import serial
+
+from tests.fixtures.grbl import Grbl
 
 pytestmark = pytest.mark.e2e
 
 STEP_MM = 1 / 80
 TOL = 0.02  # mm: a step and a bit
-
-
-class Grbl:
-    """A minimal GRBL 1.1 client: one line at a time, all lines kept."""
-
-    def __init__(self, port: str) -> None:
-        self.ser = serial.Serial(port, 115200, timeout=0.05)
-        self.lines: list[str] = []  # everything received
-        self.queue: list[str] = []  # received, not yet looked at by wait_for
-        self.pending = ""
-
-    def read_lines(self, timeout: float) -> list[str]:
-        deadline = time.monotonic() + timeout
-        got: list[str] = []
-        while time.monotonic() < deadline:
-            data = self.ser.read(4096).decode("ascii", errors="replace")
-            if not data:
-                if got:
-                    break
-                continue
-            self.pending += data
-            while "\n" in self.pending:
-                line, self.pending = self.pending.split("\n", 1)
-                line = line.strip("\r")
-                if line:
-                    got.append(line)
-        self.lines += got
-        self.queue += got
-        return got
-
-    def wait_for(self, pattern: str, timeout: float = 20.0) -> list[str]:
-        deadline = time.monotonic() + timeout
-        seen: list[str] = []
-        while time.monotonic() < deadline:
-            if not self.queue:
-                self.read_lines(0.2)
-            while self.queue:
-                line = self.queue.pop(0)
-                seen.append(line)
-                if re.search(pattern, line):
-                    return seen
-        raise AssertionError(f"no line matching {pattern!r} within {timeout} s; got {seen}")
-
-    def send(self, line: str, timeout: float = 60.0) -> list[str]:
-        """Sends one line; returns the lines up to and including its ok/error."""
-        self.ser.write(line.encode() + b"\n")
-        return self.wait_for(r"^(ok|error:\d+)$", timeout)
-
-    def ok(self, line: str, timeout: float = 60.0) -> list[str]:
-        got = self.send(line, timeout)
-        assert got[-1] == "ok", f"{line!r} -> {got}"
-        return got
-
-    def status(self) -> str:
-        self.ser.write(b"?")
-        return self.wait_for(r"^<.*>$", 5.0)[-1]
-
-    def wait_state(self, state: str, timeout: float = 60.0) -> str:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            s = self.status()
-            if s.startswith("<" + state):
-                return s
-            time.sleep(0.05)
-        raise AssertionError(f"state {state} not reached: {s}")
-
-    def close(self) -> None:
-        self.ser.close()
 
 
 def mpos(status: str) -> tuple[float, float]:

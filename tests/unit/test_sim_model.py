@@ -48,7 +48,7 @@ class Edges:
         """One step period: direction first (1 us setup), then the pulses together."""
         changed = False
         for axis, sign in steps.items():
-            level = 1 if sign > 0 else 0
+            level = 0 if sign > 0 else 1  # GRBL: direction pin LOW = positive
             if self.dirs[axis] != level:
                 self.dirs[axis] = level
                 self.emit("d" + axis, level)
@@ -215,13 +215,13 @@ def test_driver_checks(sim_build: SimBuild) -> None:
     edges.wait_us(5)
     edges.emit("sx", 0)
     edges.wait_us(100)
-    edges.emit("dx", 0)  # 125 ns direction setup
+    edges.emit("dx", 1)  # 125 ns direction setup
     edges.cycle += 2
     edges.emit("sx", 1)
     edges.wait_us(5)
     edges.emit("sx", 0)
     edges.wait_us(100)
-    edges.emit("dx", 1)  # 250 ns: enough
+    edges.emit("dx", 0)  # 250 ns: enough
     edges.cycle += 4
     edges.emit("sx", 1)
     edges.wait_us(5)

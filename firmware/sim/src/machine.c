@@ -60,13 +60,16 @@ static void update_limits(struct machine *mc)
 {
 	double x, y;
 	machine_position(mc, &x, &y);
-	int closed[2] = { x < 0 || x > mc->cfg.width, y < 0 || y > mc->cfg.height };
+	int closed[2][2] = { { x < 0, x > mc->cfg.width }, { y < 0, y > mc->cfg.height } };
 	for (int i = 0; i < 2; i++) {
-		if (closed[i] != mc->limit[i]) {
-			mc->limit[i] = closed[i];
-			if (mc->on_limit)
-				mc->on_limit(mc->ctx, i, closed[i]);
+		for (int end = 0; end < 2; end++) {
+			if (closed[i][end] != mc->limit_end[i][end]) {
+				mc->limit_end[i][end] = closed[i][end];
+				if (mc->on_limit)
+					mc->on_limit(mc->ctx, i, end, closed[i][end]);
+			}
 		}
+		mc->limit[i] = closed[i][0] || closed[i][1];
 	}
 }
 
@@ -90,8 +93,13 @@ void machine_init(struct machine *mc, const struct machine_config *cfg, double x
 	path_simplify_start(&mc->path, PATH_TOL_STEPS / spm, here(mc, 0));
 	double x, y;
 	machine_position(mc, &x, &y);
+	mc->limit_end[AXIS_X][0] = x < 0;
+	mc->limit_end[AXIS_X][1] = x > cfg->width;
+	mc->limit_end[AXIS_Y][0] = y < 0;
+	mc->limit_end[AXIS_Y][1] = y > cfg->height;
 	mc->limit[AXIS_X] = x < 0 || x > cfg->width;
 	mc->limit[AXIS_Y] = y < 0 || y > cfg->height;
+	mc->m[AXIS_X].phase = mc->m[AXIS_Y].phase = -1;
 	mc->changed = 1;
 }
 
@@ -109,6 +117,7 @@ void machine_clear(struct machine *mc, uint64_t cycle)
 	mc->pen_lifts = 0;
 	mc->travel_mm = mc->draw_mm = 0;
 	memset(&mc->v, 0, sizeof mc->v);
+	mc->missed_steps = 0;
 	mc->min_pulse_cycles = UINT64_MAX;
 	for (int i = 0; i < 2; i++) {
 		mc->m[i].max_rate = 0;
@@ -116,6 +125,15 @@ void machine_clear(struct machine *mc, uint64_t cycle)
 		mc->m[i].have_step = 0;
 	}
 	mc->changed = 1;
+}
+
+static void move(struct machine *mc, int axis, int delta, uint64_t cycle)
+{
+	mc->m[axis].pos += delta;
+	struct path_point from = mc->path.anchor, v;
+	if (path_simplify_add(&mc->path, here(mc, cycle), &v))
+		keep_vertex(mc, from, v);
+	update_limits(mc);
 }
 
 static void step_rise(struct machine *mc, int axis, uint64_t cycle)
@@ -145,11 +163,7 @@ static void step_rise(struct machine *mc, int axis, uint64_t cycle)
 		mc->v.step_while_disabled++;
 		return;
 	}
-	m->pos += m->dir ? 1 : -1;
-	struct path_point from = mc->path.anchor, v;
-	if (path_simplify_add(&mc->path, here(mc, cycle), &v))
-		keep_vertex(mc, from, v);
-	update_limits(mc);
+	move(mc, axis, m->dir ? -1 : 1, cycle); /* GRBL's convention: a LOW direction pin is positive */
 }
 
 void machine_step_pin(struct machine *mc, int axis, int level, uint64_t cycle)
@@ -194,6 +208,59 @@ void machine_enable_pin(struct machine *mc, int level)
 		mc->enabled = !level;
 		mc->changed = 1;
 	}
+}
+
+/* The 8-state sequence A, AB, B, BC, C, CD, D, DA as coil patterns; every
+ * other pattern (opposite coils, three or four on) is no state at all. */
+static int coil_state(int pattern)
+{
+	static const int seq[8] = { 1, 3, 2, 6, 4, 12, 8, 9 };
+	for (int s = 0; s < 8; s++)
+		if (seq[s] == pattern)
+			return s;
+	return -1;
+}
+
+void machine_coils(struct machine *mc, int axis, int pattern, uint64_t cycle)
+{
+	struct motor *m = &mc->m[axis];
+	if (pattern == m->coils)
+		return;
+	m->coils = pattern;
+	mc->changed = 1;
+	int any = mc->m[0].coils || mc->m[1].coils;
+	mc->enabled = any;
+	if (pattern == 0)
+		return; /* de-energized: the rotor stays where it is */
+	int s = coil_state(pattern);
+	if (s < 0) {
+		mc->missed_steps++;
+		return;
+	}
+	int stride = mc->cfg.coil_stride > 0 ? mc->cfg.coil_stride : 1;
+	if (m->phase >= 0) {
+		int d = (s - m->phase + 8) % 8; /* the rotor follows the nearest way */
+		int delta = d <= 4 ? d : d - 8;
+		if (delta == stride || delta == -stride) {
+			m->pulses++;
+			mc->stepped = 1;
+			if (m->have_step && cycle > m->last_step) {
+				double rate = mc->cfg.freq / (double)(cycle - m->last_step);
+				if (rate > m->max_rate)
+					m->max_rate = rate;
+				if (rate > mc->cfg.max_step_rate)
+					mc->v.overspeed++;
+			}
+			m->have_step = 1;
+			m->last_step = cycle;
+			move(mc, axis, delta / stride, cycle);
+		} else if (delta != 0) {
+			/* a jump the rotor cannot follow (opposite state, or two states
+			 * at once where one is a step): the motor loses its place */
+			mc->missed_steps++;
+		}
+	}
+	m->phase = s;
 }
 
 void machine_servo_pin(struct machine *mc, int level, uint64_t cycle)

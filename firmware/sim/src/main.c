@@ -1,5 +1,5 @@
-/* plotsim: the real firmware ELF on a simulated ATmega328P at 16 MHz, wired
- * to a plotter model. One thread: the loop runs instructions in slices and,
+/* plotsim: the real firmware ELF on a simulated ATmega328P or ATmega2560 at
+ * 16 MHz, wired as a board profile (--board) to a plotter model. One thread: the loop runs instructions in slices and,
  * between slices, services the pty and the control socket, paces simulated
  * time against the wall clock, and keeps the trace file and EEPROM current. */
 #include <elf.h>
@@ -16,9 +16,11 @@
 #include "sim_elf.h"
 
 #include "control.h"
+#include "board_pins.h"
 #include "eeprom_file.h"
 #include "machine.h"
 #include "options.h"
+#include "peek.h"
 #include "pins.h"
 #include "pty_link.h"
 #include "reset_fix.h"
@@ -45,6 +47,7 @@ static void on_signal(int sig)
 
 struct sim {
 	struct options opt;
+	const struct board_pins *board;
 	avr_t *avr;
 	struct machine mc;
 	struct pins pins;
@@ -137,8 +140,10 @@ static void handle_command(void *ctx, const char *line, FILE *reply)
 			fprintf(reply, "error: unknown button '%s' (estop, pause, resume)\n", arg);
 			return;
 		}
-		pins_set_button(&s->pins, b, cmd[0] == 'p');
-		fputs("ok\n", reply);
+		if (pins_set_button(&s->pins, b, cmd[0] == 'p') < 0)
+			fprintf(reply, "error: board %s has no %s button\n", s->board->name, arg);
+		else
+			fputs("ok\n", reply);
 	} else if (strcmp(cmd, "trace") == 0) {
 		write_json(s, reply, 1);
 	} else if (strcmp(cmd, "svg") == 0) {
@@ -151,11 +156,13 @@ static void handle_command(void *ctx, const char *line, FILE *reply)
 	} else if (strcmp(cmd, "clear") == 0) {
 		machine_clear(&s->mc, s->avr->cycle);
 		fputs("ok\n", reply);
+	} else if (strcmp(cmd, "peek") == 0) {
+		peek_reply(s->avr, arg, reply);
 	} else if (strcmp(cmd, "quit") == 0) {
 		s->quit = 1;
 		fputs("ok\n", reply);
 	} else {
-		fprintf(reply, "error: unknown command '%s' (press, release, trace, svg, clear, quit)\n",
+		fprintf(reply, "error: unknown command '%s' (press, release, trace, svg, clear, peek, quit)\n",
 			cmd);
 	}
 }
@@ -258,32 +265,114 @@ static int check_elf(const char *path, char *err, size_t errlen)
 	return 0;
 }
 
+/* The bootloader's Intel HEX into the flash, and the reset vector at its
+ * lowest address (the BOOTRST fuse, which simavr does not model). The chip
+ * then programs itself with SPM as avrdude talks to it over the pty.
+ * (simavr's own HEX reader rejects the start-address records in Arduino's
+ * bootloader files, so this reads them: data 00, end 01, segment 02,
+ * start 03/05 ignored, linear 04.) */
+static int load_bootloader(avr_t *avr, const char *path, unsigned flash_bytes, char *err,
+			   size_t errlen)
+{
+	FILE *f = fopen(path, "r");
+	if (!f) {
+		snprintf(err, errlen, "--bootloader %s: %s", path, strerror(errno));
+		return -1;
+	}
+	char line[600];
+	uint32_t base = 0, start = UINT32_MAX;
+	int n = 0, bad = 0;
+	while (!bad && fgets(line, sizeof line, f)) {
+		n++;
+		unsigned len, addr, type, byte, sum = 0;
+		if (line[0] != ':' || sscanf(line + 1, "%2x%4x%2x", &len, &addr, &type) != 3 ||
+		    strlen(line) < 11 + 2 * len) {
+			bad = 1;
+			break;
+		}
+		uint8_t data[256];
+		sum = len + (addr >> 8) + (addr & 0xff) + type;
+		for (unsigned i = 0; i <= len; i++) { /* the data, then the checksum */
+			sscanf(line + 9 + 2 * i, "%2x", &byte);
+			sum += byte;
+			if (i < len)
+				data[i] = (uint8_t)byte;
+		}
+		if ((sum & 0xff) != 0) {
+			bad = 1;
+		} else if (type == 0) {
+			/* Debian's optiboot_atmega328.hex (rebuilt with a newer gcc)
+			 * is 20 bytes too long and spills past 0x7FFF; the chip's
+			 * program counter wraps there, so the bytes go where it
+			 * would fetch them: address modulo the flash size */
+			for (unsigned i = 0; i < len; i++)
+				avr->flash[(base + addr + i) % flash_bytes] = data[i];
+			if (base + addr < start && base + addr < flash_bytes)
+				start = base + addr;
+		} else if (type == 2 && len == 2) {
+			base = (uint32_t)((data[0] << 8) | data[1]) << 4;
+		} else if (type == 4 && len == 2) {
+			base = (uint32_t)((data[0] << 8) | data[1]) << 16;
+		} else if (type == 1) {
+			break;
+		}
+	}
+	fclose(f);
+	if (bad || start == UINT32_MAX) {
+		snprintf(err, errlen, "--bootloader %s: line %d is not Intel HEX", path, n);
+		return -1;
+	}
+	avr->reset_pc = start;
+	avr->pc = start;
+	avr->codeend = flash_bytes - 1;
+	return 0;
+}
+
 static int setup(struct sim *s, char *err, size_t errlen)
 {
 	static elf_firmware_t fw;
-	if (check_elf(s->opt.firmware, err, errlen) < 0)
+	memset(&fw, 0, sizeof fw);
+	s->board = board_pins_find(s->opt.board);
+	if (!s->board) {
+		snprintf(err, errlen, "--board %s: unknown board (%s)", s->opt.board, board_pins_names);
 		return -1;
-	if (elf_read_firmware(s->opt.firmware, &fw) < 0 || fw.flashsize == 0) {
+	}
+	if (!s->opt.have_spm)
+		s->opt.steps_per_mm = s->board->steps_per_mm;
+	if (!s->opt.have_width)
+		s->opt.width = s->board->width;
+	if (!s->opt.have_height)
+		s->opt.height = s->board->height;
+	if (s->opt.firmware && check_elf(s->opt.firmware, err, errlen) < 0)
+		return -1;
+	if (s->opt.firmware && (elf_read_firmware(s->opt.firmware, &fw) < 0 || fw.flashsize == 0)) {
 		snprintf(err, errlen, "%s: no program in this AVR ELF file", s->opt.firmware);
 		return -1;
 	}
-	if (fw.flashsize + fw.datasize > 32768) {
-		snprintf(err, errlen, "%s: %u bytes of program do not fit the 32 KiB flash",
-			 s->opt.firmware, (unsigned)(fw.flashsize + fw.datasize));
+	const struct board_pins *b = s->board;
+	unsigned flash_kib = strcmp(b->mcu, "atmega2560") == 0 ? 256 : 32;
+	if (fw.flashsize + fw.datasize > flash_kib * 1024) {
+		snprintf(err, errlen, "%s: %u bytes of program do not fit the %u KiB flash",
+			 s->opt.firmware, (unsigned)(fw.flashsize + fw.datasize), flash_kib);
 		return -1;
 	}
-	if (fw.mmcu[0] && strcmp(fw.mmcu, "atmega328p") != 0) {
-		snprintf(err, errlen, "%s is built for %s, not atmega328p", s->opt.firmware, fw.mmcu);
+	if (fw.mmcu[0] && strcmp(fw.mmcu, b->mcu) != 0) {
+		snprintf(err, errlen, "%s is built for %s, not %s (board %s)", s->opt.firmware,
+			 fw.mmcu, b->mcu, b->name);
 		return -1;
 	}
-	snprintf(fw.mmcu, sizeof fw.mmcu, "atmega328p");
+	snprintf(fw.mmcu, sizeof fw.mmcu, "%s", b->mcu);
 	fw.frequency = CPU_HZ;
-	s->avr = avr_make_mcu_by_name("atmega328p");
+	s->avr = avr_make_mcu_by_name(b->mcu);
 	if (!s->avr || avr_init(s->avr) != 0) {
-		snprintf(err, errlen, "simavr cannot create an atmega328p");
+		snprintf(err, errlen, "simavr cannot create an %s", b->mcu);
 		return -1;
 	}
-	avr_load_firmware(s->avr, &fw);
+	if (s->opt.firmware)
+		avr_load_firmware(s->avr, &fw);
+	if (s->opt.bootloader && load_bootloader(s->avr, s->opt.bootloader, flash_kib * 1024, err,
+						 errlen) < 0)
+		return -1;
 	s->avr->frequency = CPU_HZ;
 	s->avr->sleep = no_sleep;
 	/* simavr polls INT0/INT1 every cycle while PD2/PD3 (the step pins) are
@@ -298,10 +387,10 @@ static int setup(struct sim *s, char *err, size_t errlen)
 		.freq = CPU_HZ, .width = s->opt.width, .height = s->opt.height,
 		.steps_per_mm = s->opt.steps_per_mm, .corexy = s->opt.corexy,
 		.pen_up_us = s->opt.pen_up_us, .pen_down_us = s->opt.pen_down_us,
-		.max_step_rate = s->opt.max_step_rate,
+		.max_step_rate = s->opt.max_step_rate, .coil_stride = b->coil_stride,
 	};
 	machine_init(&s->mc, &cfg, s->opt.start_x, s->opt.start_y);
-	pins_attach(&s->pins, s->avr, &s->mc);
+	pins_attach(&s->pins, s->avr, &s->mc, b);
 	if (pty_link_open(&s->pty, s->avr, s->opt.pty_link, err, errlen) < 0)
 		return -1;
 	if (control_open(&s->ctl, s->opt.control, err, errlen) < 0)

@@ -13,8 +13,11 @@ const char options_usage[] =
 	"  --trace FILE           JSON trace, kept current\n"
 	"  --control PATH         Unix socket for control commands\n"
 	"  --eeprom FILE          EEPROM image (blank if missing), saved on change\n"
-	"  --width MM --height MM work area (default 300 220)\n"
-	"  --steps-per-mm N       (default 80)\n"
+	"  --board NAME           board profile (wiring, chip; default uno-cnc-shield)\n"
+	"  --bootloader HEX       run this bootloader from reset on an erased flash\n"
+	"                         (no FIRMWARE.elf: flash it over the pty with avrdude)\n"
+	"  --width MM --height MM work area (default: the board's, 300 220)\n"
+	"  --steps-per-mm N       (default: the board's, 80)\n"
 	"  --corexy               CoreXY kinematics\n"
 	"  --start X,Y            carriage position at start, mm (default 0,0)\n"
 	"  --pen-up-us N --pen-down-us N  servo pulse widths (default 1000 2000)\n"
@@ -24,7 +27,7 @@ const char options_usage[] =
 
 enum {
 	OPT_PTY = 256, OPT_SPEED, OPT_TRACE, OPT_CONTROL, OPT_EEPROM, OPT_WIDTH, OPT_HEIGHT,
-	OPT_SPM, OPT_COREXY, OPT_START, OPT_PEN_UP, OPT_PEN_DOWN, OPT_MAX_RATE, OPT_HELP,
+	OPT_SPM, OPT_COREXY, OPT_START, OPT_PEN_UP, OPT_PEN_DOWN, OPT_MAX_RATE, OPT_HELP, OPT_BOARD, OPT_BOOTLOADER,
 };
 
 static const struct option longopts[] = {
@@ -42,6 +45,8 @@ static const struct option longopts[] = {
 	{ "pen-down-us", required_argument, NULL, OPT_PEN_DOWN },
 	{ "max-step-rate", required_argument, NULL, OPT_MAX_RATE },
 	{ "help", no_argument, NULL, OPT_HELP },
+	{ "board", required_argument, NULL, OPT_BOARD },
+	{ "bootloader", required_argument, NULL, OPT_BOOTLOADER },
 	{ NULL, 0, NULL, 0 },
 };
 
@@ -61,6 +66,7 @@ int options_parse(int argc, char **argv, struct options *o, char *err, size_t er
 	*o = (struct options){
 		.speed = 1, .width = 300, .height = 220, .steps_per_mm = 80,
 		.pen_up_us = 1000, .pen_down_us = 2000, .max_step_rate = 40000,
+		.board = "uno-cnc-shield",
 	};
 	opterr = 0;
 	int c;
@@ -77,9 +83,11 @@ int options_parse(int argc, char **argv, struct options *o, char *err, size_t er
 		case OPT_EEPROM: o->eeprom = optarg; break;
 		case OPT_COREXY: o->corexy = 1; break;
 		case OPT_SPEED: bad = number(optarg, 0, 1e6, &o->speed); break;
-		case OPT_WIDTH: bad = number(optarg, 1, 1e5, &o->width); break;
-		case OPT_HEIGHT: bad = number(optarg, 1, 1e5, &o->height); break;
-		case OPT_SPM: bad = number(optarg, 0.01, 1e5, &o->steps_per_mm); break;
+		case OPT_BOARD: o->board = optarg; break;
+		case OPT_BOOTLOADER: o->bootloader = optarg; break;
+		case OPT_WIDTH: bad = number(optarg, 1, 1e5, &o->width); o->have_width = 1; break;
+		case OPT_HEIGHT: bad = number(optarg, 1, 1e5, &o->height); o->have_height = 1; break;
+		case OPT_SPM: bad = number(optarg, 0.01, 1e5, &o->steps_per_mm); o->have_spm = 1; break;
 		case OPT_PEN_UP: bad = number(optarg, 100, 5000, &o->pen_up_us); break;
 		case OPT_PEN_DOWN: bad = number(optarg, 100, 5000, &o->pen_down_us); break;
 		case OPT_MAX_RATE: bad = number(optarg, 1, 1e7, &o->max_step_rate); break;
@@ -113,6 +121,8 @@ int options_parse(int argc, char **argv, struct options *o, char *err, size_t er
 		snprintf(err, errlen, "--pen-up-us and --pen-down-us must differ");
 		return -1;
 	}
+	if (o->bootloader && optind == argc)
+		return 0; /* the bootloader is the program */
 	if (optind != argc - 1) {
 		snprintf(err, errlen, optind >= argc ? "missing FIRMWARE.elf" : "more than one firmware given");
 		return -1;

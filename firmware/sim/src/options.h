@@ -13,6 +13,9 @@ struct options {
 	double start_x, start_y;
 	double pen_up_us, pen_down_us;
 	double max_step_rate;
+	const char *bootloader;  /* HEX: start in this bootloader, flash otherwise erased */
+	const char *board;       /* board profile name (default uno-cnc-shield) */
+	int have_spm, have_width, have_height; /* given on the command line */
 };
 
 /* 0: ok; 1: --help printed; -1: error message in err */

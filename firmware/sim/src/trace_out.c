@@ -45,6 +45,12 @@ void trace_write_json(FILE *f, const struct machine *mc, const struct trace_meta
 	fprintf(f, "\"steps\":{\"x\":%lld,\"y\":%lld},\"pulses\":{\"x\":%llu,\"y\":%llu},",
 		(long long)mc->m[AXIS_X].pos, (long long)mc->m[AXIS_Y].pos,
 		(unsigned long long)mc->m[AXIS_X].pulses, (unsigned long long)mc->m[AXIS_Y].pulses);
+	fprintf(f, "\"limit_ends\":{\"x_min\":%s,\"x_max\":%s,\"y_min\":%s,\"y_max\":%s},",
+		mc->limit_end[0][0] ? "true" : "false", mc->limit_end[0][1] ? "true" : "false",
+		mc->limit_end[1][0] ? "true" : "false", mc->limit_end[1][1] ? "true" : "false");
+	fprintf(f, "\"dir_pins\":{\"x\":%d,\"y\":%d},", mc->m[0].dir, mc->m[1].dir);
+	fprintf(f, "\"coils\":{\"x\":%d,\"y\":%d},\"missed_steps\":%llu,", mc->m[0].coils,
+		mc->m[1].coils, (unsigned long long)mc->missed_steps);
 	fputs("\"strokes\":[", f);
 	each_stroke(f, mc, json_point, "[", "]", ",");
 	fprintf(f, "],\"strokes_truncated\":%s,", mc->strokes.truncated ? "true" : "false");

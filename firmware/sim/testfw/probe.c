@@ -2,7 +2,7 @@
  * serial command set. Pins as on the CNC shield (DESIGN.md).
  *
  * Power-up: servo pulse 1000 us (pen up), 2000 us (pen down); 800 X steps
- * with dir high, then 400 Y steps with dir high, 10 us high / 90 us low
+ * with dir low (positive, as GRBL), then 400 Y steps with dir low, 10 us high / 90 us low
  * (10 kHz); servo pulse 1000 us (pen up). From (0,0) at 80 steps/mm that is
  * one stroke (0,0) -> (10,0) -> (10,5).
  *
@@ -60,10 +60,10 @@ static void state_line(void)
 
 static void step(uint8_t step_bit, uint8_t dir_bit, uint8_t positive)
 {
-	if (positive)
-		PORTD |= dir_bit;
-	else
+	if (positive) /* GRBL's convention: LOW is positive */
 		PORTD &= (uint8_t)~dir_bit;
+	else
+		PORTD |= dir_bit;
 	_delay_us(5);
 	PORTD |= step_bit;
 	_delay_us(10);
