@@ -36,7 +36,8 @@ def target(tmp_path_factory) -> Iterator[ServerProcess]:
     with running_server(data, args) as server:
         server.home()
         url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
-        with connect(url) as idle:  # held through every attack: see the last test
+        # held through every attack (see the last test); it buffers what it is sent, as a page would
+        with connect(url, max_queue=None, ping_interval=None) as idle:
             server.idle_ws = idle
             yield server
 
