@@ -33,7 +33,7 @@ from typing import Any
 import httpx
 import websockets
 
-TOKEN = "bench-token"
+TOKEN = "bench-token-0123456789"
 
 
 def free_port() -> int:

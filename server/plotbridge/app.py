@@ -20,6 +20,7 @@ from plotbridge.auth import Auth
 from plotbridge.config import Config
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
+from plotbridge.guard.middleware import Guard
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.store import JobStore
 from plotbridge.models import ERROR_RESPONSES
@@ -30,6 +31,8 @@ from plotbridge.virtual import VirtualPlotter
 from plotbridge.ws import Hub
 
 log = logging.getLogger("plotbridge.app")
+
+VALIDATION_ERRORS_SHOWN = 20
 
 
 @dataclass
@@ -52,7 +55,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     for leftover in config.tmp_dir.glob("upload-*"):
         leftover.unlink(missing_ok=True)
     store = JobStore(config.db_path, first_plotter=boards[0].name)
-    importer = Importer(config.jobs_dir, settings=lambda: boards[0].link.settings)
+    importer = Importer(config.jobs_dir, settings=lambda: boards[0].link.settings,
+                        limits=config.import_limits)  # fmt: skip
     importer.clean()
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
                      work_area=b.work_area) for b in boards]  # fmt: skip
@@ -76,7 +80,11 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
     )  # fmt: skip
     mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
-    app.state.components = Components(config, Auth(token), events, queue, clients)
+    auth = Auth(token, config.token_file)
+    app.add_middleware(
+        Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
+    )
+    app.state.components = Components(config, auth, events, queue, clients)
 
     @app.exception_handler(Refused)
     async def refused(_: Request, exc: Refused) -> JSONResponse:
@@ -85,8 +93,12 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     @app.exception_handler(RequestValidationError)
     async def validation_error(_: Request, exc: RequestValidationError) -> JSONResponse:
         errors = [
-            {"loc": list(err.get("loc", ())), "msg": err.get("msg"), "type": err.get("type")}
-            for err in exc.errors()
+            {
+                "loc": [str(part)[:64] for part in err.get("loc", ())],
+                "msg": err.get("msg"),
+                "type": err.get("type"),
+            }
+            for err in exc.errors()[:VALIDATION_ERRORS_SHOWN]  # never the input: it may be huge
         ]
         return error(422, errors)
 

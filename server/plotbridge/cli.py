@@ -64,11 +64,33 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="board profile of the plotters (firmware/src/boards/NAME.h); "
              "a virtual plotter runs that board's firmware build",
     )  # fmt: skip
-    parser.add_argument("--token", default=_env("TOKEN"), help="API token (default: generated)")
+    parser.add_argument(
+        "--token", help="API token, at least 16 characters; visible in `ps`, so prefer "
+        "--token-file or PLOTBRIDGE_TOKEN (default: generated into DATA_DIR/token)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--token-file", type=Path, default=_env("TOKEN_FILE"),
+        help="read the API token from this file (re-read when it changes)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--allowed-host", action="append", default=[
+            n for n in str(_env("ALLOWED_HOSTS", "")).split(",") if n.strip()
+        ], help="a further Host name to serve (beside this machine's names and addresses)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--client-connections", type=int, default=int(_env("CLIENT_CONNECTIONS", 32)),
+        help="open connections one client address may hold (503 beyond)",
+    )  # fmt: skip
     parser.add_argument(
         "--max-upload-mb", type=float, default=float(_env("MAX_UPLOAD_MB", 50)),
         help="largest accepted upload, MB",
     )  # fmt: skip
+    imports = parser.add_argument_group("import limits")
+    for flag, kind, default, what in IMPORT_LIMITS:
+        imports.add_argument(
+            f"--{flag}", type=kind, default=kind(_env(flag.upper().replace("-", "_"), default)),
+            help=what,
+        )  # fmt: skip
     parser.add_argument(
         "--auto-start", action="store_true", default=_env_flag("AUTO_START"),
         help="start the next queued job automatically",
@@ -82,6 +104,15 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--log-level", default=_env("LOG_LEVEL", "info"), choices=logsetup.LEVELS,
         help="console log level",
     )  # fmt: skip
+
+
+IMPORT_LIMITS = (  # flag, type, default, help: the defaults keep a 2 GB Raspberry Pi 4 responsive
+    ("import-workers", int, 2, "import worker processes (one stays free for small uploads)"),
+    ("import-time-limit", float, 120.0, "seconds one import may take"),
+    ("import-memory-mb", int, 512, "memory (address space) one import may use, MB"),
+    ("job-quota-mb", float, 200.0, "disk space one job's files may take, MB"),
+    ("total-quota-mb", float, 2048.0, "disk space all jobs' files may take, MB"),
+)
 
 
 def plotters_from_args(args: argparse.Namespace, data_dir: Path) -> list[PlotterConfig]:
@@ -104,6 +135,8 @@ def plotters_from_args(args: argparse.Namespace, data_dir: Path) -> list[Plotter
 
 
 def config_from_args(args: argparse.Namespace) -> Config:
+    from plotbridge.importing.workers import Limits
+
     data_dir = args.data_dir.expanduser().resolve()
     return Config(
         host=args.host,
@@ -112,19 +145,61 @@ def config_from_args(args: argparse.Namespace) -> Config:
         plotters=plotters_from_args(args, data_dir),
         sim_speed=args.sim_speed,
         token=args.token,
+        token_file=args.token_file.expanduser().resolve() if args.token_file else None,
+        allowed_hosts=tuple(args.allowed_host),
+        client_connections=args.client_connections,
         max_upload_mb=args.max_upload_mb,
         auto_start=args.auto_start,
         log_level=args.log_level,
         zeroconf=args.zeroconf,
         web_dir=find_web_dir(),
+        import_limits=Limits(
+            workers=max(1, args.import_workers), time_limit=args.import_time_limit,
+            memory_mb=args.import_memory_mb, job_quota_mb=args.job_quota_mb,
+            total_quota_mb=args.total_quota_mb,
+        ),
     )
 
 
-def _login_url(config: Config, token: str) -> str:
-    host = config.host
+def _login_url(host: str, port: int, token: str) -> str:
     if host in ("0.0.0.0", "::", ""):
         host = socket.gethostname()
-    return f"http://{host}:{config.port}/login?token={token}"
+    return f"http://{host}:{port}/login?token={token}"
+
+
+def print_login(host: str, port: int, token: str) -> None:
+    """The login link and its QR code (for a phone's camera) on the console."""
+    import io
+
+    import segno
+
+    url = _login_url(host, port, token)
+    qr = io.StringIO()
+    segno.make(url, error="l").terminal(out=qr, compact=True)
+    print(f"plotbridge: open {url}\n{qr.getvalue()}", flush=True)
+
+
+def resolve_token(config: Config) -> tuple[str, bool]:
+    """The token and whether it was just generated. Sources, first found: --token
+    (warned: it shows in `ps`), --token-file, PLOTBRIDGE_TOKEN, DATA_DIR/token."""
+    from plotbridge.auth import check_token_rules, load_or_create_token, read_token_file
+
+    if config.token:
+        log.warning("--token shows in `ps` to every user; use --token-file or PLOTBRIDGE_TOKEN")
+        return check_token_rules(config.token), False
+    if config.token_file is not None:
+        return read_token_file(config.token_file), False
+    if _env("TOKEN"):
+        return check_token_rules(_env("TOKEN")), False
+    config.token_file = config.data_dir / "token"
+    return load_or_create_token(config.token_file)
+
+
+def private_data_dir(path: Path) -> None:
+    """Data directory 0700; everything the server creates in it 0600/0700 (umask)."""
+    os.umask(0o077)
+    path.mkdir(parents=True, exist_ok=True, mode=0o700)
+    path.chmod(0o700)
 
 
 def keep_pauses_short() -> None:
@@ -144,13 +219,15 @@ async def serve(config: Config) -> int:
 
     from plotbridge import mdns
     from plotbridge.app import Board, create_app
-    from plotbridge.auth import load_or_create_token
+    from plotbridge.guard import connections
     from plotbridge.plotter.link import Link
     from plotbridge.plotter.plotter import WorkArea
     from plotbridge.virtual import VirtualPlotter
 
-    config.data_dir.mkdir(parents=True, exist_ok=True)
-    token = config.token or load_or_create_token(config.data_dir)
+    private_data_dir(config.data_dir)
+    token, generated = resolve_token(config)
+    file_limit = connections.raise_file_limit()
+    connections.configure(config.client_connections, file_limit)
     boards: list[Board] = []
     try:
         for index, plotter in enumerate(config.plotters):
@@ -170,13 +247,19 @@ async def serve(config: Config) -> int:
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning",
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
+            http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
+            timeout_keep_alive=5, backlog=connections.BACKLOG,
         )  # fmt: skip
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
         server = uvicorn.Server(settings)
-        print(f"plotbridge: open {_login_url(config, token)}", flush=True)
-        log.info("serving on %s:%d, data in %s, plotters: %s", config.host, config.port,
-                 config.data_dir, ", ".join(p.name for p in config.plotters))  # fmt: skip
+        if generated:  # later starts keep it out of logs: `plotbridge token` prints it
+            print_login(config.host, config.port, token)
+        log.info(
+            "serving on %s:%d, data in %s, open-file limit %d, plotters: %s",
+            config.host, config.port, config.data_dir, file_limit,
+            ", ".join(p.name for p in config.plotters),
+        )  # fmt: skip
         async with mdns.announced(config.host, config.port, config.zeroconf):
             await server.serve()
     finally:
@@ -192,11 +275,45 @@ def sim_dir(config: Config, index: int, name: str) -> Path:
     return config.data_dir / ("sim" if index == 0 else f"sim-{name}")
 
 
+def add_token_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--data-dir", type=Path, default=Path(_env("DATA_DIR", default_data_dir())),
+        help="the server's data directory (its token file is DATA_DIR/token)",
+    )  # fmt: skip
+    parser.add_argument("--token-file", type=Path, default=_env("TOKEN_FILE"),
+                        help="the server's --token-file instead")  # fmt: skip
+    parser.add_argument("--rotate", action="store_true",
+                        help="write a new token: every session ends (a running server notices)")
+    parser.add_argument("--host", default=_env("HOST", "0.0.0.0"), help="host in the link")
+    parser.add_argument("--port", type=int, default=int(_env("PORT", 8000)), help="link's port")
+
+
+def token_command(args: argparse.Namespace) -> int:
+    from plotbridge.auth import TokenRefused, load_or_create_token, new_token, write_private
+
+    path = args.token_file or args.data_dir.expanduser() / "token"
+    try:
+        if args.rotate:
+            path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
+            token = new_token()
+            write_private(path, token + "\n")
+            print(f"plotbridge: new token in {path}; every session has ended", flush=True)
+        else:
+            token, _ = load_or_create_token(path)
+    except (OSError, TokenRefused) as exc:
+        print(f"plotbridge token: {exc}", file=sys.stderr)
+        return 1
+    print_login(args.host, args.port, token)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     parser = argparse.ArgumentParser(prog="plotbridge", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
     add_serve_arguments(commands.add_parser("serve", help="run the server"))
+    token_parser = commands.add_parser("token", help="print the login link, or --rotate the token")
+    add_token_arguments(token_parser)
     submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
     if argv[:1] != ["serve"]:  # the client modules stay out of the server's process
         from plotbridge import commands as verbs
@@ -207,6 +324,8 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "submit":
         return submit.run(args)
+    if args.command == "token":
+        return token_command(args)
     if args.command != "serve":
         return verbs.run(args)
     logsetup.setup(args.log_level)

@@ -7,6 +7,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from plotbridge.importing.workers import Limits
+
 PACKAGE_DIR = Path(__file__).resolve().parent
 
 
@@ -107,11 +109,15 @@ class Config:
     plotters: list[PlotterConfig] = field(default_factory=lambda: [PlotterConfig("plotter1")])
     sim_speed: float = 1.0
     token: str | None = None
+    token_file: Path | None = None  # where the token came from (watched for rotation)
+    allowed_hosts: tuple[str, ...] = ()  # Host names accepted beside our own
+    client_connections: int = 32  # open connections per client address
     max_upload_mb: float = 50.0
     auto_start: bool = False
     log_level: str = "info"
     zeroconf: bool = True  # announce on the LAN (plotbridge.mdns)
     web_dir: Path | None = None
+    import_limits: Limits = field(default_factory=Limits)
 
     @property
     def virtual(self) -> bool:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import time
 from typing import Any
 
 from starlette.websockets import WebSocket
@@ -17,6 +18,26 @@ from starlette.websockets import WebSocket
 log = logging.getLogger("plotbridge.ws")
 
 QUEUE_SIZE = 256
+MESSAGES_PER_S = 50  # from one client; the page sends a few per second at most (jogging)
+MESSAGE_BURST = 100
+
+
+class RateLimit:
+    """Token bucket: `take()` is False once a client sends faster than the rate."""
+
+    def __init__(self, rate: float = MESSAGES_PER_S, burst: float = MESSAGE_BURST) -> None:
+        self.rate, self.burst = rate, burst
+        self.tokens = burst
+        self.at = time.monotonic()
+
+    def take(self) -> bool:
+        now = time.monotonic()
+        self.tokens = min(self.burst, self.tokens + (now - self.at) * self.rate)
+        self.at = now
+        if self.tokens < 1:
+            return False
+        self.tokens -= 1
+        return True
 
 
 class Client:
@@ -25,6 +46,7 @@ class Client:
         self.queue: asyncio.Queue[str | None] = asyncio.Queue(QUEUE_SIZE)
         self.dropped = False
         self.task: asyncio.Task[None] | None = None
+        self.rate = RateLimit()
 
     def offer(self, text: str) -> bool:
         try:

@@ -27,7 +27,7 @@ from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-TOKEN = "test-token-123"
+TOKEN = "test-token-0123456789"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
 
@@ -140,7 +140,8 @@ async def fake_import(self, kind, source, filename, dest, options):
 
 def make_app(tmp_path: Path, **config: Any):
     link = FakeLink()
-    cfg = Config(data_dir=tmp_path, plotters=[PlotterConfig("plotter1", "/dev/fake")], **config)
+    cfg = Config(data_dir=tmp_path, plotters=[PlotterConfig("plotter1", "/dev/fake")],
+                 allowed_hosts=("test", "testserver"), **config)
     return create_app(cfg, [Board("plotter1", link)], TOKEN), link
 
 
@@ -554,13 +555,14 @@ def sync_client(tmp_path, monkeypatch):
 
 
 def test_ws_requires_token_and_same_origin(sync_client):
-    with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect("/api/ws"):
-        pass
+    """Refusals are close codes after the handshake (a browser sees no HTTP status)."""
+    with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect("/api/ws") as ws:
+        ws.receive_text()
     assert info.value.code == 4401
     with pytest.raises(WebSocketDisconnect) as info, sync_client.websocket_connect(
         f"/api/ws?token={TOKEN}", headers={"origin": "http://evil.example"}
-    ):
-        pass
+    ) as ws:
+        ws.receive_text()
     assert info.value.code == 4403
     with sync_client.websocket_connect(
         f"/api/ws?token={TOKEN}", headers={"origin": "http://testserver"}
@@ -771,3 +773,14 @@ def test_leftovers_of_a_crash_are_removed_at_start(tmp_path):
     make_app(tmp_path)
     assert list((tmp_path / "jobs").iterdir()) == []
     assert list((tmp_path / "tmp").iterdir()) == []
+
+
+def test_a_flooding_ws_client_is_closed_and_its_stops_are_never_limited(sync_client):
+    with sync_client.websocket_connect(f"/api/ws?token={TOKEN}") as ws:
+        for n in range(400):
+            ws.send_json({"type": "estop"} if n % 40 == 0 else {"type": "pause"})
+        with pytest.raises(WebSocketDisconnect) as closed:
+            while True:
+                ws.receive_text()
+    assert closed.value.code == 1008
+    assert sync_client.link.estop_calls >= 3  # the stops before the close all went out

@@ -29,7 +29,7 @@ def test_server_modules_and_a_running_job_do_not_import_numpy(tmp_path):
         from plotbridge.plotter.runner import Runner
 
         config = Config(data_dir=Path({str(tmp_path)!r}))
-        create_app(config, [Board("p", Link("/dev/null"))], "t")
+        create_app(config, [Board("p", Link("/dev/null"))], "t" * 16)
         job = Job(id="j", name="j", format="gcode", lines_total=10, lines_done=4,
                   estimate_s=10.0, timeline=[(10, 10.0)])
         Runner._progress(None, job)  # the eta of a running job, as the server computes it

@@ -22,7 +22,8 @@ async def farm(tmp_path, monkeypatch):
     boards = [Board(name, links[name]) for name in NAMES[:2]]
     boards.append(Board("c", links["c"], work_area=WorkArea(10, 10)))  # too small for the jobs
     config = Config(data_dir=tmp_path,
-                    plotters=[PlotterConfig(n, f"/dev/{n}") for n in NAMES])  # fmt: skip
+                    plotters=[PlotterConfig(n, f"/dev/{n}") for n in NAMES],
+                    allowed_hosts=("test",))  # fmt: skip
     app = create_app(config, boards, TOKEN)
     async with serving(app) as client:
         yield SimpleNamespace(client=client, links=links, queue=app.state.components.queue)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import asyncio
 
-from plotbridge.auth import origin_allowed
+from plotbridge.guard.hosts import origin_allowed
 from plotbridge.ws import QUEUE_SIZE, Hub
 
 
@@ -47,3 +47,4 @@ def test_origin_check():
     assert not origin_allowed("http://plot.local:8001", "plot.local:8000")
     assert not origin_allowed("null", "plot.local:8000")
     assert not origin_allowed("http://plot.local:8000", None)
+

@@ -53,3 +53,12 @@ def test_ci_runs_exactly_the_readme_test_command():
     assert "make test" in (ROOT / ".ci/run").read_text()
     readme = (ROOT / "README.md").read_text()
     assert "make run" in readme and "make test" in readme
+
+
+def test_shipping_files_raise_the_open_file_limit():
+    compose = yaml.safe_load((ROOT / "docker-compose.yml").read_text())
+    nofile = compose["services"]["plotbridge"]["ulimits"]["nofile"]
+    assert nofile["soft"] >= 4096 and nofile["hard"] >= nofile["soft"]
+    unit = (ROOT / "deploy" / "plotbridge.service").read_text()
+    assert int(re.search(r"^LimitNOFILE=(\d+)$", unit, re.M).group(1)) >= 4096
+    assert re.search(r"^UMask=0077$", unit, re.M)

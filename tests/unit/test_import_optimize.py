@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from plotbridge.importing.optimize import EndIndex, optimize_strokes, two_opt
+from plotbridge.importing.optimize import EndIndex, optimize_strokes, order_greedy, two_opt
 from plotbridge.importing.optimize import travel as travel_of
 
 from .import_helpers import drawn_strokes, program_lines, run_import
@@ -140,3 +140,13 @@ def test_end_index_nearest_matches_brute_force():
         k = index.nearest(*q)
         brute = min(left, key=lambda i: math.dist(pts[i], q))
         assert math.dist(pts[k], q) == pytest.approx(math.dist(pts[brute], q))
+
+
+def test_identical_strokes_share_one_index_entry_per_point():
+    """100,000 identical tiny paths went quadratic: every query walked every end."""
+    strokes = [np.array([[10.0, 10.0], [10.1, 10.0]]) for _ in range(20000)]
+    ends = [(10.0, 10.0)] * 20000 + [(10.1, 10.0)] * 20000
+    index = EndIndex(ends, 0.5)
+    assert sum(len(points) for points in index.grid.values()) == 2
+    ordered = order_greedy(strokes, (0.0, 0.0), 0.01)
+    assert len(ordered) == 1 and len(ordered[0]) == 20001

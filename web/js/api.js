@@ -29,7 +29,8 @@ export function setUnauthorizedHandler(fn) {
 }
 
 async function request(method, path, body) {
-  const init = { method, credentials: "same-origin", headers: {} };
+  // X-Plotbridge: a header no form or no-cors fetch from another origin can send (CSRF).
+  const init = { method, credentials: "same-origin", headers: { "X-Plotbridge": "1" } };
   if (body !== undefined) {
     init.headers["Content-Type"] = "application/json";
     init.body = JSON.stringify(body);
@@ -71,6 +72,7 @@ export function uploadJob(formData, onProgress) {
     const xhr = new XMLHttpRequest();
     xhr.open("POST", "/api/jobs");
     xhr.withCredentials = true;
+    xhr.setRequestHeader("X-Plotbridge", "1");
     xhr.upload.addEventListener("progress", (e) => {
       if (e.lengthComputable) onProgress(e.loaded, e.total);
     });

@@ -171,9 +171,17 @@ function bind() {
 async function start() {
   bind();
   preview = new PreviewCanvas($("#preview"));
+  // A login link's token (#token=...) is exchanged for a session at once and taken
+  // out of the address bar and the history.
+  const linkToken = new URLSearchParams(location.hash.slice(1)).get("token");
+  if (linkToken) history.replaceState(null, "", location.pathname);
   tabFromHash();
   // for debugging in the browser console, and for the browser tests' measurements
   window.plotbridge = { store, actions, preview };
+  if (linkToken) {
+    await actions.login(linkToken);
+    return;
+  }
   try {
     await api.get("/api/machine");
     actions.enterApp();

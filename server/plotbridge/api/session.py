@@ -4,19 +4,20 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, HTTPException
+from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import RedirectResponse, Response
 
 from plotbridge import __version__
 from plotbridge.api.deps import GUARD, Parts, error
-from plotbridge.auth import COOKIE
+from plotbridge.auth import COOKIE, SESSION_TTL
 from plotbridge.models import LoginBody
 
 router = APIRouter()
 
 
 def _set_cookie(response: Response, session: str) -> None:
-    response.set_cookie(COOKIE, session, httponly=True, samesite="strict", path="/")
+    response.set_cookie(COOKIE, session, httponly=True, samesite="strict", path="/",
+                        max_age=int(SESSION_TTL))  # fmt: skip
 
 
 @router.get("/api/health")
@@ -29,7 +30,7 @@ async def login(body: LoginBody, c: Parts) -> Response:
     if not c.auth.check_token(body.token):
         raise HTTPException(401, "wrong token")
     response = Response(status_code=204)
-    _set_cookie(response, c.auth.session)
+    _set_cookie(response, c.auth.new_session())
     return response
 
 
@@ -38,12 +39,13 @@ async def login_link(c: Parts, token: str = "") -> Response:
     if not c.auth.check_token(token):
         return error(401, "wrong or missing token in the login link")
     response = RedirectResponse("/", status_code=303)
-    _set_cookie(response, c.auth.session)
+    _set_cookie(response, c.auth.new_session())
     return response
 
 
 @router.post("/api/logout", status_code=204)
-async def logout() -> Response:
+async def logout(request: Request, c: Parts) -> Response:
+    c.auth.end_session(request.cookies.get(COOKIE))
     response = Response(status_code=204)
     response.delete_cookie(COOKIE, path="/")
     return response

@@ -12,7 +12,6 @@ from fastapi import APIRouter, WebSocket
 from pydantic import ValidationError
 
 from plotbridge.api.deps import Components
-from plotbridge.auth import COOKIE, origin_allowed
 from plotbridge.errors import Refused
 from plotbridge.models import JogBody
 from plotbridge.ws import Client
@@ -29,16 +28,7 @@ Command = tuple[str, dict[str, Any]]
 @router.websocket("/api/ws")
 async def websocket(ws: WebSocket) -> None:
     c: Components = ws.app.state.components
-    allowed = c.auth.check_session(ws.cookies.get(COOKIE)) or c.auth.check_token(
-        ws.query_params.get("token")
-    )
-    if not allowed:
-        await ws.close(code=4401, reason="missing or wrong token")
-        return
-    if not origin_allowed(ws.headers.get("origin"), ws.headers.get("host")):
-        await ws.close(code=4403, reason="origin not allowed")
-        return
-    await ws.accept()
+    await ws.accept()  # the guard has checked the session or token, the Origin and the Host
     client = c.clients.add(ws)
     for message in c.queue.snapshot_messages():
         c.clients.send(client, message)
@@ -72,9 +62,12 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
             if text is None:
                 text = (message.get("bytes") or b"").decode("utf-8", "replace")
             kind, body = parse_message(text)
-            if kind == "estop":  # first thing, before anything else
+            if kind == "estop":  # first thing, before anything else (never rate-limited)
                 _estop(c, body)
                 c.clients.send(client, {"type": "ack", "command": "estop"})
+            elif not client.rate.take():
+                await ws.close(code=1008, reason="too many messages")
+                return
             elif body is None:
                 c.clients.send(client, {"type": "error", "command": None, "detail": kind})
             elif kind in ("jog", "command"):

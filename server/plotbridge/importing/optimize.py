@@ -24,40 +24,53 @@ TWO_OPT_WINDOW = 64     # longest run of strokes a 2-opt move reverses
 
 
 class EndIndex:
-    """Grid over stroke ends for nearest-neighbour queries with removal."""
+    """Grid over stroke ends for nearest-neighbour queries with removal.
+
+    Ends at the same point share one entry (a list of their indices, removed ones
+    dropped lazily), so a drawing of many identical strokes costs one distance per
+    point, not per stroke: ordering stays near n log n on such degenerate input."""
 
     def __init__(self, ends: list[tuple[float, float]], cell: float) -> None:
         self.cell = cell
-        self.grid: dict[tuple[int, int], set[int]] = {}
+        self.grid: dict[tuple[int, int], dict[tuple[float, float], list[int]]] = {}
         self.ends = ends
-        for k, (x, y) in enumerate(ends):
-            self.grid.setdefault(self._key(x, y), set()).add(k)
+        self.removed = bytearray(len(ends))
+        self.left: dict[tuple[float, float], int] = {}  # ends not yet removed per point
+        for k, end in enumerate(ends):
+            self.grid.setdefault(self._key(*end), {}).setdefault(end, []).append(k)
+            self.left[end] = self.left.get(end, 0) + 1
         self.count = len(ends)
 
     def _key(self, x: float, y: float) -> tuple[int, int]:
         return math.floor(x / self.cell), math.floor(y / self.cell)
 
     def remove(self, k: int) -> None:
-        x, y = self.ends[k]
-        cell = self.grid[self._key(x, y)]
-        cell.discard(k)
+        end = self.ends[k]
+        self.removed[k] = 1
         self.count -= 1
+        self.left[end] -= 1
+        if not self.left[end]:
+            del self.grid[self._key(*end)][end]
+
+    def _any(self, waiting: list[int]) -> int:
+        while self.removed[waiting[-1]]:
+            waiting.pop()
+        return waiting[-1]
 
     def nearest(self, x: float, y: float) -> int:
         """Index of the nearest remaining end (the index must not be empty)."""
         cx, cy = self._key(x, y)
         best, best_d = -1, math.inf
         ring = 0
-        grid, ends, cell = self.grid, self.ends, self.cell
+        grid, cell = self.grid, self.cell
         while True:
             for gx in range(cx - ring, cx + ring + 1):
                 edge = gx in (cx - ring, cx + ring)
                 for gy in (range(cy - ring, cy + ring + 1) if edge else (cy - ring, cy + ring)):
-                    for k in grid.get((gx, gy), ()):
-                        ex, ey = ends[k]
+                    for (ex, ey), waiting in grid.get((gx, gy), {}).items():
                         d = (ex - x) ** 2 + (ey - y) ** 2
                         if d < best_d:
-                            best, best_d = k, d
+                            best, best_d = self._any(waiting), d
             # Every end outside the rings searched is at least ring*cell away.
             if best >= 0 and best_d <= (ring * cell) ** 2:
                 return best

@@ -8,15 +8,15 @@ the import writes into a hidden `.ID.partial` folder renamed at the end.
 from __future__ import annotations
 
 import asyncio
-import multiprocessing
+import os
 import shutil
 import uuid
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
 from plotbridge.errors import Refused
+from plotbridge.importing.workers import ImportLimit, ImportService, Limits
 from plotbridge.jobs.model import Imported
 
 
@@ -50,10 +50,11 @@ def patterns() -> dict[str, str]:
 
 
 class Importer:
-    def __init__(self, jobs_dir: Path, settings: Callable[[], dict[int, float]]) -> None:
+    def __init__(self, jobs_dir: Path, settings: Callable[[], dict[int, float]],
+                 limits: Limits | None = None) -> None:  # fmt: skip
         self.jobs_dir = jobs_dir
         self.settings = settings  # the board settings the import plans for
-        self._pool: ProcessPoolExecutor | None = None
+        self.workers = ImportService(limits)  # supervised, limited (importing/workers.py)
         self._patterns: dict[str, str] | None = None
 
     def clean(self) -> None:
@@ -62,8 +63,7 @@ class Importer:
             shutil.rmtree(leftover, ignore_errors=True)
 
     def close(self) -> None:
-        if self._pool:
-            self._pool.shutdown(wait=False, cancel_futures=True)
+        self.workers.close()
 
     async def create(self, kind: str, source: Path | str, filename: str,
                      options: dict[str, Any]) -> tuple[str, str, Imported]:  # fmt: skip
@@ -116,17 +116,26 @@ class Importer:
 
     async def _import(self, kind: str, source: str, filename: str, dest: Path,
                       options: dict[str, Any]) -> Imported:  # fmt: skip
-        outcome = await self._worker(run_import, kind, source, filename, str(dest), options,
-                                     dict(self.settings()))  # fmt: skip
+        size = await asyncio.to_thread(os.path.getsize, source) if kind == "file" else 0
+        try:
+            await self.workers.check_room(self.jobs_dir, size)
+            outcome = await self.workers.call(run_import, kind, source, filename, str(dest),
+                                              options, dict(self.settings()),
+                                              size=size)  # fmt: skip
+            if outcome[0] == "ok":
+                await self.workers.check_job(dest)
+        except ImportLimit as exc:
+            raise Refused(exc.status, {"errors": [{"line": None, "message": str(exc)}]}) from exc
         if outcome[0] != "ok":
             raise Refused(outcome[1], {"errors": outcome[2]})
         return Imported.model_validate(outcome[1])
 
     async def _worker(self, function: Callable[..., Any], *args: Any) -> Any:
-        """Run `function` in the import process."""
-        if self._pool is None:  # created on first use; spawn, as forking a threaded loop is unsafe
-            self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
-        return await asyncio.get_running_loop().run_in_executor(self._pool, function, *args)
+        """Run `function` in an import worker; a limit answers as a refusal."""
+        try:
+            return await self.workers.call(function, *args)
+        except ImportLimit as exc:
+            raise Refused(exc.status, {"errors": [{"line": None, "message": str(exc)}]}) from exc
 
 
 def _safe_suffix(filename: str) -> str:

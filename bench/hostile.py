@@ -1,0 +1,204 @@
+"""Hostile-LAN benchmark: the emergency stop and streaming beside full-size attacks.
+
+A real `plotbridge serve --virtual` (real firmware in the simulator, real time)
+runs under a 1,024 open-file limit. For idle and for each attack (from
+127.0.0.2, another LAN device): the streaming rate of a job of short moves,
+then the REST and WebSocket stop latencies (a fresh connection per REST stop),
+and the server's peak memory. Prints each figure, its ratio to idle and MET /
+NOT MET against the goals: stop p99 <= 20 ms, streaming >= 90 % of idle.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import signal
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from websockets.sync.client import connect
+
+from tests.fixtures import attacks
+from tests.fixtures.server import ServerProcess
+
+STOP_GOAL = 0.020  # s, p99
+STREAM_GOAL = 0.90  # of the idle rate
+
+
+class LimitedServer(ServerProcess):
+    """The server under a 1,024 open-file limit (soft and hard: it cannot raise it)."""
+
+    def command(self) -> list[str]:
+        return ["prlimit", "--nofile=1024:1024", "--", *super().command()]
+
+
+def short_moves(lines: int) -> str:
+    moves = [f"G1 X{10 + (i % 2) * 0.5:.1f} Y{10 + (i // 2) * 0.01:.2f} F6000"
+             for i in range(lines)]  # fmt: skip
+    return "\n".join(["G21", "G90", "G0 X10 Y10", "M3", *moves, "M5"]) + "\n"
+
+
+class Peak:
+    def __init__(self, pid: int) -> None:
+        self.pid, self.peak = pid, 0.0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(0.1):
+            with contextlib.suppress(OSError):
+                self.peak = max(self.peak, attacks.rss_mb(self.pid))
+
+    def stop(self) -> float:
+        self._stop.set()
+        self._thread.join()
+        return self.peak
+
+
+def streaming_rate(server: ServerProcess, program: str, seconds: float) -> float:
+    server.client.post("/api/machine/unlock")
+    server.wait_machine(lambda m: m["state"] == "Idle", 30)
+    job = server.client.post(
+        "/api/jobs", files={"file": ("moves.gcode", program)}, timeout=300
+    ).json()
+    assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
+    deadline = time.monotonic() + 60
+    while server.job(job["id"])["lines_done"] < 100 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    start_lines, started = server.job(job["id"])["lines_done"], time.monotonic()
+    time.sleep(seconds)
+    done = server.job(job["id"])
+    rate = (done["lines_done"] - start_lines) / (time.monotonic() - started)
+    server.client.post(f"/api/jobs/{job['id']}/cancel")
+    server.wait_job(job["id"], ("cancelled", "done", "stopped", "failed"), 30)
+    server.client.delete(f"/api/jobs/{job['id']}")
+    return rate
+
+
+def stop_latencies(server: ServerProcess, samples: int) -> tuple[list[float], list[float]]:
+    """REST stops on fresh connections; WebSocket stops on one open socket whose
+    every message is read by a thread (as a browser does), acks timed."""
+    rest, ws_times = [], []
+    url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
+    acked = threading.Event()
+    with connect(url, max_size=None) as ws:
+
+        def reader() -> None:
+            with contextlib.suppress(Exception):
+                for text in ws:
+                    if json.loads(text) == {"type": "ack", "command": "estop"}:
+                        acked.set()
+
+        thread = threading.Thread(target=reader, daemon=True)
+        thread.start()
+        for _ in range(samples):
+            rest.append(attacks.rest_stop(server.url, server.token))
+            acked.clear()
+            started = time.perf_counter()
+            ws.send(json.dumps({"type": "estop"}))
+            if not acked.wait(30):
+                raise RuntimeError("no WebSocket stop acknowledgement within 30 s")
+            ws_times.append(time.perf_counter() - started)
+            time.sleep(0.02)
+    return rest, ws_times
+
+
+def verdict(ok: bool) -> str:
+    return "MET" if ok else "NOT MET"
+
+
+def measure(server: ServerProcess, name: str, attack, args, idle: dict | None) -> dict:
+    peak = Peak(server.proc.pid)
+    if attack is not None:
+        attack.start()
+        time.sleep(args.warmup)
+    try:
+        rate = streaming_rate(server, short_moves(4000), args.stream_seconds)
+        rest, ws_times = stop_latencies(server, args.samples)
+    finally:
+        if attack is not None:
+            attack.stop()
+    result = {
+        "rate": rate, "rest": attacks.summary(rest), "ws": attacks.summary(ws_times),
+        "peak_mb": peak.stop(), "errors": attack.server_errors() if attack else 0,
+        "statuses": dict(attack.statuses) if attack else {},
+    }  # fmt: skip
+    base = idle or result
+    print(f"\n== {name}")
+    for path in ("rest", "ws"):
+        s, b = result[path], base[path]
+        print(f"  {path.upper():4s} stop  median {s['median'] * 1000:7.2f} ms  p99 "
+              f"{s['p99'] * 1000:7.2f} ms  worst {s['worst'] * 1000:7.2f} ms  "
+              f"(x{s['median'] / b['median']:.2f} / x{s['p99'] / b['p99']:.2f} idle)  "
+              f"p99 <= 20 ms: {verdict(s['p99'] <= STOP_GOAL)}")  # fmt: skip
+    ratio = rate / base["rate"]
+    print(f"  streaming {rate:6.1f} lines/s ({ratio * 100:5.1f} % of idle)  "
+          f">= 90 %: {verdict(ratio >= STREAM_GOAL)}")
+    print(f"  peak memory {result['peak_mb']:.0f} MB; 5xx answers: {result['errors']}; "
+          f"attacker saw {result['statuses']}")
+    return result
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--samples", type=int, default=100, help="stops per path per attack")
+    parser.add_argument("--stream-seconds", type=float, default=5.0)
+    parser.add_argument("--warmup", type=float, default=1.0, help="attack running before measuring")
+    parser.add_argument("--only", help="run only attacks whose name contains this")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        server = LimitedServer(Path(tmp) / "data", ["--virtual", "--sim-speed", "1"])
+        server.start()
+        try:
+            server.home()
+            idle = measure(server, "idle", None, args, None)
+            svg = attacks.identical_paths_svg(100_000)
+
+            def uploads(attack: attacks.Attack) -> None:
+                answer = server.client.post("/api/jobs", files={"file": ("many.svg", svg)})
+                attack.got(answer.status_code)
+
+            def killer(attack: attacks.Attack) -> None:
+                answer_box: list = []
+                thread = threading.Thread(target=lambda: answer_box.append(server.client.post(
+                    "/api/jobs", files={"file": ("k.svg", svg)}, timeout=300)))  # fmt: skip
+                thread.start()
+                attack.wait(1.0)
+                for pid in attacks.import_workers(server.proc.pid):
+                    os.kill(pid, signal.SIGKILL)
+                thread.join()
+                attack.got(answer_box[0].status_code if answer_box else 0)
+
+            suite = {
+                "1M-key bodies, no token": lambda: attacks.big_bodies(
+                    server.url, megabytes=250, keys=1_000_000, threads=4),
+                "1,100 half-sent headers (1,024 file limit)": lambda: attacks.slow_headers(
+                    server.url, connections=1100),
+                "200 silent WebSockets, 1 MiB frames, reconnects": lambda: (
+                    attacks.silent_websockets(server.url, server.token, clients=200)),
+                "wrong logins": lambda: attacks.wrong_logins(server.url),
+                "100,000-path SVG imports": lambda: attacks.Attack("svg", 1, uploads),
+                "killed import worker": lambda: attacks.Attack("killer", 1, killer),
+            }
+            for name, make in suite.items():
+                if args.only and args.only not in name:
+                    continue
+                measure(server, name, make(), args, idle)
+        except Exception:
+            print(server.log()[-3000:])
+            raise
+        finally:
+            server.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,227 @@
+"""The guard middleware (pure ASGI, so nothing is buffered or parsed on its way).
+
+Order for an HTTP request, each step before the app reads the body:
+Host allow-list -> declared body size -> authentication (routes other than health
+and login) -> CSRF (cookie-authenticated changes) -> login lockout; then the body
+is counted while the app reads it (413 past the route's bound, 408 if it stalls)
+and every response gets the security headers.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+from collections.abc import Awaitable, Callable, MutableMapping
+from typing import Any
+from urllib.parse import parse_qs
+
+from starlette.requests import ClientDisconnect
+
+from plotbridge.guard.headers import security_headers
+from plotbridge.guard.hosts import host_allowed, origin_allowed, own_names
+from plotbridge.guard.limits import body_limit
+from plotbridge.guard.logs import escape
+from plotbridge.guard.ratelimit import LoginLimiter
+
+log = logging.getLogger("plotbridge.guard")
+
+Scope = MutableMapping[str, Any]
+Message = MutableMapping[str, Any]
+Receive = Callable[[], Awaitable[Message]]
+Send = Callable[[Message], Awaitable[None]]
+ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
+
+BODY_IDLE_TIMEOUT = 10.0  # s without a byte of a body that has not all arrived: 408
+CSRF_HEADER = b"x-plotbridge"  # the page adds it; a form or no-cors fetch cannot
+UNSAFE = ("POST", "PUT", "PATCH", "DELETE")
+PUBLIC = ("/api/health", "/api/login", "/api/logout")
+LOGIN_PATHS = ("/api/login", "/login")
+WS_PER_CLIENT = 8  # open WebSockets per client address (the page needs one)
+COOKIE = "plotbridge_session"
+
+
+def _headers(scope: Scope) -> dict[bytes, bytes]:
+    return {k.lower(): v for k, v in scope.get("headers", ())}
+
+
+def _cookie(headers: dict[bytes, bytes], name: str) -> str | None:
+    for part in headers.get(b"cookie", b"").decode("latin-1").split(";"):
+        key, _, value = part.strip().partition("=")
+        if key == name:
+            return value
+    return None
+
+
+def _client(scope: Scope) -> str:
+    client = scope.get("client")
+    return str(client[0]) if client else "?"
+
+
+async def _answer(send: Send, status: int, detail: str, extra: list | None = None) -> None:
+    body = json.dumps({"detail": detail}).encode()
+    headers = [
+        (b"content-type", b"application/json"),
+        (b"content-length", str(len(body)).encode()),
+        (b"connection", b"close"),
+        *security_headers(""),
+        *(extra or []),
+    ]
+    await send({"type": "http.response.start", "status": status, "headers": headers})
+    await send({"type": "http.response.body", "body": body})
+
+
+class Guard:
+    def __init__(
+        self, app: ASGIApp, *, auth: Any, upload_limit: int, allowed_hosts: tuple[str, ...] = ()
+    ) -> None:
+        self.app = app
+        self.auth = auth
+        self.upload_limit = upload_limit
+        self.names = own_names(allowed_hosts)
+        self.logins = LoginLimiter()
+        self.websockets: dict[str, int] = {}
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] == "http":
+            await self._http(scope, receive, send)
+        elif scope["type"] == "websocket":
+            await self._websocket(scope, receive, send)
+        else:
+            await self.app(scope, receive, send)
+
+    # ---- checks shared by HTTP and WebSocket ---------------------------------
+
+    def _authenticated(self, headers: dict[bytes, bytes], query_token: str | None) -> str | None:
+        """'bearer', 'cookie', 'query', or None."""
+        if self.auth.check_header(headers.get(b"authorization", b"").decode("latin-1")):
+            return "bearer"
+        if self.auth.check_session(_cookie(headers, COOKIE)):
+            return "cookie"
+        if query_token is not None and self.auth.check_token(query_token):
+            return "query"
+        return None
+
+    def _own_origin(self, headers: dict[bytes, bytes]) -> bool | None:
+        """True/False: the Origin is/is not this server's; None: no Origin sent."""
+        origin = headers.get(b"origin")
+        if origin is None:
+            return None
+        return origin_allowed(origin.decode("latin-1"), headers.get(b"host", b"").decode("latin-1"))
+
+    # ---- HTTP ------------------------------------------------------------------
+
+    async def _http(self, scope: Scope, receive: Receive, send: Send) -> None:
+        headers = _headers(scope)
+        method, path = scope["method"], scope["path"]
+        client = _client(scope)
+        if not host_allowed(headers.get(b"host", b"").decode("latin-1"), self.names):
+            return await _answer(send, 400, "the Host header names no address of this server")
+        limit = body_limit(method, path, self.upload_limit)
+        length = headers.get(b"content-length", b"")
+        if length and (not length.isdigit() or int(length) > limit):
+            return await _answer(send, 413, f"request body larger than {limit} bytes")
+        api = path.startswith("/api/")
+        via = self._authenticated(headers, None)
+        if api and path not in PUBLIC and via is None:
+            return await _answer(
+                send, 401, "missing or wrong token: send 'Authorization: Bearer TOKEN' or log in",
+                [(b"www-authenticate", b"Bearer")],
+            )  # fmt: skip
+        if method in UNSAFE and via != "bearer":
+            origin = self._own_origin(headers)
+            unmarked = origin is None and CSRF_HEADER not in headers
+            if origin is False or (via == "cookie" and unmarked):
+                log.warning("refused cross-site %s %s from %s", method, escape(path), client)
+                return await _answer(send, 403, "cross-site request refused (Origin)")
+        login = path in LOGIN_PATHS
+        if login:
+            wait = self.logins.wait(client)
+            if wait > 0:
+                return await _answer(
+                    send, 429, f"too many failed logins; try again in {wait:.0f} s",
+                    [(b"retry-after", str(int(wait) + 1).encode())],
+                )  # fmt: skip
+        await self._run(scope, receive, send, limit, path, client, login)
+
+    async def _run(
+        self, scope: Scope, receive: Receive, send: Send,
+        limit: int, path: str, client: str, login: bool,
+    ) -> None:  # fmt: skip
+        received = 0
+        started = False
+        refused = False  # the guard answered: the app is told the client left
+        extra = security_headers(path)
+
+        async def counted_receive() -> Message:
+            nonlocal received, refused
+            if refused:
+                return {"type": "http.disconnect"}
+            try:
+                message = await asyncio.wait_for(receive(), BODY_IDLE_TIMEOUT)
+            except TimeoutError:
+                message = None
+            if message is not None and message["type"] == "http.request":
+                received += len(message.get("body", b""))
+                if received <= limit:
+                    return message
+            elif message is not None:
+                return message
+            if not started:  # answer now; the app sees a disconnect and gives up
+                refused = True
+                if message is None:
+                    await _answer(send, 408, "the request body stopped arriving")
+                else:
+                    await _answer(send, 413, f"request body larger than {limit} bytes")
+            return {"type": "http.disconnect"}
+
+        async def guarded_send(message: Message) -> None:
+            nonlocal started
+            if refused:
+                return
+            if message["type"] == "http.response.start":
+                started = True
+                if login and message["status"] == 401:
+                    self.logins.failed(client)
+                    log.warning("failed login from %s", client)
+                message = {**message, "headers": [*message.get("headers", ()), *extra]}
+            await send(message)
+
+        try:
+            await self.app(scope, counted_receive, guarded_send)
+        except ClientDisconnect:
+            if not refused:
+                log.info("client %s went away during %s", client, escape(path))
+
+    # ---- WebSocket ---------------------------------------------------------------
+
+    async def _websocket(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Refusals are sent as close codes after accepting (a browser sees no code
+        for an HTTP refusal): 4401 not logged in, 4403 foreign origin, 1013 too many."""
+        headers = _headers(scope)
+        client = _client(scope)
+        if not host_allowed(headers.get(b"host", b"").decode("latin-1"), self.names):
+            return await self._ws_refuse(receive, send, 4403, "host not allowed")
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        token = query.get("token", [None])[0]
+        if self._authenticated(headers, token) is None:
+            return await self._ws_refuse(receive, send, 4401, "missing or wrong token")
+        if self._own_origin(headers) is False:
+            return await self._ws_refuse(receive, send, 4403, "origin not allowed")
+        if self.websockets.get(client, 0) >= WS_PER_CLIENT:
+            log.warning("refused a WebSocket from %s: %d open", client, WS_PER_CLIENT)
+            return await self._ws_refuse(receive, send, 1013, "too many connections")
+        self.websockets[client] = self.websockets.get(client, 0) + 1
+        try:
+            await self.app(scope, receive, send)
+        finally:
+            self.websockets[client] -= 1
+            if not self.websockets[client]:
+                del self.websockets[client]
+
+    async def _ws_refuse(self, receive: Receive, send: Send, code: int, reason: str) -> None:
+        message = await receive()
+        if message["type"] != "websocket.connect":
+            return
+        await send({"type": "websocket.accept"})
+        await send({"type": "websocket.close", "code": code, "reason": reason})

@@ -1,0 +1,296 @@
+"""Imports as a supervised service: worker processes with limits, fair queueing.
+
+Each worker is a spawned process (never a fork of the threaded server) that runs
+one call at a time and is bound to the server three ways: PR_SET_PDEATHSIG kills
+it when the server dies (even by SIGKILL); a worker waiting for work exits at
+EOF on its pipe; `close()` kills it at shutdown. No multiprocessing queues, so no
+resource-tracker process is left behind either.
+
+Limits, answered with what was too big:
+- memory: RLIMIT_AS in the worker; a MemoryError is answered, and a worker the
+  kernel kills (OOM) is replaced and the upload that killed it told so;
+- time: a call past `time_limit` has its worker killed and replaced;
+- disk: the jobs directory's total before an import, each job's files after.
+
+Fairness: calls wait in order of size class (small first), then arrival, and a
+large call never takes the last free worker, so small uploads never queue
+behind a huge one.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ctypes
+import itertools
+import logging
+import multiprocessing
+import os
+import resource
+import signal
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from pathlib import Path
+from typing import Any
+
+log = logging.getLogger("plotbridge.importing.workers")
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+STARTUP_LIMIT = 60.0  # s for a new worker's interpreter to start (slow on a busy Pi)
+
+
+@dataclass
+class Limits:
+    workers: int = 2  # one always free for small uploads
+    time_limit: float = 120.0  # s per import
+    memory_mb: int = 512  # address space per worker (a Pi 4 with 2 GB keeps room)
+    small_bytes: int = 1024 * 1024  # uploads up to this size are "small"
+    job_quota_mb: float = 200.0  # one job's files (original, program, preview)
+    total_quota_mb: float = 2048.0  # every job's files together
+
+
+class ImportLimit(Exception):
+    """An import refused for a limit; `status` is the HTTP status to answer with."""
+
+    def __init__(self, status: int, message: str) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+# ---- the worker process ------------------------------------------------------------
+
+
+def _bind_to_parent() -> None:
+    """Die with the server: the kernel sends SIGKILL when the parent exits."""
+    with contextlib.suppress(OSError, AttributeError):
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() == 1:  # the server died before the line above ran
+        os._exit(1)
+
+
+def _serve(conn: Connection, memory_bytes: int) -> None:
+    _bind_to_parent()
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the server's to handle
+    resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
+    conn.send(("ready",))  # the time limit counts from here, not from a slow start
+    while True:
+        try:
+            function, args = conn.recv()
+        except (EOFError, OSError):
+            return  # the server closed the pipe: shut down
+        try:
+            answer: tuple = ("ok", function(*args))
+        except MemoryError:
+            answer = ("memory",)
+        except Exception as exc:
+            answer = ("error", f"{type(exc).__name__}: {exc}")
+        try:
+            conn.send(answer)
+        except MemoryError:
+            conn.send(("memory",))
+
+
+# ---- the server side ----------------------------------------------------------------
+
+
+class Worker:
+    def __init__(self, memory_bytes: int) -> None:
+        context = multiprocessing.get_context("spawn")
+        self.conn, child = context.Pipe()
+        env = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+        saved = {key: os.environ.get(key) for key in env}
+        os.environ.update(env)  # inherited by the spawned interpreter: one BLAS thread
+        try:
+            self.process = context.Process(
+                target=_serve, args=(child, memory_bytes), name="plotbridge-import", daemon=True
+            )
+            self.process.start()
+        finally:
+            for key, value in saved.items():
+                if value is None:
+                    os.environ.pop(key, None)
+                else:
+                    os.environ[key] = value
+        child.close()
+        self.busy = False
+        self.started = False
+
+    def kill(self) -> None:
+        with contextlib.suppress(Exception):
+            self.process.kill()
+        with contextlib.suppress(Exception):
+            self.process.join(1)
+        with contextlib.suppress(Exception):
+            self.conn.close()
+        with contextlib.suppress(Exception):
+            self.process.close()
+
+    async def call(self, function: Callable[..., Any], args: tuple, limit: float) -> tuple:
+        """("ok", value) / ("memory",) / ("error", text) / ("died", exitcode) / ("timeout",)."""
+        if not self.started:
+            answer = await self._answer(STARTUP_LIMIT)
+            if answer[0] != "ready":
+                return answer
+            self.started = True
+        try:
+            self.conn.send((function, args))
+        except OSError:
+            return await self._answer(1.0)
+        return await self._answer(limit)
+
+    async def _answer(self, limit: float) -> tuple:
+        """The worker's next message, or how it failed to send one within `limit` s."""
+        loop = asyncio.get_running_loop()
+        done: asyncio.Future[str] = loop.create_future()
+        fds = (self.conn.fileno(), self.process.sentinel)
+        for fd, what in zip(fds, ("answer", "died"), strict=True):
+            loop.add_reader(fd, lambda what=what: done.done() or done.set_result(what))
+        try:
+            what = await asyncio.wait_for(done, limit)
+        except TimeoutError:
+            return ("timeout",)
+        finally:
+            for fd in fds:
+                loop.remove_reader(fd)
+        if what == "answer":
+            with contextlib.suppress(EOFError, OSError):
+                return self.conn.recv()
+        self.process.join(1)
+        return ("died", self.process.exitcode)
+
+
+@dataclass(order=True)
+class _Waiting:
+    large: bool
+    seq: int
+    ready: asyncio.Future[Worker] = field(compare=False)
+
+
+class ImportService:
+    def __init__(self, limits: Limits | None = None) -> None:
+        self.limits = limits or Limits()
+        self.workers: list[Worker] = []
+        self.waiting: list[_Waiting] = []
+        self._seq = itertools.count()
+        self._closed = False
+
+    # ---- scheduling ------------------------------------------------------------
+
+    def _large_running(self) -> int:
+        return sum(1 for w in self.workers if w.busy and getattr(w, "large", False))
+
+    def _dispatch(self) -> None:
+        self.waiting.sort()
+        for entry in list(self.waiting):
+            if entry.ready.done():
+                self.waiting.remove(entry)
+                continue
+            if entry.large and self._large_running() >= max(1, self.limits.workers - 1):
+                continue  # keep a worker for small uploads
+            worker = self._free_worker()
+            if worker is None:
+                return
+            worker.busy = True
+            worker.large = entry.large  # type: ignore[attr-defined]
+            self.waiting.remove(entry)
+            entry.ready.set_result(worker)
+
+    def _free_worker(self) -> Worker | None:
+        for worker in self.workers:
+            if not worker.busy:
+                return worker
+        if len(self.workers) < self.limits.workers:
+            worker = Worker(self.limits.memory_mb * 1024 * 1024)
+            self.workers.append(worker)
+            return worker
+        return None
+
+    def _release(self, worker: Worker, broken: bool) -> None:
+        worker.busy = False
+        if broken:
+            worker.kill()
+            self.workers.remove(worker)  # a fresh one is spawned when next needed
+        if not self._closed:
+            self._dispatch()
+
+    # ---- calls -------------------------------------------------------------------
+
+    async def call(self, function: Callable[..., Any], *args: Any, size: int = 0) -> Any:
+        """`function(*args)` in a worker; ImportLimit when a limit stopped it."""
+        if self._closed:
+            raise ImportLimit(503, "the server is shutting down")
+        entry = _Waiting(size > self.limits.small_bytes, next(self._seq),
+                         asyncio.get_running_loop().create_future())  # fmt: skip
+        self.waiting.append(entry)
+        self._dispatch()
+        try:
+            worker = await entry.ready
+        except asyncio.CancelledError:
+            if entry.ready.done() and not entry.ready.cancelled():
+                self._release(entry.ready.result(), broken=False)
+            raise
+        answer: tuple = ("timeout",)
+        try:
+            answer = await worker.call(function, args, self.limits.time_limit)
+        finally:
+            self._release(worker, broken=answer[0] in ("timeout", "died"))
+        return self._unpack(answer)
+
+    def _unpack(self, answer: tuple) -> Any:
+        kind = answer[0]
+        if kind == "ok":
+            return answer[1]
+        if kind == "memory":
+            raise ImportLimit(413, f"the import needed more than the {self.limits.memory_mb} MB "
+                              "memory limit (--import-memory-mb); simplify or split the drawing")
+        if kind == "timeout":
+            log.warning("import stopped after %g s; worker replaced", self.limits.time_limit)
+            raise ImportLimit(413, f"the import took longer than the {self.limits.time_limit:g} s "
+                              "limit (--import-time-limit); simplify or split the drawing")
+        if kind == "died":
+            code = answer[1]
+            killed = isinstance(code, int) and code < 0
+            how = f"killed by signal {-code}" if killed else f"exit {code}"
+            log.warning("import worker died (%s); replaced", how)
+            raise ImportLimit(
+                413, f"the import worker died ({how}) while importing this upload, as the "
+                "kernel does when memory runs out; simplify or split the drawing",
+            )  # fmt: skip
+        raise ImportLimit(422, f"import failed: {answer[1]}")
+
+    # ---- disk quotas --------------------------------------------------------------
+
+    async def check_room(self, jobs_dir: Path, incoming: int) -> None:
+        used = await asyncio.to_thread(tree_size, jobs_dir)
+        total = self.limits.total_quota_mb * 1024 * 1024
+        if used + incoming > total:
+            raise ImportLimit(507, f"the jobs take {used / 2**20:.0f} MB of the "
+                              f"{self.limits.total_quota_mb:g} MB quota; delete finished jobs")
+
+    async def check_job(self, folder: Path) -> None:
+        used = await asyncio.to_thread(tree_size, folder)
+        if used > self.limits.job_quota_mb * 1024 * 1024:
+            raise ImportLimit(507, f"this job's files would take {used / 2**20:.0f} MB, more "
+                              f"than the {self.limits.job_quota_mb:g} MB per-job quota")
+
+    def close(self) -> None:
+        self._closed = True
+        for entry in self.waiting:
+            if not entry.ready.done():
+                entry.ready.cancel()
+        for worker in self.workers:
+            worker.kill()
+        self.workers.clear()
+
+
+def tree_size(path: Path) -> int:
+    total = 0
+    for root, _, files in os.walk(path):
+        for name in files:
+            with contextlib.suppress(OSError):
+                total += os.lstat(os.path.join(root, name)).st_size
+    return total
+
+

@@ -1,0 +1,96 @@
+"""The browser side of the hardening: another origin cannot act, the CSP holds,
+a refused WebSocket leads to the login, a login link leaves no token behind."""
+
+from __future__ import annotations
+
+import functools
+import http.server
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from tests.browser.conftest import QuietHandler, login
+
+pytestmark = pytest.mark.e2e
+
+EVIL = """<!doctype html><html><body>
+<form id="f" method="post" action="{url}/api/machine/estop" target="sink"></form>
+<iframe name="sink"></iframe>
+<script>
+  const data = new FormData();
+  data.append("file", new Blob(["G1 X1 Y1\\n"]), "evil.gcode");
+  data.append("start", "true");
+  fetch("{url}/api/jobs", {{method: "POST", mode: "no-cors", credentials: "include", body: data}})
+    .finally(() => {{ document.getElementById("f").submit(); window.done = true; }});
+</script></body></html>"""
+
+
+@pytest.fixture
+def evil_site(tmp_path, server_virtual) -> Iterator[str]:
+    """A page on another port of the same host (same site, other origin)."""
+    (tmp_path / "index.html").write_text(EVIL.format(url=server_virtual.url))
+    handler = functools.partial(QuietHandler, directory=str(tmp_path))
+    httpd = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=httpd.serve_forever, daemon=True).start()
+    try:
+        yield f"http://127.0.0.1:{httpd.server_address[1]}/index.html"
+    finally:
+        httpd.shutdown()
+        httpd.server_close()
+
+
+def test_a_page_on_another_port_cannot_start_or_stop_anything(desktop, server_virtual, evil_site):
+    page, _ = desktop
+    login(page, server_virtual.url, server_virtual.token)
+    other = page.context.new_page()
+    other.goto(evil_site)
+    other.wait_for_function("() => window.done === true")
+    time.sleep(1.0)  # the form's POST lands in the frame
+    assert server_virtual.client.get("/api/jobs").json() == []
+    assert "EMERGENCY STOP" not in server_virtual.log()
+    assert "refused cross-site POST" in server_virtual.log()
+    # The page itself still can.
+    page.click("#estop")
+    deadline = time.monotonic() + 10
+    while "EMERGENCY STOP" not in server_virtual.log():
+        assert time.monotonic() < deadline, "the page's own stop did not arrive"
+        time.sleep(0.05)
+
+
+def test_the_csp_blocks_an_inline_script(desktop, server_virtual):
+    page, _ = desktop
+    violations: list[str] = []
+    page.on("console", lambda msg: violations.append(msg.text))
+    login(page, server_virtual.url, server_virtual.token)
+    page.evaluate("""() => {
+        window.injected = false;
+        const s = document.createElement("script");
+        s.textContent = "window.injected = true";
+        document.head.appendChild(s);
+    }""")
+    assert page.evaluate("() => window.injected") is False
+    assert any("Content Security Policy" in text for text in violations), violations
+
+
+def test_a_refused_websocket_shows_the_login_and_stops_retrying(desktop, server_virtual):
+    """A restart ends the sessions (they live in memory): the page's reconnect is
+    refused with 4401, it shows the login and tries no more."""
+    page, _ = desktop
+    login(page, server_virtual.url, server_virtual.token)
+    sockets: list[str] = []
+    page.on("websocket", lambda ws: sockets.append(ws.url))
+    server_virtual.restart()
+    page.wait_for_selector("#login-view:not([hidden])", timeout=60000)
+    tried = len(sockets)
+    time.sleep(3.0)  # retries would come every 0.5-10 s
+    assert len(sockets) == tried
+
+
+def test_a_login_link_leaves_no_token_in_the_address_bar(desktop, server_virtual):
+    page, _ = desktop
+    page.goto(f"{server_virtual.url}/#token={server_virtual.token}")
+    page.wait_for_selector("#app:not([hidden])")
+    assert server_virtual.token not in page.url
+    assert server_virtual.token not in page.evaluate("() => location.href")

@@ -1,0 +1,109 @@
+"""The supervised import service (importing/workers.py) with real worker processes."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+from plotbridge.importing.workers import ImportLimit, ImportService, Limits
+
+
+def echo(value: int) -> int:
+    return value
+
+
+def pid() -> int:
+    return os.getpid()
+
+
+def sleep_then(seconds: float, value: str) -> str:
+    time.sleep(seconds)
+    return value
+
+
+def hog(megabytes: int) -> int:
+    return len(bytearray(megabytes * 1024 * 1024))
+
+
+def kill_self() -> None:
+    os.kill(os.getpid(), signal.SIGKILL)
+
+
+def alive(process_id: int) -> bool:
+    try:
+        os.kill(process_id, 0)
+    except ProcessLookupError:
+        return False
+    with open(f"/proc/{process_id}/stat") as stat:  # a zombie is dead too
+        return stat.read().split(") ")[1][0] != "Z"
+
+
+@pytest.fixture
+async def service():
+    imports = ImportService(Limits(workers=2, time_limit=20, memory_mb=400, small_bytes=1000))
+    yield imports
+    pids = [w.process.pid for w in imports.workers]
+    imports.close()
+    assert not any(alive(p) for p in pids)
+
+
+async def test_a_killed_worker_is_replaced_and_its_upload_told(service):
+    with pytest.raises(ImportLimit, match=r"died .*signal 9"):
+        await service.call(kill_self)
+    assert await service.call(echo, 7) == 7
+
+
+async def test_time_and_memory_limits_answer_what_was_too_big(service):
+    service.limits.time_limit = 1.0
+    with pytest.raises(ImportLimit, match="longer than the 1 s limit") as slow:
+        await service.call(sleep_then, 30, "late")
+    assert slow.value.status == 413
+    service.limits.time_limit = 60.0  # a loaded machine must not turn the next into a timeout
+    with pytest.raises(ImportLimit, match="more than the 400 MB memory limit"):
+        await service.call(hog, 600)
+    assert await service.call(hog, 10) == 10 * 1024 * 1024
+
+
+async def test_small_uploads_do_not_wait_behind_a_large_one(service):
+    large = [asyncio.create_task(service.call(sleep_then, 15, "large", size=10**6))
+             for _ in range(2)]  # fmt: skip
+    await asyncio.sleep(0.5)
+    small = await service.call(echo, 1, size=10)  # the second large one waits, not this
+    assert small == 1 and not any(task.done() for task in large)
+    assert await asyncio.gather(*large) == ["large", "large"]
+
+
+def test_workers_die_with_the_server(tmp_path):
+    """SIGKILL of the server process: the kernel kills its workers (PR_SET_PDEATHSIG)."""
+    script = textwrap.dedent("""
+        import asyncio, sys
+        from tests.unit.test_import_workers import pid
+        from plotbridge.importing.workers import ImportService
+
+        async def main():
+            service = ImportService()
+            print(await service.call(pid), flush=True)
+            await asyncio.sleep(60)
+
+        asyncio.run(main())
+    """)
+    server = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True,
+                              cwd=os.getcwd())  # fmt: skip
+    try:
+        worker = int(server.stdout.readline())
+        assert alive(worker)
+        server.kill()
+        server.wait(10)
+        deadline = time.monotonic() + 10
+        while alive(worker) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not alive(worker)
+    finally:
+        server.kill()
+        server.wait()
