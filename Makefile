@@ -10,7 +10,9 @@ BOARD ?= uno-cnc-shield
 DATA_DIR ?= data
 ARGS ?=
 
-.PHONY: run test setup setup-test firmware sim lint flash install-service bench clean
+INKSCAPE_EXTENSIONS ?= $(HOME)/.config/inkscape/extensions
+
+.PHONY: run test setup setup-test firmware sim lint flash install-service bench clean inkscape-extension
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
@@ -33,8 +35,9 @@ $(VENV)/.stamp: requirements.txt server/pyproject.toml
 	$(PY) -m pip install -q --disable-pip-version-check --no-deps -e server
 	touch $@
 
-$(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt
+$(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt requirements-inkex.txt
 	$(PY) -m pip install -q --disable-pip-version-check -r requirements-dev.txt
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps -r requirements-inkex.txt
 	touch $@
 
 firmware:
@@ -51,6 +54,11 @@ flash: .stamps/system-run firmware
 
 install-service: setup firmware sim
 	scripts/install-service $(CURDIR)
+
+inkscape-extension:
+	mkdir -p "$(INKSCAPE_EXTENSIONS)"
+	cp integrations/inkscape/plotbridge_send.inx integrations/inkscape/plotbridge_send.py "$(INKSCAPE_EXTENSIONS)/"
+	@echo "installed into $(INKSCAPE_EXTENSIONS): restart Inkscape, then Extensions > plotbridge > Send to plotter"
 
 bench: setup-test firmware sim
 	for b in bench/*.py; do $(PY) $$b || exit 1; done

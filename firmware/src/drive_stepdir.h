@@ -12,7 +12,7 @@
 extern uint8_t drive_pulsing; /* axes whose pulse is up */
 
 /* 2 cycles per axis on separate ports, 3 on a shared one (one write) */
-static inline void drive_step(uint8_t axes)
+static inline __attribute__((always_inline)) void drive_step(uint8_t axes)
 {
     if (IO_SAME_PORT(X_STEP, Y_STEP)) {
         uint8_t bits = 0;
@@ -30,7 +30,7 @@ static inline void drive_step(uint8_t axes)
     drive_pulsing = axes;
 }
 
-static inline void drive_step_end(void)
+static inline __attribute__((always_inline)) void drive_step_end(void)
 {
     drive_step(drive_pulsing);
     drive_pulsing = 0;

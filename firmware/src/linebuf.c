@@ -9,6 +9,15 @@ void linebuf_reset(linebuf_t *lb)
 
 uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
 {
+    /* the common byte first, in one test of each: an upper-case letter,
+     * digit or sign outside a comment, with room left (the line is
+     * NUL-terminated at its end, not after every byte) */
+    if (c > ' ' && c <= 'Z' && c != '(' && c != ';' && !(lb->in_paren | lb->in_semicolon) &&
+        lb->len < LINE_SIZE) {
+        lb->after_cr = 0;
+        lb->text[lb->len++] = (char)c;
+        return LB_NONE;
+    }
     if (c == '\n' || c == '\r') {
         if (c == '\n' && lb->after_cr) {
             lb->after_cr = 0;
@@ -50,6 +59,5 @@ uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
         return LB_NONE;
     }
     lb->text[lb->len++] = (char)c;
-    lb->text[lb->len] = 0;
     return LB_NONE;
 }

@@ -14,31 +14,27 @@ uint8_t read_number(const char *line, uint8_t *pos, float *out)
     uint32_t mantissa = 0;
     uint8_t sig = 0;       /* significant digits kept in mantissa */
     int16_t exponent = 0;  /* power of ten applied to mantissa */
-    uint8_t digits = 0, point = 0;
-    for (;; i++) {
-        char c = line[i];
-        if (c == '.') {
-            if (point)
-                break;
-            point = 1;
-            continue;
-        }
-        if (c < '0' || c > '9')
-            break;
+    uint8_t digits = 0;
+    /* integer part, then the fraction: two tight loops instead of one that
+     * asks at every digit which side of the point it is on */
+    for (uint8_t d; (d = (uint8_t)(line[i] - '0')) <= 9; i++) {
         digits++;
-        if (sig == 0 && c == '0') {
-            if (point)
-                exponent--;   /* leading zero after the point */
-            continue;
-        }
         if (sig < MAX_SIG_DIGITS) {
-            mantissa = mantissa * 10u + (uint32_t)(c - '0');
-            sig++;
-            if (point)
+            mantissa = mantissa * 10u + d;
+            sig += mantissa != 0; /* leading zeros are not significant */
+        } else if (exponent < 100) {
+            exponent++; /* a dropped integer digit still scales */
+        }
+    }
+    if (line[i] == '.') {
+        i++;
+        for (uint8_t d; (d = (uint8_t)(line[i] - '0')) <= 9; i++) {
+            digits++;
+            if (sig < MAX_SIG_DIGITS) {
+                mantissa = mantissa * 10u + d;
+                sig += mantissa != 0;
                 exponent--;
-        } else if (!point) {
-            if (exponent < 100)
-                exponent++;  /* dropped integer digit still scales */
+            }
         }
     }
     if (digits == 0)

@@ -13,6 +13,9 @@ static int32_t position[N_AXIS];   /* cartesian steps where the last block ends 
 static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
+static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
+static float last_feed;        /* the last block's feed, and as stored in blocks */
+static uint16_t last_feed_u16;
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
@@ -56,6 +59,17 @@ void plan_get_position(int32_t *steps) { memcpy(steps, position, sizeof(position
 uint8_t plan_free(void) { return (uint8_t)(PLAN_SIZE - 1 - count); }
 uint8_t plan_count(void) { return count; }
 plan_block_t *plan_current(void) { return count ? &ring[tail] : 0; }
+
+uint16_t plan_events(const plan_block_t *b)
+{
+    uint16_t events = 0;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        uint16_t m = (uint16_t)(b->steps[a] < 0 ? -b->steps[a] : b->steps[a]);
+        if (m > events)
+            events = m;
+    }
+    return events;
+}
 
 plan_sqr_t plan_sqr_from_float(float v_sqr)
 {
@@ -127,7 +141,7 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
  * The backward pass stops at a block that stays at its junction limit: the
  * blocks before it would get the values they already have, and the forward
  * pass resumes from there. */
-static void recalculate(void)
+static void recalculate(uint8_t full)
 {
     /* pointers rather than ring indices: no index multiply per block */
     plan_block_t *const last = &ring[PLAN_SIZE - 1];
@@ -139,7 +153,7 @@ static void recalculate(void)
         plan_sqr_t e = next_entry + b->accel_dist2;
         if (e > b->max_entry_sqr)
             e = b->max_entry_sqr;
-        if (e == b->entry_sqr && e == b->max_entry_sqr) {
+        if (e == b->entry_sqr && e == b->max_entry_sqr && !full) {
             first = b;
             break;
         }
@@ -154,6 +168,81 @@ static void recalculate(void)
             b->entry_sqr = reach;
         reach = b->entry_sqr + b->accel_dist2; /* both <= PLAN_SQR_MAX: no overflow */
     }
+}
+
+/* Cruise speed of a block: the programmed feed (mm/min) or, for a rapid,
+ * the axis limit, each scaled by its override (jogs keep theirs), within
+ * the axis limits along the move (s_per_mm: the largest |u_axis| / max
+ * rate), and no slower than the step timer can time. */
+static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float events_per_mm)
+{
+    float speed;
+    if (flags & PB_RAPID) {
+        speed = 1.0f / s_per_mm;
+        if (rapid_pct != 100)
+            speed *= (float)rapid_pct * 0.01f;
+    } else {
+        speed = feed * (1.0f / 60.0f);
+        if (feed_pct != 100 && !(flags & PB_JOG))
+            speed *= (float)feed_pct * 0.01f;
+        if (speed * s_per_mm > 1.0f)
+            speed = 1.0f / s_per_mm;
+    }
+    if (speed * events_per_mm < MIN_STEP_RATE)
+        speed = MIN_STEP_RATE / events_per_mm;
+    return speed;
+}
+
+/* The tightest axis speed limit along a move: max over moving axes of
+ * |u_axis| / max rate (s/mm), from the unit vector. */
+static float axis_s_per_mm(const float *unit)
+{
+    float s_per_mm = 0.0f;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        float u = fabsf(unit[a]);
+        if (u > 1.0e-6f) {
+            float r = u * axis.s_per_mm[a];
+            if (r > s_per_mm)
+                s_per_mm = r;
+        }
+    }
+    return s_per_mm;
+}
+
+void planner_set_overrides(uint8_t feed, uint8_t rapid)
+{
+    if (feed == feed_pct && rapid == rapid_pct)
+        return;
+    feed_pct = feed;
+    rapid_pct = rapid;
+    if (!count)
+        return;
+    refresh_axis();
+    plan_block_t *const last = &ring[PLAN_SIZE - 1];
+    plan_block_t *const end = &ring[head];
+    plan_block_t *const oldest = &ring[tail];
+    float prev_nominal = 0.0f;
+    for (plan_block_t *b = oldest; b != end; b = b == last ? ring : b + 1) {
+        if (!(b->flags & PB_JOG)) {
+            int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
+            float unit[N_AXIS], inv_mm = 1.0f / b->mm;
+            plan_cart_from_motor(motor, cart);
+            for (uint8_t a = 0; a < N_AXIS; a++)
+                unit[a] = (float)cart[a] * axis.mm_per_step[a] * inv_mm;
+            float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), b->events_per_mm);
+            b->nominal_sqr = speed * speed;
+        }
+        /* a junction is never faster than the cruise speeds on either side */
+        if (b != oldest) {
+            float cap = prev_nominal < b->nominal_sqr ? prev_nominal : b->nominal_sqr;
+            plan_sqr_t c = plan_sqr_from_float(cap);
+            if (b->max_entry_sqr > c)
+                b->max_entry_sqr = c;
+        }
+        prev_nominal = b->nominal_sqr;
+    }
+    prev_nominal_sqr = prev_nominal;
+    recalculate(1);
 }
 
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
@@ -186,7 +275,6 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->flags = flags;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    b->events = (uint16_t)events;
     b->mm = sqrtf(mm2);
     float inv_mm = 1.0f / b->mm;
     b->events_per_mm = (float)events * inv_mm;
@@ -194,26 +282,23 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
      * for every moving axis; the tightest has the largest |u| / limit, so
      * one division each at most */
     float unit[N_AXIS];
-    float s_per_mm = 0.0f, inv_accel = 0.0f;
+    float inv_accel = 0.0f;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         unit[a] = d_mm[a] * inv_mm;
         float u = fabsf(unit[a]);
         if (u > 1.0e-6f) {
-            float r = u * axis.s_per_mm[a];
-            if (r > s_per_mm)
-                s_per_mm = r;
-            r = u * axis.inv_accel[a];
+            float r = u * axis.inv_accel[a];
             if (r > inv_accel)
                 inv_accel = r;
         }
     }
-    float speed = (flags & PB_RAPID) ? 1.0e9f : feed * (1.0f / 60.0f);
-    if (speed * s_per_mm > 1.0f)
-        speed = 1.0f / s_per_mm;
+    float speed = cruise_speed(feed, flags, axis_s_per_mm(unit), b->events_per_mm);
     float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
-    /* the step timer cannot run slower than MIN_STEP_RATE */
-    if (speed * b->events_per_mm < MIN_STEP_RATE)
-        speed = MIN_STEP_RATE / b->events_per_mm;
+    if (feed != last_feed) { /* F is modal: converted once per change (overrides only: 1 mm/min is fine) */
+        last_feed = feed;
+        last_feed_u16 = feed < 65535.0f ? (uint16_t)feed : 65535u;
+    }
+    b->feed = last_feed_u16;
     b->nominal_sqr = speed * speed;
     b->accel = accel;
     b->inv_accel = inv_accel;
@@ -251,6 +336,6 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     head = next_index(head);
     if (count++ == 0)
         exec_exit_limit = b->accel_dist2; /* starts from rest */
-    recalculate();
+    recalculate(0);
     return 1;
 }

@@ -20,11 +20,11 @@ float plan_sqr_to_float(plan_sqr_t v);
 #define PB_JOG 0x02
 
 typedef struct {
-    int16_t steps[N_AXIS];  /* signed motor steps, |steps| <= PLAN_MAX_EVENTS */
-    uint16_t events;        /* step events: the largest |steps| */
+    int16_t steps[N_AXIS];  /* signed motor steps, |steps| <= PLAN_MAX_EVENTS;
+                             * step events: the largest |steps| (plan_events) */
     float mm;               /* length in mm */
     float events_per_mm;
-    float nominal_sqr;      /* cruise speed squared, (mm/s)^2 */
+    float nominal_sqr;      /* cruise speed squared, (mm/s)^2, overrides applied */
     float accel;            /* mm/s^2 along the move */
     float inv_accel;        /* 1 / accel, so the segment preparer multiplies */
     /* The planner passes run on every queued block for every new one, so
@@ -33,6 +33,7 @@ typedef struct {
     plan_sqr_t accel_dist2;   /* 2 * accel * mm: speed^2 gained over the block */
     plan_sqr_t entry_sqr;     /* planned entry speed squared */
     plan_sqr_t max_entry_sqr; /* junction limit squared */
+    uint16_t feed;            /* programmed feed, mm/min (for overrides; unused by rapids) */
     uint8_t flags;
 } plan_block_t;
 
@@ -49,12 +50,21 @@ uint8_t plan_count(void);
 #define PLAN_TOO_LONG 2
 uint8_t plan_line(const float *target, float feed, uint8_t flags);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
+uint16_t plan_events(const plan_block_t *b); /* step events of a block */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
 /* Into how many equal pieces a move to target must be cut (see plan_line). */
 uint16_t plan_pieces(const float *target);
 /* Highest exit speed^2 the executing block can still reach (segment preparer). */
 void plan_set_exec_exit_limit(float v_sqr);
+/* GRBL's realtime overrides, percent (feed 10..200, rapid 25/50/100; 100 =
+ * as programmed): the nominal speed of every queued block, the executing
+ * one included, is recomputed (feed_pct for G1/G2/G3, rapid_pct for
+ * G0/G28; jogs keep theirs), junction limits are capped by the new speeds,
+ * and the queue is replanned. Later blocks are planned with them too. A
+ * junction capped by a lower speed is not raised again when the speed
+ * rises (it stays safe, merely slower, for the blocks already queued). */
+void planner_set_overrides(uint8_t feed_pct, uint8_t rapid_pct);
 /* Motor steps for cartesian steps (CoreXY: A = X + Y, B = X - Y). */
 void plan_motor_steps(const int32_t *cart, int32_t *motor);
 void plan_cart_from_motor(const int32_t *motor, int32_t *cart);

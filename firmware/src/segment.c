@@ -13,6 +13,7 @@ static struct {
     uint8_t first;       /* next segment is the block's first */
     uint8_t hold, stopped;
     uint32_t done;       /* events prepared */
+    uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
     float events_per_mm;
@@ -79,6 +80,19 @@ static float advance(const plan_block_t *b, float dt)
     float ve2 = plan_next_entry_sqr();
     float vn2 = b->nominal_sqr;
     float v2 = v * v;
+    if (v2 > vn2 && v2 > vn2 * 1.0001f) { /* (the first test spares the multiply) */
+        /* above the cruise speed (a feed override lowered it): slow down to
+         * it first, where the block leaves room; otherwise the profile below
+         * decelerates to the exit */
+        float tn = (v - sqrtf(vn2)) * prep.inv_accel;
+        float tt = dt < tn ? dt : tn;
+        float ds = v * tt - 0.5f * a * tt * tt;
+        if (ds < remaining) {
+            prep.s += ds;
+            prep.v = v - a * tt;
+            return tt;
+        }
+    }
     if (v2 >= vn2 && ve2 >= v2 && v > 0.0f) {
         /* cruising on at the block's speed to an exit no slower: the
          * profile below comes down to this, without its dozen float steps */
@@ -161,7 +175,8 @@ static void start_block(const plan_block_t *b)
 {
     prep.block = (uint8_t)((prep.block + 1) & (SEG_SIZE - 1));
     step_block_t *sb = &step_blocks[prep.block];
-    sb->events = (int16_t)b->events;
+    prep.events = plan_events(b);
+    sb->events = (int16_t)prep.events;
     sb->dir_negative = 0;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         int32_t st = b->steps[a];
@@ -201,9 +216,9 @@ uint8_t seg_fill(void)
             time += advance(b, SEGMENT_S);
             ended = prep.s >= b->mm;
             float e = prep.s * prep.events_per_mm;
-            target = ended ? b->events : (uint32_t)(e + 0.5f); /* a step is due half way */
-            if (target > b->events)
-                target = b->events;
+            target = ended ? prep.events : (uint32_t)(e + 0.5f); /* a step is due half way */
+            if (target > prep.events)
+                target = prep.events;
         } while (target == prep.done && !ended && !(prep.hold && prep.stopped) && ++rounds < 8);
         if (target == prep.done && !ended && !(prep.hold && prep.stopped))
             target = prep.done + 1; /* slower than the timer can time: one step anyway */
@@ -211,7 +226,7 @@ uint8_t seg_fill(void)
             /* end the segment exactly on its last step, so its rate is exact;
              * the distance to that step is moved over to the next segment */
             if (prep.mm_per_event == 0.0f)
-                prep.mm_per_event = b->mm / (float)b->events;
+                prep.mm_per_event = b->mm / (float)prep.events;
             float extra = prep.s - (float)target * prep.mm_per_event;
             float back = extra / prep.v;
             if (fabsf(back) < 0.25f * time) { /* when slow, v is too rough an estimate */
@@ -240,7 +255,7 @@ uint8_t seg_fill(void)
             seg_head++; /* publish after the segment is complete */
             added = 1;
         }
-        if (target >= b->events) {
+        if (target >= prep.events) {
             plan_discard_current();
             prep.active = 0;
         } else {

@@ -9,7 +9,11 @@
 #include "stepper.h"
 
 static volatile uint8_t running;
-static volatile int32_t position[N_AXIS];   /* motor steps */
+/* Motor position: where the current block started, plus the steps made in
+ * it (16-bit counts in the interrupt instead of 32-bit read-modify-writes;
+ * folded into the base when the next block starts). */
+static volatile int32_t position[N_AXIS];
+static volatile uint16_t done[N_AXIS];
 static uint8_t pulse_ticks;                 /* Timer0 ticks (0.5 us) */
 static uint8_t enabled;
 
@@ -22,7 +26,9 @@ static int16_t counter[N_AXIS]; /* Bresenham: 16-bit, blocks are at most PLAN_MA
 
 void stepper_apply_settings(void)
 {
-    pulse_ticks = (uint8_t)(settings.pulse_us * 2 + 1); /* +1: the first tick may be partly gone */
+    /* +1: the first tick after the count is reset may be partly gone */
+    pulse_ticks = (uint8_t)(settings.pulse_us * 2 + 1);
+    OCR0A = pulse_ticks;
     drive_apply_settings();
 }
 
@@ -30,9 +36,12 @@ void stepper_init(void)
 {
 #ifdef BENCH_ISR_PIN
     IO_OUTPUT(BENCH_ISR);
+#ifdef BENCH_ISR_END
+    IO_OUTPUT(BENCH_ISR_END);
+#endif
 #endif
     TCCR0A = 0;
-    TCCR0B = 1 << CS01;          /* Timer0 free-running at 2 MHz: pulse-length clock */
+    TCCR0B = 1 << CS01;          /* Timer0 free-running at 2 MHz: its compare A ends step pulses */
     TCCR1A = 0;
     TCCR1B = 1 << WGM12;         /* CTC, clock off until a move starts */
     enabled = 0;
@@ -69,6 +78,24 @@ void stepper_start(void)
     }
 }
 
+/* The current block's steps into the base position (interrupts off);
+ * unrolled: a shift by the axis number would be a loop on the AVR. */
+static inline __attribute__((always_inline)) void fold_block(void)
+{
+    int32_t x = position[0], y = position[1];
+    if (dir_negative & 1)
+        x -= done[0];
+    else
+        x += done[0];
+    if (dir_negative & 2)
+        y -= done[1];
+    else
+        y += done[1];
+    position[0] = x;
+    position[1] = y;
+    done[0] = done[1] = 0;
+}
+
 uint8_t stepper_halt(void)
 {
     uint8_t was;
@@ -76,13 +103,15 @@ uint8_t stepper_halt(void)
     {
         TCCR1B = 1 << WGM12;
         TIMSK1 = 0;
+        TIMSK0 = 0;
         drive_step_end();
         was = running;
         running = 0;
         /* steps counted but never pulsed: take them back so the position stays true */
         for (uint8_t a = 0; a < N_AXIS; a++)
             if (pending_steps & (1 << a))
-                position[a] += (dir_negative & (1 << a)) ? 1 : -1;
+                done[a]--;
+        fold_block();
         pending_steps = 0;
     }
     return was;
@@ -93,7 +122,7 @@ void stepper_get_position(int32_t *motor)
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
         for (uint8_t a = 0; a < N_AXIS; a++)
-            motor[a] = position[a];
+            motor[a] = (dir_negative & (1 << a)) ? position[a] - done[a] : position[a] + done[a];
     }
 }
 
@@ -101,8 +130,10 @@ void stepper_set_position(const int32_t *motor)
 {
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
-        for (uint8_t a = 0; a < N_AXIS; a++)
+        for (uint8_t a = 0; a < N_AXIS; a++) {
             position[a] = motor[a];
+            done[a] = 0;
+        }
     }
 }
 
@@ -120,30 +151,46 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
 #endif
 }
 
-/* One step event per tick: emit the pulse computed last tick (so its edge
+/* Timer1 runs in CTC mode at 2 MHz: compare A (OCR1A, the segment's
+ * period) is the step tick. Timer0 runs at 2 MHz and is reset to 0 at
+ * the rising edge; its compare A (OCR0A = $0 in ticks) ends the pulse, so
+ * neither interrupt waits. (A second compare on Timer1, or OCR0A moved
+ * along a free-running count, would do on the chip, but simavr loses
+ * Timer1's tick when OCR1B is rewritten at high rates, and a compare
+ * value that wraps past 255.)
+ *
+ * One step event per tick: emit the pulse computed last tick (so its edge
  * has no jitter from the work below), then run Bresenham for the next one.
- * Directions change only after the pulse falls, a full period before the
- * next edge. */
+ * A new block's directions are written in the tick that computes its first
+ * step: a whole period before that step's edge, and after the edge of the
+ * old block's last step made at the top of the tick (past its hold time).
+ *
+ * Cycle budget, measured by bench/firmware_bench.py on the 328P at 50 kHz
+ * on both axes (a period of 320 cycles), entry and exit (86) included:
+ * 229 cycles on average, 394 at worst on the tick that loads a segment
+ * starting a block (the next edge then comes up to ~5 us late, the tick
+ * after it early: the hardware period holds, so no step is lost or late
+ * over a segment). The pulse-end interrupt below adds at most 50. */
 ISR(TIMER1_COMPA_vect)
 {
 #ifdef BENCH_ISR_PIN
     IO_HIGH(BENCH_ISR);
 #endif
 #if DRIVE_PULSED
-    uint8_t t0 = TCNT0;
-#endif
+    if (drive_pulsing) /* the pulse end came late (never at the planned rates): keep edges paired */
+        drive_step_end();
     drive_step(pending_steps);
-    uint8_t new_dir = 0;
+    TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse; no wrap to handle */
+    TIFR0 = 1 << OCF0A;
+    TIMSK0 = 1 << OCIE0A;
+#else
+    drive_step(pending_steps);
+#endif
     if (seg_left == 0) {
-        if (seg_head == seg_tail) { /* nothing left: stop after this pulse */
+        if (seg_head == seg_tail) { /* nothing left: stop (Timer0 still ends this pulse) */
             TCCR1B = 1 << WGM12;
             TIMSK1 = 0;
             running = 0;
-#if DRIVE_PULSED
-            while ((uint8_t)(TCNT0 - t0) < pulse_ticks) {
-            }
-            drive_step_end();
-#endif
             pending_steps = 0;
 #ifdef BENCH_ISR_PIN
             IO_LOW(BENCH_ISR);
@@ -156,8 +203,9 @@ ISR(TIMER1_COMPA_vect)
         if (seg->flags & SEG_FIRST) {
             blk = &step_blocks[seg->block];
             counter[0] = counter[1] = (int16_t)(blk->events >> 1);
-            new_dir = 1;
+            fold_block();
             dir_negative = blk->dir_negative;
+            drive_set_dir(dir_negative);
         }
     }
     uint8_t steps = 0;
@@ -165,31 +213,42 @@ ISR(TIMER1_COMPA_vect)
     if (counter[0] < 0) {
         counter[0] += blk->events;
         steps |= 1;
-        if (dir_negative & 1)
-            position[0]--;
-        else
-            position[0]++;
+        done[0]++;
     }
     counter[1] -= blk->steps[1];
     if (counter[1] < 0) {
         counter[1] += blk->events;
         steps |= 2;
-        if (dir_negative & 2)
-            position[1]--;
-        else
-            position[1]++;
+        done[1]++;
     }
     pending_steps = steps;
     if (--seg_left == 0)
         seg_tail++; /* segment consumed: its slot may be refilled */
 #if DRIVE_PULSED
-    while ((uint8_t)(TCNT0 - t0) < pulse_ticks) {
+    if (TIFR0 & (1 << OCF0A)) {
+        /* a long tick (a block starts) outlasted the pulse: end it now rather
+         * than after the next tick's interrupt, which outranks Timer0's */
+        drive_step_end();
+        TIMSK0 = 0;
     }
-    drive_step_end();
 #endif
-    if (new_dir)
-        drive_set_dir(dir_negative);
 #ifdef BENCH_ISR_PIN
     IO_LOW(BENCH_ISR);
 #endif
 }
+
+#if DRIVE_PULSED
+/* The pulse ends $0 us after its edge. Cycle budget, measured by
+ * bench/firmware_bench.py: 50 cycles worst, entry and exit included. */
+ISR(TIMER0_COMPA_vect)
+{
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
+    IO_HIGH(BENCH_ISR_END);
+#endif
+    drive_step_end();
+    TIMSK0 = 0;
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
+    IO_LOW(BENCH_ISR_END);
+#endif
+}
+#endif

@@ -24,6 +24,7 @@ static const test_case cases[] = {
     {"planner_exact_steps", test_planner_exact_steps},
     {"segments_profile", test_segments_profile},
     {"segments_hold", test_segments_hold},
+    {"planner_overrides", test_planner_overrides},
     {"settings", test_settings},
     {"fuzz_replay", test_fuzz_replay},
 };

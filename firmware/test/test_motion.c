@@ -270,6 +270,60 @@ void test_segments_hold(void)
     CHECK(r.events == 8000);
 }
 
+void test_planner_overrides(void)
+{
+    /* three straight 10 mm moves at F3000 (50 mm/s), a rapid and a jog */
+    fresh_planner();
+    float p1[2] = {10, 0}, p2[2] = {20, 0}, p3[2] = {30, 0}, p4[2] = {40, 0}, p5[2] = {50, 0};
+    CHECK(plan_line(p1, 3000, 0) && plan_line(p2, 3000, 0) && plan_line(p3, 3000, 0));
+    CHECK(plan_line(p4, 0, PB_RAPID) && plan_line(p5, 1200, PB_JOG));
+    plan_block_t *q = plan_current();
+    CHECK_NEAR(sqrt(q[1].nominal_sqr), 50, 1e-3);
+    CHECK_NEAR(plan_sqr_to_float(q[1].max_entry_sqr), 2500, 1);
+    /* feed 50 %, rapids 25 %: every queued block, the oldest too */
+    planner_set_overrides(50, 25);
+    for (int i = 0; i < 3; i++)
+        CHECK_NEAR(sqrt(q[i].nominal_sqr), 25, 1e-3);
+    CHECK_NEAR(sqrt(q[3].nominal_sqr), 100 * 0.25, 1e-3); /* $110 6000 mm/min */
+    CHECK_NEAR(sqrt(q[4].nominal_sqr), 20, 1e-3);         /* the jog keeps F1200 */
+    /* junctions capped by the new speeds, and the queue replanned */
+    CHECK(plan_sqr_to_float(q[1].max_entry_sqr) <= 625 + 1e-3);
+    CHECK(plan_sqr_to_float(q[4].max_entry_sqr) <= 400 + 1e-3);
+    for (int i = 1; i < 5; i++)
+        CHECK(q[i].entry_sqr <= q[i].max_entry_sqr);
+    /* later blocks are planned with the overrides too */
+    float p6[2] = {60, 0};
+    CHECK(plan_line(p6, 3000, 0));
+    CHECK_NEAR(sqrt(q[5].nominal_sqr), 25, 1e-3);
+    /* back to 100 %: programmed speeds again */
+    planner_set_overrides(100, 100);
+    CHECK_NEAR(sqrt(q[0].nominal_sqr), 50, 1e-3);
+    CHECK_NEAR(sqrt(q[3].nominal_sqr), 100, 1e-3);
+    /* the segment preparer follows a lowered speed inside the executing block */
+    fresh_planner();
+    float far[2] = {100, 0};
+    plan_line(far, 3000, 0);
+    run_t r;
+    memset(&r, 0, sizeof(r));
+    for (int i = 0; i < 20; i++) { /* up to 50 mm/s */
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(r.last_speed > 45);
+    planner_set_overrides(20, 100);
+    for (int i = 0; i < 20; i++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(r.last_speed < 10 * 1.05 && r.last_speed > 10 * 0.95);
+    planner_set_overrides(100, 100);
+    for (int guard = 0; guard < 100000 && (plan_count() || seg_head != seg_tail); guard++) {
+        seg_fill();
+        drain(&r, 1.0 / 80.0);
+    }
+    CHECK(r.events == 8000);
+}
+
 void test_settings(void)
 {
     settings_t s;

@@ -15,6 +15,7 @@ from fastapi.staticfiles import StaticFiles
 from plotbridge import __version__
 from plotbridge.api import jobs, plotters, session, ws
 from plotbridge.api.deps import Components, error
+from plotbridge.apidocs import mount_docs
 from plotbridge.auth import Auth
 from plotbridge.config import Config
 from plotbridge.errors import Refused
@@ -71,9 +72,10 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
             store.close()
 
     app = FastAPI(
-        title="plotbridge", version=__version__, lifespan=lifespan, docs_url="/docs",
+        title="plotbridge", version=__version__, lifespan=lifespan, docs_url=None,
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
     )  # fmt: skip
+    mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
     app.state.components = Components(config, Auth(token), events, queue, clients)
 
     @app.exception_handler(Refused)

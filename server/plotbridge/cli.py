@@ -1,4 +1,5 @@
-"""Command line: `plotbridge serve` and `plotbridge submit`."""
+"""Command line: `plotbridge serve`, and the client verbs (submit, status, queue, stop,
+pause, resume, home) built on `plotbridge.client`."""
 
 from __future__ import annotations
 
@@ -73,6 +74,11 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="start the next queued job automatically",
     )  # fmt: skip
     parser.add_argument(
+        "--zeroconf", action=argparse.BooleanOptionalAction,
+        default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
+        help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
+    )  # fmt: skip
+    parser.add_argument(
         "--log-level", default=_env("LOG_LEVEL", "info"), choices=logsetup.LEVELS,
         help="console log level",
     )  # fmt: skip
@@ -109,6 +115,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         max_upload_mb=args.max_upload_mb,
         auto_start=args.auto_start,
         log_level=args.log_level,
+        zeroconf=args.zeroconf,
         web_dir=find_web_dir(),
     )
 
@@ -135,6 +142,7 @@ def keep_pauses_short() -> None:
 async def serve(config: Config) -> int:
     import uvicorn
 
+    from plotbridge import mdns
     from plotbridge.app import Board, create_app
     from plotbridge.auth import load_or_create_token
     from plotbridge.plotter.link import Link
@@ -169,7 +177,8 @@ async def serve(config: Config) -> int:
         print(f"plotbridge: open {_login_url(config, token)}", flush=True)
         log.info("serving on %s:%d, data in %s, plotters: %s", config.host, config.port,
                  config.data_dir, ", ".join(p.name for p in config.plotters))  # fmt: skip
-        await server.serve()
+        async with mdns.announced(config.host, config.port, config.zeroconf):
+            await server.serve()
     finally:
         for board in boards:
             if board.virtual is not None:
@@ -189,13 +198,17 @@ def main(argv: list[str] | None = None) -> int:
     commands = parser.add_subparsers(dest="command", required=True)
     add_serve_arguments(commands.add_parser("serve", help="run the server"))
     submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
-    if argv[:1] == ["submit"]:  # its client libraries (httpx, rich) stay out of the server
+    if argv[:1] != ["serve"]:  # the client modules stay out of the server's process
+        from plotbridge import commands as verbs
         from plotbridge import submit
 
         submit.add_arguments(submit_parser)
+        verbs.add_verbs(commands)
     args = parser.parse_args(argv)
     if args.command == "submit":
         return submit.run(args)
+    if args.command != "serve":
+        return verbs.run(args)
     logsetup.setup(args.log_level)
     try:
         return asyncio.run(serve(config_from_args(args)))

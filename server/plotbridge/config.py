@@ -110,6 +110,7 @@ class Config:
     max_upload_mb: float = 50.0
     auto_start: bool = False
     log_level: str = "info"
+    zeroconf: bool = True  # announce on the LAN (plotbridge.mdns)
     web_dir: Path | None = None
 
     @property

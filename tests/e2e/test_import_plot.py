@@ -5,18 +5,16 @@ program streamed to the real firmware in the virtual plotter, and what the pen d
 from __future__ import annotations
 
 import math
-import time
-from collections import deque
 from pathlib import Path
 
 import numpy as np
 import pytest
-import serial
 from plotbridge.importing import ImportOptions, MachineProfile, import_file
+
+from tests.fixtures.grbl_sender import Board
 
 pytestmark = pytest.mark.e2e
 
-RX_BUFFER = 127   # GRBL's 128-byte receive buffer, one byte kept free
 
 SVG = """<svg xmlns="http://www.w3.org/2000/svg" width="120mm" height="100mm"
      viewBox="0 0 240 200">
@@ -68,80 +66,6 @@ def distances(points: np.ndarray, polylines: list[np.ndarray]) -> np.ndarray:
         out[k:k + 256] = np.sqrt(np.min(np.einsum("pij,pij->pi", off, off), axis=1))
     return out
 
-
-class Board:
-    """Minimal GRBL sender: character counting over the 128-byte receive buffer."""
-
-    def __init__(self, port: str) -> None:
-        self.ser = serial.Serial(port, 115200, timeout=0.05)
-        self._rx = b""
-        self.ser.write(b"\x18")   # soft reset: a fresh banner (the boot one was before us)
-        deadline = time.monotonic() + 10
-        while not any(ln.startswith("Grbl") for ln in self.lines(until=deadline, stop="Grbl")):
-            if time.monotonic() > deadline:
-                raise AssertionError("no GRBL banner from the firmware")
-
-    def lines(self, until: float, stop: str) -> list[str]:
-        got: list[str] = []
-        while time.monotonic() < until:
-            self._rx += self.ser.read(self.ser.in_waiting or 1)
-            while b"\n" in self._rx:
-                line, self._rx = self._rx.split(b"\n", 1)
-                text = line.decode(errors="replace").strip()
-                if text:
-                    got.append(text)
-                    if text.startswith(stop):
-                        return got
-        return got
-
-    def readline(self, timeout: float = 30) -> str:
-        deadline = time.monotonic() + timeout
-        while True:
-            got = self.lines(until=min(deadline, time.monotonic() + 0.05), stop="")
-            if got:
-                return got[0]
-            if time.monotonic() > deadline:
-                raise AssertionError("no answer from the firmware")
-
-    def command(self, line: str) -> None:
-        self.ser.write(line.encode() + b"\n")
-        while True:
-            answer = self.readline()
-            if answer == "ok":
-                return
-            if answer.startswith(("error", "ALARM")):
-                raise AssertionError(f"{line!r}: {answer}")
-
-    def stream(self, lines: list[str], timeout: float = 300) -> None:
-        """Sends while the receive buffer has room; fails on any error or alarm."""
-        sent: deque[tuple[int, int]] = deque()
-        used = 0
-        n = 0
-        deadline = time.monotonic() + timeout
-        while n < len(lines) or sent:
-            while n < len(lines) and used + len(lines[n]) + 1 <= RX_BUFFER:
-                self.ser.write(lines[n].encode() + b"\n")
-                sent.append((n + 1, len(lines[n]) + 1))
-                used += len(lines[n]) + 1
-                n += 1
-            answer = self.readline(max(deadline - time.monotonic(), 0.1))
-            if answer == "ok":
-                used -= sent.popleft()[1]
-            elif answer.startswith(("error", "ALARM")):
-                raise AssertionError(f"program line {sent[0][0]} {lines[sent[0][0] - 1]!r}: "
-                                     f"{answer}")
-
-    def wait_idle(self, timeout: float = 120) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            self.ser.write(b"?")
-            for line in self.lines(until=time.monotonic() + 0.05, stop="<"):
-                if line.startswith("<Idle"):
-                    return
-        raise AssertionError("the machine did not come to rest")
-
-    def close(self) -> None:
-        self.ser.close()
 
 
 def plot(plotter, program: Path) -> dict:

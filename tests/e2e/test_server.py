@@ -52,17 +52,6 @@ def submit(server, gcode: str, start: bool = True) -> dict:
     return job
 
 
-def wait_progress(server, job_id: str, lines: int, timeout: float = 30) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        job = server.job(job_id)
-        if job["lines_done"] >= lines:
-            return job
-        assert job["state"] == "running", job
-        time.sleep(0.02)
-    raise AssertionError(f"job {job_id} did not reach line {lines}")
-
-
 def preview(server, job_id: str) -> dict:
     return server.client.get(f"/api/jobs/{job_id}/preview").json()
 
@@ -133,7 +122,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
     plotter.clear()
     job = submit(server, drawing(circles=6))
-    wait_progress(server, job["id"], 40)
+    server.wait_progress(job["id"], 40)
     sent_at = time.monotonic()
     response = server.client.post("/api/machine/estop")
     assert response.status_code == 202
@@ -152,7 +141,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
 def test_estop_does_not_wait_for_an_import(server, plotter):
     server.home()
     job = submit(server, drawing(circles=15))  # long enough to outlast the upload's start
-    wait_progress(server, job["id"], 20)
+    server.wait_progress(job["id"], 20)
     big = drawing(circles=1).encode() * 1000  # ~3 MB of G-code: seconds of import work
     with ThreadPoolExecutor(1) as pool:
         uploading = pool.submit(
@@ -176,7 +165,7 @@ def test_estop_websocket_mid_job(server, plotter):
     with connect(url) as ws:
         first = json.loads(ws.recv(5))
         assert first["type"] == "machine"
-        wait_progress(server, job["id"], 40)
+        server.wait_progress(job["id"], 40)
         sent_at = time.monotonic()
         ws.send(json.dumps({"type": "estop"}))
         seen_ack = seen_stopped = False
@@ -193,7 +182,7 @@ def test_pause_resume(server, plotter):
     server.home()
     plotter.clear()
     job = submit(server, drawing(circles=10))
-    wait_progress(server, job["id"], 30)
+    server.wait_progress(job["id"], 30)
     paused = server.client.post(f"/api/jobs/{job['id']}/pause")
     assert paused.status_code == 200 and paused.json()["state"] == "paused"
     server.wait_machine(lambda m: m["state"] == "Hold", 5)
@@ -220,7 +209,7 @@ def test_pause_resume(server, plotter):
 def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
     server.home()
     job = submit(server, drawing(circles=6))
-    wait_progress(server, job["id"], 40)
+    server.wait_progress(job["id"], 40)
     plotter.press("estop")
     failed = server.wait_job(job["id"], ("failed", "stopped", "interrupted", "done"), 5)
     plotter.release("estop")
@@ -236,7 +225,7 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     job = submit(server, drawing(circles=6))
     started = time.monotonic()
     sim_start = plotter.trace()["sim_time"]
-    wait_progress(server, job["id"], 150)
+    server.wait_progress(job["id"], 150)
     # SIGTERM: the simulator dies mid-move all the same, but writes its final trace
     # (after SIGKILL the file can lag the pen by 50 ms, which would fake a gap).
     plotter.stop()
@@ -276,7 +265,7 @@ def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
         waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
         moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
         assert moved.status_code == 200
-        wait_progress(server, job["id"], 60)
+        server.wait_progress(job["id"], 60)
         time.sleep(1.2)  # a progress write reaches the store
         server.kill()
         server.start()

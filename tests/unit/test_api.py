@@ -474,7 +474,8 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     assert response.status_code == 200
     await settle(lambda: api.queue.jobs[jid].state == "done")
     resumed = api.link.streamed[12:]
-    assert resumed[:2] == [(0, "M5"), (0, "G0 X6 Y0")] and resumed[2][0] == 5
+    # streamed in the compact wire format (program/wire.py)
+    assert resumed[:2] == [(0, "M5"), (0, "G0X6Y0")] and resumed[2][0] == 5
 
 
 async def test_move_and_delete(api, tmp_path):

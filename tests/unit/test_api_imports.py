@@ -43,7 +43,7 @@ def test_importing_keeps_its_public_names_loaded_on_first_use():
     out = run_python(f"""
         import sys
         import plotbridge.importing as importing
-        import plotbridge.importing.eta
+        import plotbridge.motion.eta
         from plotbridge.importing import eta
         assert callable(eta) and importing.eta is eta  # the function, not its module
         assert not any(m.split(".")[0] in {HEAVY!r} for m in sys.modules)

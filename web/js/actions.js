@@ -67,7 +67,7 @@ export function createActions(store, socket, estop) {
   let pollTimer = null;
 
   function resync() {
-    api.get("/api/machine").then(setMachine).catch(() => {});
+    api.get(machinePath()).then(setMachine).catch(() => {});
     loadJobs().catch(() => {});
   }
 
@@ -88,6 +88,25 @@ export function createActions(store, socket, estop) {
     });
     // the board's settings (and the work area) are read again when it (re)connects
     if (m.connected && !wasConnected && s.view === "app") loadSettings();
+  }
+
+  /** A machine report: kept per plotter; the selected one (the first by default) is shown. */
+  function onMachine(name, m) {
+    if (name) {
+      store.update((st) => {
+        if (!st.plotterOrder.includes(name)) st.plotterOrder.push(name);
+        st.plotters[name] = m;
+        if (!st.plotter) st.plotter = name;
+      });
+    }
+    if (!name || name === s.plotter) setMachine(m);
+  }
+
+  /** A board verb's path: the selected plotter's when there are several. */
+  function machinePath(verb = "") {
+    const several = s.plotterOrder.length > 1 && s.plotter;
+    const base = several ? `/api/plotters/${encodeURIComponent(s.plotter)}/machine` : "/api/machine";
+    return verb ? `${base}/${verb}` : base;
   }
 
   function upsertJob(job) {
@@ -139,7 +158,7 @@ export function createActions(store, socket, estop) {
       st.settings.error = "";
     });
     try {
-      const data = await api.get("/api/machine/settings");
+      const data = await api.get(machinePath("settings"));
       store.update((st) => {
         st.settings.list = asList(data, "settings");
         if (discardEdits) st.settings.edits = {};
@@ -183,7 +202,7 @@ export function createActions(store, socket, estop) {
     loadSettings,
 
     loadAll() {
-      api.get("/api/machine").then(setMachine).catch(() => {});
+      api.get(machinePath()).then(setMachine).catch(() => {});
       loadJobs().catch(() => {});
       api.get("/api/server").then((d) => store.update((st) => {
         st.server = d;
@@ -239,7 +258,7 @@ export function createActions(store, socket, estop) {
 
     onSocketMessage(msg) {
       const body = (key) => (msg[key] && typeof msg[key] === "object" ? msg[key] : msg);
-      if (msg.type === "machine") setMachine(body("machine"));
+      if (msg.type === "machine") onMachine(msg.plotter, body("machine"));
       else if (msg.type === "job") upsertJob(body("job"));
       else if (msg.type === "jobs" && Array.isArray(msg.jobs)) {
         store.update((st) => {
@@ -428,13 +447,34 @@ export function createActions(store, socket, estop) {
       }
     },
 
+    // ---- plotters ----
+    selectPlotter(name) {
+      store.update((st) => {
+        st.plotter = name;
+        if (st.plotters[name]) st.machine = { ...st.plotters[name], seq: ++machineSeq };
+      });
+      loadSettings();
+    },
+    estopPlotter(name) {
+      if (!socket.send({ type: "estop", plotter: name })) {
+        api.post(`/api/plotters/${encodeURIComponent(name)}/machine/estop`).catch(() => {});
+      }
+    },
+    estopAll() {
+      if (!socket.send({ type: "estop", all: true })) api.post("/api/estop").catch(() => {});
+    },
+    holdPlotter(name) {
+      const job = s.jobs.find((j) => j.plotter === name && j.state === "running");
+      if (job) api.post(`/api/jobs/${encodeURIComponent(job.id)}/pause`).then(upsertJob).catch(() => {});
+    },
+
     // ---- machine ----
 
-    home: () => clearing("/api/machine/home"),
-    unlock: () => clearing("/api/machine/unlock"),
-    pen: (down) => machineCall("/api/machine/pen", { down }),
-    motors: (enabled) => machineCall("/api/machine/motors", { enabled }),
-    jog: (ux, uy) => machineCall("/api/machine/jog", { dx: ux * s.jog.step, dy: uy * s.jog.step, feed: s.jog.feed }),
+    home: () => clearing(machinePath("home")),
+    unlock: () => clearing(machinePath("unlock")),
+    pen: (down) => machineCall(machinePath("pen"), { down }),
+    motors: (enabled) => machineCall(machinePath("motors"), { enabled }),
+    jog: (ux, uy) => machineCall(machinePath("jog"), { dx: ux * s.jog.step, dy: uy * s.jog.step, feed: s.jog.feed }),
     setJog(patch) {
       store.update((st) => {
         Object.assign(st.jog, patch);
@@ -449,7 +489,7 @@ export function createActions(store, socket, estop) {
       else if (action === "resume") {
         const job = s.jobs.find((j) => j.state === "paused");
         if (job) actions.jobVerb(job.id, "resume");
-        else if (!socket.send({ type: "resume" })) machineCall("/api/machine/command", { line: "~" });
+        else if (!socket.send({ type: "resume", plotter: s.plotter })) machineCall(machinePath("command"), { line: "~" });
       } else if (action === "resume-job") actions.jobVerb(id, "resume");
     },
 
@@ -485,7 +525,7 @@ export function createActions(store, socket, estop) {
         st.settings.rowErrors = {};
       });
       try {
-        await api.put("/api/machine/settings", { settings: body });
+        await api.put(machinePath("settings"), { settings: body });
         // The board acknowledged every line. Show those values rather than re-reading:
         // the server's copy of the settings is only refreshed on (re)connect for now.
         store.update((st) => {
@@ -508,10 +548,10 @@ export function createActions(store, socket, estop) {
 
     async sendCommand(line) {
       clear("commandError");
-      if (socket.send({ type: "command", line })) return; // the log shows tx and the answer
+      if (socket.send({ type: "command", line, plotter: s.plotter })) return; // the log shows tx and the answer
       actions.appendLog("tx", line);
       try {
-        const data = await api.post("/api/machine/command", { line });
+        const data = await api.post(machinePath("command"), { line });
         for (const r of asList(data, "responses")) actions.appendLog("rx", r);
       } catch (err) {
         fail("commandError")(err);

@@ -19,7 +19,7 @@ export function createEstop({ socket, store }) {
   function viaRest(record) {
     record.rest = true;
     api
-      .post("/api/machine/estop")
+      .post(store.state.plotterOrder.length > 1 ? "/api/estop" : "/api/machine/estop")
       .then(() => acknowledge(record, "rest"))
       .catch((err) => {
         if (store.state.estop !== record || record.acked) return;
@@ -32,7 +32,9 @@ export function createEstop({ socket, store }) {
   return {
     trigger() {
       // Send before touching anything else on the page.
-      const sentOnSocket = socket.send({ type: "estop" });
+      // With several plotters the big STOP stops them all (each card has its own).
+      const all = store.state.plotterOrder.length > 1;
+      const sentOnSocket = socket.send(all ? { type: "estop", all: true } : { type: "estop" });
       const state = store.state;
       const machine = state.machine;
       const record = {

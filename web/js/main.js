@@ -12,6 +12,7 @@ import { bindConsole, renderConsole } from "./views/console.js";
 import { bindControl, renderControl } from "./views/control.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
+import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
 const TABS = ["plot", "control", "settings", "console"];
@@ -91,6 +92,7 @@ function render(state) {
     else button.removeAttribute("aria-current");
   }
   renderMachine(state);
+  renderPlotters(state);
   renderNotice(state);
   if (state.tab === "plot") {
     renderJobs(state);
@@ -159,6 +161,7 @@ function bind() {
   $("#zoom-fit").addEventListener("click", () => preview.fitView());
 
   bindMachine(actions);
+  bindPlotters(actions);
   bindJobs(actions);
   bindControl(actions);
   bindSettings(actions);

@@ -10,7 +10,10 @@ export function initialState() {
     tab: "plot",              // "plot" | "control" | "settings" | "console"
     login: { busy: false, error: "" },
     socket: { status: "closed" },   // "open" | "connecting" | "closed"
-    machine: null,            // the machine object from the server
+    machine: null,            // the machine object of the selected plotter
+    plotters: {},             // plotter name -> its machine object
+    plotterOrder: [],         // plotter names, the server's order (the first is the default)
+    plotter: null,            // the selected plotter's name
     server: null,             // GET /api/server
     jobs: [],                 // queue order
     selectedJobId: null,

@@ -20,6 +20,7 @@
 #include "eeprom_file.h"
 #include "machine.h"
 #include "options.h"
+#include "peek.h"
 #include "pins.h"
 #include "pty_link.h"
 #include "reset_fix.h"
@@ -155,11 +156,13 @@ static void handle_command(void *ctx, const char *line, FILE *reply)
 	} else if (strcmp(cmd, "clear") == 0) {
 		machine_clear(&s->mc, s->avr->cycle);
 		fputs("ok\n", reply);
+	} else if (strcmp(cmd, "peek") == 0) {
+		peek_reply(s->avr, arg, reply);
 	} else if (strcmp(cmd, "quit") == 0) {
 		s->quit = 1;
 		fputs("ok\n", reply);
 	} else {
-		fprintf(reply, "error: unknown command '%s' (press, release, trace, svg, clear, quit)\n",
+		fprintf(reply, "error: unknown command '%s' (press, release, trace, svg, clear, peek, quit)\n",
 			cmd);
 	}
 }

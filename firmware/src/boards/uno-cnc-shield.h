@@ -30,8 +30,9 @@
  * (port B: the switches), PCINT1 group (port C: the buttons) */
 #define INPUTS_PCINT 1
 
-/* bench builds raise this pin for the body of the step interrupt */
+/* bench builds raise these pins for the bodies of the step interrupts */
 #define BENCH_ISR C, 5  /* A5 */
+#define BENCH_ISR_END C, 4 /* A4: the step pulse's end interrupt */
 
 /* defaults for $-settings */
 #define DEFAULT_STEPS_PER_MM 80.0f

@@ -35,7 +35,7 @@ static uint64_t isr_rise, isr_max, isr_count, isr_total;
 static uint64_t steps[2], last_step_cycle, last_rise[2], min_interval[2] = {~0ULL, ~0ULL};
 static uint32_t window_steps[MAX_WINDOWS][2];
 static int alarm_seen;
-static uint64_t mark_rise, mark_total, mark_count; /* PC4: optional profiling mark */
+static uint64_t mark_rise, mark_total, mark_count, mark_max; /* PC4: the pulse-end interrupt */
 /* HARNESS_PROFILE=FILE: sample the program counter every PROFILE_EVERY
  * cycles (odd, so no loop aliases with it) and write "byte_address count"
  * lines; bench/firmware_bench.py --profile maps them to functions. */
@@ -59,8 +59,11 @@ static void on_mark_pin(struct avr_irq_t *irq, uint32_t value, void *param)
     if (value & 1) {
         mark_rise = avr->cycle;
     } else if (mark_rise) {
-        mark_total += avr->cycle - mark_rise;
+        uint64_t d = avr->cycle - mark_rise;
+        mark_total += d;
         mark_count++;
+        if (d > mark_max)
+            mark_max = d;
     }
 }
 
@@ -212,12 +215,20 @@ int main(int argc, char **argv)
 
     uint64_t limit = (uint64_t)(max_s * F_CPU);
     uint64_t sleep_cycles = 0;
+    /* HARNESS_SPAN_FROM=N: also count the sleep from the Nth acknowledgement
+     * to the last one (the CPU's idle share of a measured run) */
+    const char *span_env = getenv("HARNESS_SPAN_FROM");
+    size_t span_from = span_env ? (size_t)atol(span_env) : (size_t)-1;
+    uint64_t span_sleep_cycles = 0;
     for (;;) {
         uint64_t before = avr->cycle;
         int was_sleeping = avr->state == cpu_Sleeping;
         int st = avr_run(avr);
-        if (was_sleeping)
+        if (was_sleeping) {
             sleep_cycles += avr->cycle - before;
+            if (acked >= span_from && acked < line_count)
+                span_sleep_cycles += avr->cycle - before;
+        }
         if (st == cpu_Done || st == cpu_Crashed)
             break;
         if (avr->cycle > limit)
@@ -234,14 +245,15 @@ int main(int argc, char **argv)
         if (pf)
             fclose(pf);
     }
-    printf("{\"sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles);
+    printf("{\"sleep_cycles\": %llu, \"span_sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles,
+           (unsigned long long)span_sleep_cycles);
     printf("\"cycles\": %llu, \"lines\": %zu, \"acked\": %zu, \"errors\": %u, \"alarm\": %d,\n",
            (unsigned long long)avr->cycle, line_count, acked, errors, alarm_seen);
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
            (unsigned long long)isr_count, (unsigned long long)isr_max,
            isr_count ? (double)isr_total / (double)isr_count : 0.0);
-    printf(" \"mark\": {\"count\": %llu, \"total_cycles\": %llu},\n", (unsigned long long)mark_count,
-           (unsigned long long)mark_total);
+    printf(" \"mark\": {\"count\": %llu, \"total_cycles\": %llu, \"max_cycles\": %llu},\n",
+           (unsigned long long)mark_count, (unsigned long long)mark_total, (unsigned long long)mark_max);
     printf(" \"steps\": [%llu, %llu], \"min_interval_cycles\": [%llu, %llu],\n",
            (unsigned long long)steps[0], (unsigned long long)steps[1],
            (unsigned long long)(steps[0] > 1 ? min_interval[0] : 0),

@@ -12,9 +12,8 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-# Loaded at once: numpy-free, and its name is also its module's, which a later
-# `import plotbridge.importing.eta` would otherwise leave bound to the module.
-from .eta import eta
+# Loaded at once: numpy-free (it lives with the motion model).
+from ..motion.eta import eta
 
 if TYPE_CHECKING:
     from .models import ImportFailed, ImportOptions, ImportResult, MachineProfile

@@ -23,8 +23,7 @@ class MachineProfile:
     corexy: bool = False
     planner_blocks: int = 17   # the firmware's planner ring holds 17 blocks
     baud: int = 115200  # serial speed: bounds how fast lines reach the planner (0: no bound)
-    plan_block_s: float = 0.0022  # firmware time to parse and plan one block (measured in simavr)
-    block_gap_s: float = 0.00012  # motion time lost between two blocks (measured in simavr)
+    plan_block_s: float = 0.0022  # firmware time to parse and plan one line (motion/timing.py)
 
     @classmethod
     def from_settings(cls, settings: dict[int, float]) -> MachineProfile:

@@ -5,10 +5,10 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
+from ..motion.estimate import Estimator
 from .models import ErrorLog, MachineProfile
 from .ops import ARC, DWELL, MOVE, PEN, arc_extent, arc_points
 from .placement import Transform
-from .planner import Planner
 from .preview import PreviewBuilder
 
 HEADER = ("G21", "G90", "M5")
@@ -31,7 +31,7 @@ class ProgramWriter:
         self.t = transform
         self.profile = profile
         self.errors = errors
-        self.planner = Planner(profile, start)
+        self.planner = Estimator(profile, start)
         self.preview = PreviewBuilder()
         self.line = 0
         self.x, self.y = start

@@ -18,9 +18,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from plotbridge.errors import Refused
-from plotbridge.importing.eta import eta  # numpy-free, unlike the rest of the importer
 from plotbridge.jobs.model import Job
+from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
+from plotbridge.program import wire
 from plotbridge.program.reader import ProgramReader
 from plotbridge.resume import first_unexecuted_line, resume_preamble
 
@@ -144,7 +145,7 @@ class Runner:
             self._motion = reader.motion  # filled as the reader goes
             start_time = time.time()
             async with contextlib.aclosing(reader.lines()) as lines:
-                await self.link.stream(lines, self._on_ack)
+                await self.link.stream(wire.compact_async(lines, self.link.settings), self._on_ack)
             state = await self._wait_done(start_time)
             if not job.active:
                 return  # settled meanwhile (estop, cancel)

@@ -155,7 +155,10 @@ function renderQueue(state) {
       badge.dataset.state = job.state;
       const lines = job.lines_total ? `${job.lines_total} lines` : "";
       const from = job.resume_line && RESUMABLE.has(job.state) && job.state !== "paused" ? `resumes at line ${job.resume_line}` : "";
-      setText(node.querySelector(".job-meta"), [job.format, lines, `est. ${duration(job.estimate_s)}`, from].filter(Boolean).join(" · "));
+      const where = job.plotter || job.target;
+      const on = where ? `on ${where}` : "";
+      const wait = job.state === "waiting" && job.waiting ? `waiting: ${job.waiting}` : "";
+      setText(node.querySelector(".job-meta"), [job.format, lines, `est. ${duration(job.estimate_s)}`, from, on, wait].filter(Boolean).join(" · "));
       const showProgress = ["running", "paused", "interrupted", "stopped"].includes(job.state);
       const prog = node.querySelector(".job-progress");
       setHidden(prog, !showProgress);

@@ -1,0 +1,340 @@
+"""The Python client of a plotbridge server.
+
+    from plotbridge.client import Plotbridge
+
+    with Plotbridge("http://plotter.local:8000", token="...") as pb:
+        job = pb.upload("art.svg", paper="a4", fit=True)
+        pb.start(job["id"])
+        pb.wait(job["id"], progress=lambda job: print(job["progress"]))
+
+The URL and token default to `PLOTBRIDGE_URL` and `PLOTBRIDGE_TOKEN` (or a
+token file: `token_file=` or `PLOTBRIDGE_TOKEN_FILE`); without a URL the
+client looks for a server on the LAN (zeroconf). Every failure is a
+`PlotbridgeError` whose message says what the server answered.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import AsyncIterator, Callable, Iterable
+from pathlib import Path
+from typing import IO, Any
+from urllib.parse import quote, urlencode
+
+import httpx
+
+Job = dict[str, Any]
+END_STATES = frozenset({"done", "failed", "cancelled", "stopped", "interrupted"})
+ACTIVE_STATES = ("running", "pen_change", "paused", "waiting")
+PLACEMENT = ("paper", "margin", "fit", "rotate", "scale", "dx", "dy", "optimize", "pen_dialect")
+DISCOVER_TIMEOUT_S = 3.0
+NO_ROUTE = (404, 405)  # a server from before several plotters (its web UI answers the path)
+
+
+class PlotbridgeError(Exception):
+    """A request that failed: `status` (None when the server was not reached) and `detail`."""
+
+    def __init__(self, message: str, status: int | None = None, detail: Any = None) -> None:
+        super().__init__(message)
+        self.status = status
+        self.detail = detail
+
+
+class SetupError(PlotbridgeError):
+    """The client cannot start: no token, an unreadable token file, no server found."""
+
+
+def describe_detail(detail: Any) -> str:
+    """The server's `detail` as lines a person reads (upload errors with their line)."""
+    if isinstance(detail, dict) and isinstance(detail.get("errors"), list):
+        return "\n".join(
+            f"  line {e.get('line')}: {e.get('message')}" if e.get("line") else
+            f"  {e.get('message')}"
+            for e in detail["errors"]
+        )  # fmt: skip
+    if isinstance(detail, list):  # validation errors: [{"loc", "msg"}]
+        return "\n".join(
+            f"  {'.'.join(str(p) for p in e.get('loc', []))}: {e.get('msg')}"
+            if isinstance(e, dict) else f"  {e}"
+            for e in detail
+        )  # fmt: skip
+    return str(detail)
+
+
+def read_token(token: str | None = None, token_file: str | os.PathLike[str] | None = None) -> str:
+    """The token: given, else `PLOTBRIDGE_TOKEN`, else the token file (given or from the env)."""
+    token = token or os.environ.get("PLOTBRIDGE_TOKEN")
+    if token:
+        return token.strip()
+    path = token_file or os.environ.get("PLOTBRIDGE_TOKEN_FILE")
+    if not path:
+        raise SetupError("no token: pass one, or set PLOTBRIDGE_TOKEN or PLOTBRIDGE_TOKEN_FILE")
+    try:
+        text = Path(path).expanduser().read_text().strip()
+    except OSError as exc:
+        raise SetupError(f"cannot read the token file {path}: {exc.strerror}") from exc
+    if not text:
+        raise SetupError(f"the token file {path} is empty")
+    return text
+
+
+def find_url(timeout: float = DISCOVER_TIMEOUT_S) -> str:
+    """The URL of the one plotbridge server announced on the LAN."""
+    from plotbridge.mdns import discover
+
+    try:
+        found = discover(timeout)
+    except OSError as exc:
+        raise SetupError(f"no server URL and no LAN search possible: {exc}") from exc
+    if not found:
+        raise SetupError(
+            f"no plotbridge server answered on the LAN within {timeout:g} s: "
+            "pass --url or set PLOTBRIDGE_URL"
+        )
+    if len({f.url for f in found}) > 1:
+        names = ", ".join(f"{f.name} ({f.url})" for f in found)
+        raise SetupError(f"several plotbridge servers on the LAN, choose one with --url: {names}")
+    return found[0].url
+
+
+class Plotbridge:
+    """One server. A context manager; also usable plainly (then call `close()`)."""
+
+    def __init__(
+        self,
+        url: str | None = None,
+        token: str | None = None,
+        *,
+        token_file: str | os.PathLike[str] | None = None,
+        timeout: float = 60.0,
+    ) -> None:
+        self.token = read_token(token, token_file)
+        url = url or os.environ.get("PLOTBRIDGE_URL") or os.environ.get("PLOTBRIDGE_SERVER")
+        self.url = (url or find_url()).rstrip("/")
+        if "://" not in self.url:
+            self.url = f"http://{self.url}"
+        self._http = httpx.Client(
+            base_url=self.url, timeout=timeout,
+            headers={"Authorization": f"Bearer {self.token}"},
+        )  # fmt: skip
+
+    def __enter__(self) -> Plotbridge:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._http.close()
+
+    # ---- plumbing -------------------------------------------------------------------
+
+    def request(self, method: str, path: str, what: str, **kwargs: Any) -> Any:
+        """One call; the decoded JSON answer (None for an empty one) or PlotbridgeError."""
+        try:
+            response = self._http.request(method, path, **kwargs)
+        except httpx.HTTPError as exc:
+            raise PlotbridgeError(f"cannot reach {self.url}: {exc}") from exc
+        if response.is_error:
+            try:
+                detail = response.json().get("detail")
+            except (ValueError, AttributeError):
+                detail = response.text.strip() or response.reason_phrase
+            raise PlotbridgeError(
+                f"{what} failed ({response.status_code}):\n{describe_detail(detail)}",
+                response.status_code, detail,
+            )  # fmt: skip
+        return response.json() if response.content else None
+
+    @staticmethod
+    def _board(plotter: str | None) -> str:
+        return f"/api/plotters/{quote(plotter, safe='')}" if plotter else "/api"
+
+    # ---- server, plotters, machine -----------------------------------------------------
+
+    def health(self) -> bool:
+        return self.request("GET", "/api/health", "health check").get("status") == "ok"
+
+    def server(self) -> dict[str, Any]:
+        return self.request("GET", "/api/server", "server info")
+
+    def plotters(self) -> list[dict[str, Any]]:
+        """Every plotter (`name`, `machine`, ...); a single-plotter server lists its one."""
+        try:
+            return self.request("GET", "/api/plotters", "plotter list")
+        except PlotbridgeError as exc:
+            if exc.status not in NO_ROUTE:
+                raise
+        return [{"name": None, "machine": self.machine()}]
+
+    def machine(self, plotter: str | None = None) -> dict[str, Any]:
+        return self.request("GET", f"{self._board(plotter)}/machine", "machine state")
+
+    def stop(self, plotter: str | None = None, *, all: bool = False) -> dict[str, Any]:
+        """Emergency stop: one plotter (default the first) or, with `all`, every plotter."""
+        if all:
+            try:
+                return self.request("POST", "/api/estop", "emergency stop", timeout=10)
+            except PlotbridgeError as exc:
+                if exc.status not in NO_ROUTE:  # a single-plotter server: its one machine
+                    raise
+        return self.request(
+            "POST", f"{self._board(plotter)}/machine/estop", "emergency stop", timeout=10
+        )
+
+    def home(self, plotter: str | None = None, settle: float = 10.0) -> dict[str, Any]:
+        """Run homing; `{"responses", "machine"}` once the machine reports it is done."""
+        answer = self.request("POST", f"{self._board(plotter)}/machine/home", "homing", timeout=180)
+        deadline = time.monotonic() + settle  # the board's status lags its "ok" a little
+        machine = self.machine(plotter)
+        while machine.get("state") == "Home" and time.monotonic() < deadline:
+            time.sleep(0.05)
+            machine = self.machine(plotter)
+        return {**answer, "machine": machine}
+
+    def unlock(self, plotter: str | None = None) -> dict[str, Any]:
+        return self.request("POST", f"{self._board(plotter)}/machine/unlock", "unlock")
+
+    def trace(self, plotter: str | None = None) -> dict[str, Any]:
+        """What a virtual plotter's pen drew (404 from a real board)."""
+        return self.request("GET", f"{self._board(plotter)}/sim/trace", "trace")
+
+    # ---- jobs --------------------------------------------------------------------------
+
+    def jobs(self) -> list[Job]:
+        return self.request("GET", "/api/jobs", "job list")
+
+    def job(self, job_id: str) -> Job:
+        return self.request("GET", f"/api/jobs/{job_id}", "job")
+
+    def upload(
+        self,
+        source: str | os.PathLike[str] | bytes | IO[bytes],
+        *,
+        filename: str | None = None,
+        name: str | None = None,
+        layers: Iterable[str] | None = None,
+        plotter: str | None = None,
+        start: bool = False,
+        **placement: Any,
+    ) -> Job:
+        """Upload a file (a path), or a drawing in memory (bytes or a binary file object,
+        with `filename` naming its format: "art.svg"). Placement keywords: paper,
+        margin, fit, rotate, scale, dx, dy, optimize, pen_dialect. The new job."""
+        unknown = set(placement) - set(PLACEMENT)
+        if unknown:
+            raise TypeError(f"unknown placement option(s): {', '.join(sorted(unknown))}")
+        fields: dict[str, str] = {}
+        for key, value in placement.items():
+            if value is not None:
+                fields[key] = str(value).lower() if isinstance(value, bool) else str(value)
+        if layers is not None:
+            fields["layers"] = ",".join(layers)
+        if plotter:
+            fields["plotter"] = plotter
+        if start:
+            fields["start"] = "true"
+        if isinstance(source, (str, os.PathLike)):
+            path = Path(source)
+            if not path.is_file():
+                raise PlotbridgeError(f"no such file: {path}")
+            filename = filename or path.name
+            fields["name"] = name or filename
+            with path.open("rb") as fh:
+                return self._post_upload(fields, filename, fh)
+        filename = filename or "drawing"
+        fields["name"] = name or filename
+        return self._post_upload(fields, filename, source)
+
+    def _post_upload(self, fields: dict[str, str], filename: str, body: Any) -> Job:
+        files = {"file": (filename, body)}
+        job = self.request("POST", "/api/jobs", "upload", data=fields, files=files)
+        if job.get("start_error"):
+            raise PlotbridgeError(f"uploaded as job {job['id']}, but it did not start: "
+                                  f"{describe_detail(job['start_error'])}", 409, job)  # fmt: skip
+        return job
+
+    def start(self, job_id: str, plotter: str | None = None) -> Job:
+        """Start a queued job (on `plotter`, where the server drives several)."""
+        params = {"plotter": plotter} if plotter else None
+        return self.request("POST", f"/api/jobs/{job_id}/start", "start", params=params)
+
+    def active_job(self) -> Job | None:
+        """The job that is running (or paused, or waiting for a pen change), if any."""
+        jobs = self.jobs()
+        for state in ACTIVE_STATES:
+            for job in jobs:
+                if job["state"] == state:
+                    return job
+        return None
+
+    def _job_or_active(self, job_id: str | None, action: str) -> str:
+        if job_id:
+            return job_id
+        job = self.active_job()
+        if job is None:
+            raise PlotbridgeError(f"nothing to {action}: no job is running", 409)
+        return job["id"]
+
+    def pause(self, job_id: str | None = None) -> Job:
+        """Pause a job (default: the running one)."""
+        job_id = self._job_or_active(job_id, "pause")
+        return self.request("POST", f"/api/jobs/{job_id}/pause", "pause")
+
+    def resume(self, job_id: str | None = None) -> Job:
+        """Resume a paused or pen-change job (default: the active one)."""
+        job_id = self._job_or_active(job_id, "resume")
+        return self.request("POST", f"/api/jobs/{job_id}/resume", "resume")
+
+    def cancel(self, job_id: str) -> Job:
+        return self.request("POST", f"/api/jobs/{job_id}/cancel", "cancel")
+
+    def delete(self, job_id: str) -> None:
+        self.request("DELETE", f"/api/jobs/{job_id}", "delete")
+
+    def wait(
+        self,
+        job_id: str,
+        progress: Callable[[Job], None] | None = None,
+        *,
+        timeout: float | None = None,
+        poll: float = 0.5,
+    ) -> Job:
+        """Block until the job ends (done, failed, cancelled, stopped, interrupted); the
+        last job. `progress(job)` is called on every poll. TimeoutError past `timeout`."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            job = self.job(job_id)
+            if progress is not None:
+                progress(job)
+            if job["state"] in END_STATES:
+                return job
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"job {job_id} still {job['state']} after {timeout:g} s")
+            time.sleep(poll)
+
+    # ---- events ------------------------------------------------------------------------
+
+    def events_url(self) -> str:
+        scheme = "wss" if self.url.startswith("https") else "ws"
+        return f"{scheme}{self.url[self.url.index(':'):]}/api/ws?{urlencode({'token': self.token})}"
+
+    async def events(self) -> AsyncIterator[dict[str, Any]]:
+        """The server's events (`machine`, `job`, `log`, ...) as they come, one dict each:
+
+            async for event in pb.events():
+                if event["type"] == "job": ...
+        """
+        from websockets.asyncio.client import connect
+        from websockets.exceptions import InvalidStatus, WebSocketException
+
+        try:
+            async with connect(self.events_url(), max_size=2**22, open_timeout=30) as ws:
+                async for text in ws:
+                    yield json.loads(text)
+        except InvalidStatus as exc:
+            raise PlotbridgeError(f"events refused: {exc}", exc.response.status_code) from exc
+        except (OSError, WebSocketException) as exc:
+            raise PlotbridgeError(f"events from {self.url} ended: {exc}") from exc

@@ -1,0 +1,79 @@
+"""Loads libmotion, the firmware's planner, arc and segment code built for the host
+(`firmware/build/host/libmotion.so`, made by `make -C firmware`).
+
+ctypes rather than cffi: it is in the standard library, needs no compiler or build
+step at import time (the library is built by the firmware's make, like the firmware
+itself), and the interface is one struct and one call per program, so ctypes' per-call
+overhead does not matter: the whole program goes in as arrays in a single call.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import subprocess
+import threading
+from pathlib import Path
+
+FIRMWARE_DIR = Path(os.environ.get("PLOTBRIDGE_FIRMWARE_DIR",
+                                   Path(__file__).resolve().parents[3] / "firmware"))
+LIBRARY = FIRMWARE_DIR / "build" / "host" / "libmotion.so"
+
+# Line kinds (firmware/host/motion.c OP_*).
+RAPID, LINE, ARC_CW, ARC_CCW, PEN_DOWN, PEN_UP, DWELL, OTHER = range(8)
+
+
+class Config(ctypes.Structure):
+    _pack_ = 1    # the library packs its structs as avr-gcc does
+    _fields_ = [
+        ("steps_per_mm", ctypes.c_double * 2),
+        ("max_rate", ctypes.c_double * 2),
+        ("accel", ctypes.c_double * 2),
+        ("junction_deviation", ctypes.c_double),
+        ("arc_tolerance", ctypes.c_double),
+        ("pen_settle_s", ctypes.c_double),
+        ("corexy", ctypes.c_int),
+        ("depth", ctypes.c_int),
+        ("byte_s", ctypes.c_double),
+        ("line_cpu_s", ctypes.c_double),
+        ("rx_size", ctypes.c_int),
+    ]
+
+
+class MotionLibraryMissing(RuntimeError):
+    pass
+
+
+_lib: ctypes.CDLL | None = None
+_load_lock = threading.Lock()
+# The firmware code keeps its state in globals: one program at a time per process.
+run_lock = threading.Lock()
+
+
+def load() -> ctypes.CDLL:
+    """The library, built first with make when it is missing."""
+    global _lib
+    with _load_lock:
+        if _lib is None:
+            if not LIBRARY.exists():
+                r = subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), "motion"],
+                                   capture_output=True, text=True)
+                if r.returncode or not LIBRARY.exists():
+                    raise MotionLibraryMissing(
+                        f"cannot build {LIBRARY}: {r.stderr.strip() or r.stdout.strip()}")
+            lib = ctypes.CDLL(str(LIBRARY))
+            lib.motion_configure.argtypes = [ctypes.POINTER(Config)]
+            lib.motion_configure.restype = None
+            lib.motion_plan_size.restype = ctypes.c_int
+            f = ctypes.POINTER(ctypes.c_float)
+            lib.motion_run.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_uint8), f, f, f, f,
+                                       f, ctypes.POINTER(ctypes.c_uint16),
+                                       ctypes.POINTER(ctypes.c_double)]
+            lib.motion_run.restype = ctypes.c_double
+            lib.motion_plan.argtypes = lib.motion_run.argtypes[:7]
+            lib.motion_plan.restype = None
+            lib.motion_blocks.argtypes = [ctypes.c_char_p, ctypes.c_int]
+            lib.motion_blocks.restype = ctypes.c_int
+            lib.motion_block_size.restype = ctypes.c_int
+            _lib = lib
+        return _lib

@@ -1,0 +1,28 @@
+"""A progress bar on stderr for a job being followed (`submit --wait`, the vpype command)."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Callable, Iterator
+from typing import Any
+
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
+
+
+@contextlib.contextmanager
+def job_progress(name: str, quiet: bool = False) -> Iterator[Callable[[dict[str, Any]], None]]:
+    """Yields `update(job)`, to be called with the job as it is polled."""
+    columns = (
+        TextColumn("{task.description}"), BarColumn(),
+        TextColumn("{task.percentage:>3.0f}%"), TimeRemainingColumn(),
+    )  # fmt: skip
+    with Progress(*columns, console=Console(stderr=True), disable=quiet) as progress:
+        bar = progress.add_task(name, total=1.0)
+
+        def update(job: dict[str, Any]) -> None:
+            progress.update(
+                bar, completed=job.get("progress") or 0, description=f"{name} [{job['state']}]"
+            )
+
+        yield update

@@ -1,0 +1,172 @@
+"""The estimate: the firmware's planner, arc and segment code built for the host
+(libmotion) against hand-computed motion profiles and the host-side timing model.
+Hand figures assume ideal trapezoids; the firmware's step segments come within 3%."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from plotbridge.importing import MachineProfile
+from plotbridge.motion import library
+from plotbridge.motion.estimate import Estimator, thin_timeline
+from plotbridge.motion.eta import eta
+from plotbridge.motion.timing import GRBL_PLANNER_BLOCKS, stock_grbl
+
+# 1000 mm/s², 100 mm/s max rate, junction deviation 0.02 mm; lines reach the planner
+# without delay unless a test says otherwise.
+P = MachineProfile(baud=0, plan_block_s=0.0)
+
+
+def trapezoid(v0, v1, vn, a, length):
+    da, dd = (vn * vn - v0 * v0) / (2 * a), (vn * vn - v1 * v1) / (2 * a)
+    if da + dd <= length:
+        return (vn - v0) / a + (vn - v1) / a + (length - da - dd) / vn
+    vp = math.sqrt((2 * a * length + v0 * v0 + v1 * v1) / 2)
+    return (vp - v0) / a + (vp - v1) / a
+
+
+def run(moves, profile=P, nbytes=20):
+    e = Estimator(profile)
+    for n, (x, y, f) in enumerate(moves, 1):
+        e.receive(nbytes)
+        e.move(n, x, y, f)
+    e.flush()
+    return e.time
+
+
+def test_the_library_is_the_firmware_build():
+    assert library.LIBRARY.name == "libmotion.so"
+    assert library.load().motion_plan_size() >= 16
+
+
+def test_one_trapezoid():
+    assert run([(100, 0, 3000)]) == pytest.approx(trapezoid(0, 0, 50, 1000, 100), rel=0.005)
+
+
+def test_triangle_profile():
+    assert run([(2, 0, 6000)]) == pytest.approx(trapezoid(0, 0, 100, 1000, 2), rel=0.03)
+
+
+def test_right_angle_junction():
+    s = math.sqrt(0.5)
+    vj = math.sqrt(1000 * 0.02 * s / (1 - s))
+    half = trapezoid(0, vj, 10, 1000, 10)
+    assert run([(10, 0, 600), (10, 10, 600)]) == pytest.approx(2 * half, rel=0.01)
+
+
+def test_straight_chain_runs_through_and_reversal_stops():
+    assert run([(50, 0, 3000), (100, 0, 3000)]) == pytest.approx(run([(100, 0, 3000)]),
+                                                                   rel=0.005)
+    assert run([(50, 0, 3000), (0, 0, 3000)]) == pytest.approx(2 * run([(50, 0, 3000)]),
+                                                                rel=0.005)
+
+
+def test_axis_limits_on_diagonals():
+    slow_y = MachineProfile(max_rate=(6000, 3000), accel=(1000, 500), baud=0, plan_block_s=0)
+    expected = trapezoid(0, 0, 50 * math.sqrt(2), 500 * math.sqrt(2), 100 * math.sqrt(2))
+    assert run([(100, 100, 99999)], slow_y) == pytest.approx(expected, rel=0.005)
+    assert run([(100, 100, None)], slow_y) == pytest.approx(expected, rel=0.005)
+
+
+def test_short_segments_are_limited_by_the_planner_depth():
+    segs = [(0.1 * k, 0, 6000) for k in range(1, 1001)]
+    # With 17 blocks queued (the oldest partly cut into step segments already) the
+    # last 15 to 16 (1.5 to 1.6 mm) must suffice to stop: v² = 2·1000·d.
+    def cruise(d):
+        v = math.sqrt(2 * 1000 * d)
+        return 100 / v + v / 1000
+    assert cruise(1.6) < run(segs) < cruise(1.5)
+    shallow = MachineProfile(planner_blocks=4, baud=0, plan_block_s=0)
+    # blocks already cut into step segments (up to 7 of 8 ms) no longer count
+    assert cruise(0.6) < run(segs, shallow) < cruise(0.2)
+
+
+def test_stock_grbl_uses_its_planner_depth_and_line_time():
+    grbl = stock_grbl({110: 6000, 111: 6000, 120: 1000, 121: 1000})
+    assert grbl.planner_blocks == GRBL_PLANNER_BLOCKS
+    segs = [(0.1 * k, 0, 6000) for k in range(1, 401)]
+    ours = run(segs, MachineProfile())
+    theirs = run(segs, grbl)
+    # 400 lines at GRBL's 3.3 ms each: the CPU sets the pace
+    assert theirs == pytest.approx(400 * grbl.plan_block_s, rel=0.05)
+    assert theirs > ours
+
+
+def test_arcs_are_cut_by_the_arc_tolerance():
+    e = Estimator(P)
+    e.receive(10)
+    e.move(1, 2.0, 0.0, None)
+    e.receive(10)
+    e.stop(2, 0.0)
+    e.receive(30)
+    e.arc(3, -2.0, 0.0, -2.0, 0.0, 6000, False)
+    e.flush()
+    n = math.ceil(math.pi / (2 * math.acos(1 - 0.002 / 2)))
+    assert n == 36
+    chords = [(2, 0, None)] + [(2 * math.cos(math.pi * k / n), 2 * math.sin(math.pi * k / n),
+                                6000) for k in range(1, n + 1)]
+    # the same chords as G1 lines (after a stop at the start) take the same time
+    e2 = Estimator(P)
+    for k, (x, y, f) in enumerate(chords):
+        e2.receive(10)
+        e2.move(k, x, y, f)
+        if k == 0:
+            e2.receive(10)
+            e2.stop(1, 0.0)
+    e2.flush()
+    assert e.time == pytest.approx(e2.time, rel=1e-6)
+    assert e.time > run([(2, 0, None)]) + math.pi * 2 / 100 * 1.2   # corners slow it
+
+
+def test_pen_moves_and_dwell_stop_and_settle():
+    e = Estimator(P)
+    e.receive(20)
+    e.move(1, 100, 0, 3000)
+    e.receive(3)
+    e.stop(2, P.pen_settle_s)
+    e.receive(20)
+    e.move(3, 200, 0, 3000)
+    e.flush()
+    assert e.time == pytest.approx(2 * run([(100, 0, 3000)]) + 0.15, rel=0.005)
+
+
+def feed_lines(profile, lines, step=0.05):
+    e = Estimator(profile)
+    for n, text in enumerate(lines, 1):
+        e.receive(len(text) + 1)
+        e.move(n, step * n, 0.0, 6000)
+    e.flush()
+    return e.time
+
+
+def test_serial_line_bounds_dense_short_moves():
+    lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
+    fast = feed_lines(P, lines)
+    slow = feed_lines(MachineProfile(plan_block_s=0), lines)
+    serial = sum(len(t) + 1 for t in lines) * 10 / 115200
+    assert fast < serial
+    assert slow == pytest.approx(serial, rel=0.06)
+
+
+def test_firmware_line_time_bounds_dense_short_moves():
+    lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
+    cpu = feed_lines(MachineProfile(baud=0, plan_block_s=0.0034), lines)
+    assert cpu == pytest.approx(2000 * 0.0034, rel=0.05)
+
+
+def test_timeline_thins_to_its_limit():
+    ack = np.arange(1, 1001) * 0.5
+    samples = thin_timeline(ack, 1000, 500.0, limit=10)
+    assert len(samples) <= 10
+    assert samples[-1] == (1000, 500.0)
+    assert [s[0] for s in samples] == sorted(s[0] for s in samples)
+
+
+def test_eta_interpolates():
+    timeline = [(10, 5.0), (20, 15.0), (30, 20.0)]
+    assert eta(timeline, 20.0, 0) == 20.0
+    assert eta(timeline, 20.0, 15) == pytest.approx(10.0)
+    assert eta(timeline, 20.0, 30) == 0.0
+    assert eta([], 12.0, 3) == 12.0
