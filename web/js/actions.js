@@ -4,7 +4,7 @@
 import { api, ApiError, uploadJob } from "./api.js";
 import { LOG_LIMIT } from "./views/console.js";
 import { buildGeometry } from "./preview-data.js";
-import { previewJob } from "./store.js";
+import { holdAction, previewJob } from "./store.js";
 
 const POLL_MS = 2000; // REST polling while the WebSocket is down
 const asList = (data, key) => (Array.isArray(data) ? data : (data && data[key]) || []);
@@ -462,6 +462,13 @@ export function createActions(store, socket, estop) {
     },
     estopAll() {
       if (!socket.send({ type: "estop", all: true })) api.post("/api/estop").catch(() => {});
+    },
+    /** The big Hold/Continue button: `!` or `~` by the WebSocket, REST if it is closed. */
+    holdOrContinue() {
+      const what = holdAction(s);
+      if (!what) return;
+      const type = what === "hold" ? "pause" : "resume";
+      if (!socket.send({ type, plotter: s.plotter })) machineCall(machinePath(what));
     },
     holdPlotter(name) {
       const job = s.jobs.find((j) => j.plotter === name && j.state === "running");

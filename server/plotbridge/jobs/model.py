@@ -21,6 +21,10 @@ ACTIVE: frozenset[str] = frozenset({"running", "paused"})
 FINISHED: frozenset[str] = frozenset({"done", "failed", "cancelled", "stopped"})
 RESUMABLE: frozenset[str] = frozenset({"interrupted", "stopped"})
 
+AfterJob = Literal["park", "home", "none"]
+"""What a plotter does once a job is done: pen up and park, home, or nothing."""
+AFTER_JOB: tuple[str, ...] = ("park", "home", "none")
+
 
 class Bounds(BaseModel):
     min_x: float
@@ -84,6 +88,8 @@ class Job(BaseModel):
     """The plotter asked for on upload or start; None: the first free one it fits."""
     waiting: str | None = None
     """Why a `waiting` job does not run yet."""
+    after: AfterJob | None = None
+    """What the plotter does once this job is done; None: the server's default."""
     # the server's own:
     kind: Literal["file", "pattern"] = Field("file", exclude=True)
     source: str = Field("", exclude=True)

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from plotbridge.errors import Refused
-from plotbridge.jobs.model import Job
+from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
@@ -30,6 +30,7 @@ log = logging.getLogger("plotbridge.runner")
 PROGRESS_INTERVAL = 0.2  # s between job progress messages (5 Hz)
 SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
+AFTER_JOB_S = 120.0  # s a park move or a homing cycle after a job may take
 
 Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
@@ -37,8 +38,13 @@ Report = Callable[[Job, bool], None]
 
 class Runner:
     def __init__(self, plotter: str, link: Link, jobs_dir: Path, report: Report,
-                 finished: Callable[[Job], None]) -> None:  # fmt: skip
+                 finished: Callable[[Job], None], after_job: AfterJob = "none",
+                 park: tuple[float, float] = (0.0, 0.0)) -> None:  # fmt: skip
         self.plotter = plotter
+        self.after_job = after_job
+        self.park = park
+        self.busy: str | None = None
+        """Why the plotter takes no job although none runs (the after-the-job action)."""
         self.link = link
         self.jobs_dir = jobs_dir
         self.report = report
@@ -151,7 +157,12 @@ class Runner:
                 return  # settled meanwhile (estop, cancel)
             if state == "Idle":
                 job.lines_done = job.lines_total
+                after = self._after_lines(job)
+                if after:
+                    action = job.after or self.after_job
+                    self.busy = f"{self.plotter} finishes job {job.id} ({action})"
                 self._finish(job, "done", None)
+                await self._after(job, after)
             elif state == "Alarm":
                 self._finish(job, "failed", f"the board raised an alarm: {self._alarm_text()}")
             else:
@@ -175,7 +186,26 @@ class Runner:
         finally:
             if self.job is job:
                 self.job = None
+            self.busy = None
             self.finished(job)
+
+    def _after_lines(self, job: Job) -> list[str]:
+        """The G-code of the job's "after the job" action (the server's default if unset)."""
+        action = job.after or self.after_job
+        if action == "park":  # G4 P0 is answered once the move has ended
+            x, y = self.park
+            return ["M5", f"G0 X{x:.3f} Y{y:.3f}", "G4 P0"]
+        if action == "home":
+            return ["M5", "$H"]
+        return []
+
+    async def _after(self, job: Job, lines: list[str]) -> None:
+        for line in lines:
+            try:
+                await self.link.command(line, timeout=AFTER_JOB_S)
+            except Exception as exc:  # the job is done; the board says what went wrong
+                log.warning("after job %s: %s failed: %s", job.id, line, exc)
+                return
 
     async def _wait_done(self, since: float) -> str:
         """After the last ok: wait until the board is Idle (or fails)."""
