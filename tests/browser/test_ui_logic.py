@@ -138,6 +138,7 @@ def test_job_buttons_follow_the_state(modules):
           verbs(m.jobButtons({state: 'waiting', bounds: {}}, 0, 1, true)),
           verbs(m.jobButtons({state: 'done', bounds: {}}, -1, 0, false)),
           m.jobButtons({state: 'queued'}, 0, 1, true)[0].label,
+          verbs(m.jobButtons({state: 'pen_change', bounds: {}}, -1, 0, true)),
         ];
     """)
     assert got == [
@@ -150,6 +151,7 @@ def test_job_buttons_follow_the_state(modules):
         ["cancel", "frame-", "up-", "down-"],
         ["start", "frame", "delete"],
         "Start next",
+        ["resume", "cancel"],
     ]
 
 

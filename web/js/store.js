@@ -2,7 +2,7 @@
 // Actions mutate state through update(); renderers read it; a frame renders once.
 
 export const MOVING_STATES = new Set(["Run", "Jog", "Home"]);
-export const ACTIVE_JOB_STATES = new Set(["running", "paused"]);
+export const ACTIVE_JOB_STATES = new Set(["running", "paused", "pen_change"]);
 const HOLDABLE_STATES = new Set(["Run", "Jog"]);
 
 export function initialState() {
@@ -70,7 +70,7 @@ export function holdAction(state) {
   if (!m || !m.connected) return null;
   const mine = (j) => !state.plotter || !j.plotter || j.plotter === state.plotter;
   const job = state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state) && mine(j));
-  if (m.state === "Hold" || (job && job.state === "paused")) return "continue";
+  if (m.state === "Hold" || (job && job.state !== "running")) return "continue";
   if (HOLDABLE_STATES.has(m.state) || job) return "hold";
   return null;
 }

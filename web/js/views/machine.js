@@ -48,6 +48,12 @@ export function bannersFor(state) {
     });
   }
   for (const job of state.jobs) {
+    if (job.state === "pen_change" && job.pen_change) {
+      out.push({
+        key: `pen-${job.id}`, level: "warn", text: `“${job.name}”: ${job.pen_change.message}.`,
+        actions: [{ label: "Continue", action: "resume-job", id: job.id }],
+      });
+    }
     if (job.state === "interrupted") {
       out.push({
         key: `int-${job.id}`, level: "warn",
