@@ -87,3 +87,13 @@ async def test_stop_during_a_pen_change_makes_the_job_resumable(tmp_path, monkey
         await settle(lambda: queue.first.job is None and queue.first.runner.busy is None)
         stopped = queue.jobs[job["id"]]
         assert stopped.state == "stopped" and stopped.resume_line is not None
+
+
+def test_the_progress_label_shows_the_pen_change_prompt():
+    from plotbridge.progress import describe
+
+    job = {"state": "pen_change", "pen_change": {"message": "Layer 2 of 3, 'b': load its pen"}}
+    assert describe("d.svg", job) == "d.svg [pen_change]: Layer 2 of 3, 'b': load its pen"
+    assert describe("d.svg", {"state": "waiting", "waiting": "plotter1 is in Alarm"}).endswith(
+        ": plotter1 is in Alarm")
+    assert describe("d.svg", {"state": "running"}) == "d.svg [running]"
