@@ -59,7 +59,9 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
                         limits=config.import_limits)  # fmt: skip
     importer.clean()
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
-                     work_area=b.work_area) for b in boards]  # fmt: skip
+                     work_area=b.work_area, home_on_connect=config.home_on_connect,
+                     after_job=config.after_job, park=config.park)  # type: ignore[arg-type]
+             for b in boards]  # fmt: skip
     queue = JobQueue(units, store, importer, events, auto_start=config.auto_start)
     queue.load()
 

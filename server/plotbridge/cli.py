@@ -7,6 +7,7 @@ import argparse
 import asyncio
 import gc
 import logging
+import math
 import os
 import socket
 import sys
@@ -24,6 +25,7 @@ from plotbridge.config import (
     find_web_dir,
     read_plotters_file,
 )
+from plotbridge.jobs.model import AFTER_JOB
 
 log = logging.getLogger("plotbridge")
 
@@ -36,6 +38,17 @@ def _env(name: str, default: Any = None) -> Any:
 
 def _env_flag(name: str) -> bool:
     return str(_env(name, "")).strip().lower() in ("1", "true", "yes", "on")
+
+
+def _point(text: str) -> tuple[float, float]:
+    """`X,Y` in mm."""
+    try:
+        x, y = (float(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected X,Y in mm, got {text!r}") from None
+    if not all(math.isfinite(v) and v >= 0 for v in (x, y)):
+        raise argparse.ArgumentTypeError(f"X,Y must be finite and not negative, got {text!r}")
+    return x, y
 
 
 def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
@@ -96,6 +109,19 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="start the next queued job automatically",
     )  # fmt: skip
     parser.add_argument(
+        "--home-on-connect", action="store_true", default=_env_flag("HOME_ON_CONNECT"),
+        help="home ($H) a plotter that connects in Alarm (for plotters with limit switches)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--after-job", choices=AFTER_JOB, default=_env("AFTER_JOB", "none"),
+        help="what a plotter does once a job is done, unless the job says: "
+             "park (pen up, carriage to --park), home, none (default)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--park", type=_point, default=_env("PARK", "0,0"), metavar="X,Y",
+        help="park position in mm (default 0,0: the front left corner)",
+    )  # fmt: skip
+    parser.add_argument(
         "--zeroconf", action=argparse.BooleanOptionalAction,
         default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
         help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
@@ -150,6 +176,9 @@ def config_from_args(args: argparse.Namespace) -> Config:
         client_connections=args.client_connections,
         max_upload_mb=args.max_upload_mb,
         auto_start=args.auto_start,
+        home_on_connect=args.home_on_connect,
+        after_job=args.after_job,
+        park=args.park,
         log_level=args.log_level,
         zeroconf=args.zeroconf,
         web_dir=find_web_dir(),

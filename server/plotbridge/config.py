@@ -116,6 +116,9 @@ class Config:
     auto_start: bool = False
     log_level: str = "info"
     zeroconf: bool = True  # announce on the LAN (plotbridge.mdns)
+    home_on_connect: bool = False  # $H when a plotter connects in Alarm (it has switches)
+    after_job: str = "none"  # park | home | none: the default "after the job" action
+    park: tuple[float, float] = (0.0, 0.0)  # mm, where "park" leaves the carriage
     web_dir: Path | None = None
     import_limits: Limits = field(default_factory=Limits)
 

@@ -22,7 +22,13 @@ def job_progress(name: str, quiet: bool = False) -> Iterator[Callable[[dict[str,
 
         def update(job: dict[str, Any]) -> None:
             progress.update(
-                bar, completed=job.get("progress") or 0, description=f"{name} [{job['state']}]"
+                bar, completed=job.get("progress") or 0, description=describe(name, job)
             )
 
         yield update
+
+
+def describe(name: str, job: dict[str, Any]) -> str:
+    """The bar's label: the job's state, and what it waits for (a pen change, the machine)."""
+    why = (job.get("pen_change") or {}).get("message") or job.get("waiting")
+    return f"{name} [{job['state']}]" + (f": {why}" if why else "")

@@ -2,10 +2,12 @@
 
 The queue keeps the jobs in memory (the truth while running) and mirrors each
 change to the store and the event hub. It sends a started job to a free, ready
-plotter whose work area fits it (or to the one the job names); with several
-plotters a job nothing can run yet `waits` with the reason and starts by itself
-when a plotter frees, in queue order. With one plotter, starting a job the
-plotter cannot take now is refused (409), as it always was.
+plotter whose work area fits it (or to the one the job names). A job nothing
+can run yet (its plotter in Alarm, disconnected, or busy) `waits` with the
+reason and starts by itself when a plotter becomes Idle and free, in queue
+order. Refused (409) is only what waiting cannot cure: a job that fits no
+plotter's work area, and a stopped or interrupted job (its resume needs a homed
+machine, which the user asks for).
 """
 
 from __future__ import annotations
@@ -97,13 +99,13 @@ class JobQueue:
 
     async def create(self, *, kind: str, source: Path | str, filename: str, name: str,
                      options: dict[str, Any], placement: dict[str, Any],
-                     target: str | None = None) -> Job:  # fmt: skip
+                     target: str | None = None, after: str | None = None) -> Job:  # fmt: skip
         """Import an upload (a file already on disk) or a pattern into a new queued job."""
         if target is not None:
             self.plotter(target)
         job_id, kept, result = await self.importer.create(kind, source, filename, options)
         job = Job(id=job_id, name=name, kind=kind, source=kept, filename=filename,
-                  options=options, placement=placement, target=target,
+                  options=options, placement=placement, target=target, after=after,
                   format=result.format, lines_total=result.lines_total,
                   estimate_s=result.estimate_s)  # fmt: skip
         job.imported(result)
@@ -174,7 +176,7 @@ class JobQueue:
         plotter, reason = self._place(job)
         if plotter is not None:
             self._begin(job, plotter)
-        elif len(self.plotters) == 1 or job.state in RESUMABLE:
+        elif job.state in RESUMABLE or not any(p.fits(job) for p in self._candidates(job)):
             raise Refused(409, reason)
         else:
             job.state, job.waiting, job.error = "waiting", reason, None
@@ -245,13 +247,44 @@ class JobQueue:
                 return candidate
         raise Refused(409, "no job is running")
 
-    def pause(self, job_id: str | None = None, plotter: str | None = None) -> Job:
-        return self._running_on(job_id, plotter).runner.pause()
+    def pause(self, job_id: str | None = None, plotter: str | None = None) -> Job | None:
+        """Feed hold of a job; without a job named, of the plotter's job, or of its machine
+        when no job runs (a jog, a console move): the board lifts the pen while held."""
+        unit = self._holding(job_id, plotter)
+        if unit.job is None:
+            unit.realtime(b"!")
+            return None
+        return unit.runner.pause()
 
-    def resume(self, job_id: str | None = None, plotter: str | None = None) -> Job:
+    def resume(self, job_id: str | None = None, plotter: str | None = None) -> Job | None:
         if job_id is not None and self.get(job_id).state in RESUMABLE:
             return self.start(job_id, plotter)
-        return self._running_on(job_id, plotter).runner.resume()
+        unit = self._holding(job_id, plotter)
+        if unit.job is None:
+            unit.realtime(b"~")
+            return None
+        return unit.runner.resume()
+
+    def _holding(self, job_id: str | None, plotter: str | None) -> Plotter:
+        """The plotter a hold or continue acts on: the job's, the named one's, the one
+        running a job, else the first."""
+        if job_id is None and (plotter is not None or all(p.job is None for p in
+                                                           self.plotters.values())):  # fmt: skip
+            return self.plotter(plotter)
+        return self._running_on(job_id, plotter)
+
+    async def frame(self, job_id: str, plotter: str | None = None) -> Job:
+        """Trace the job's frame with the pen up on the plotter it would run on."""
+        job = self.get(job_id)
+        if job.active:
+            raise Refused(409, f"job {job_id} is {job.state}; trace the frame before it runs")
+        unit = self.plotter(plotter or job.target or (job.plotter if job.plotter in self.plotters
+                                                       else None))  # fmt: skip
+        if not unit.fits(job):
+            raise Refused(409, f"job {job_id} does not fit {unit.name}'s work area "
+                               f"({unit.work_area})")  # fmt: skip
+        await unit.trace_frame(job)
+        return job
 
     async def cancel(self, job_id: str) -> Job:
         job = self.get(job_id)

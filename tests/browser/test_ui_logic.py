@@ -135,15 +135,23 @@ def test_job_buttons_follow_the_state(modules):
           verbs(m.jobButtons({state: 'paused'}, -1, 0, true)),
           verbs(m.jobButtons({state: 'stopped'}, -1, 0, false)),
           verbs(m.jobButtons({state: 'done'}, -1, 0, false)),
+          verbs(m.jobButtons({state: 'waiting', bounds: {}}, 0, 1, true)),
+          verbs(m.jobButtons({state: 'done', bounds: {}}, -1, 0, false)),
+          m.jobButtons({state: 'queued'}, 0, 1, true)[0].label,
+          verbs(m.jobButtons({state: 'pen_change', bounds: {}}, -1, 0, true)),
         ];
     """)
     assert got == [
         ["start", "up-", "down", "delete"],
-        ["start-", "up", "down-", "delete"],
+        ["start", "up", "down-", "delete"],
         ["pause", "cancel"],
         ["resume", "cancel"],
         ["resume", "delete"],
         ["start", "delete"],
+        ["cancel", "frame-", "up-", "down-"],
+        ["start", "frame", "delete"],
+        "Start next",
+        ["resume", "cancel"],
     ]
 
 
@@ -169,3 +177,28 @@ def test_stop_confirmation_and_control_lock(modules):
     assert got[1:4] == [False, False, True]
     assert got[4].startswith("In alarm")
     assert got[5] == ""
+
+
+def test_hold_button_follows_the_selected_plotter(modules):
+    got = run(modules, """
+        const s = m.initialState();
+        const out = [m.holdAction(s)];
+        s.machine = {connected: true, state: 'Idle'};
+        out.push(m.holdAction(s));
+        s.machine.state = 'Jog';
+        out.push(m.holdAction(s));
+        s.machine.state = 'Hold';
+        out.push(m.holdAction(s));
+        s.machine.state = 'Idle';
+        s.plotter = 'a';
+        s.jobs = [{id: 'j', state: 'running', plotter: 'b'}];
+        out.push(m.holdAction(s));
+        s.jobs[0].plotter = 'a';
+        out.push(m.holdAction(s));
+        s.jobs[0].state = 'paused';
+        out.push(m.holdAction(s));
+        s.machine.connected = false;
+        out.push(m.holdAction(s));
+        return out;
+    """)
+    assert got == [None, None, "hold", "continue", None, "hold", "continue", None]

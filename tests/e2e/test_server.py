@@ -127,10 +127,11 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     response = server.client.post("/api/machine/estop")
     assert response.status_code == 202
     _assert_stopped(server, plotter, job["id"], sent_at)
-    # the next job is refused until the alarm is cleared, with a hint
+    # the next job waits until the alarm is cleared, saying why
     other = submit(server, drawing(), start=False)
-    refused = server.client.post(f"/api/jobs/{other['id']}/start")
-    assert refused.status_code == 409 and "$H" in refused.json()["detail"]
+    waiting = server.client.post(f"/api/jobs/{other['id']}/start").json()
+    assert waiting["state"] == "waiting" and "$H" in waiting["waiting"]
+    assert server.client.post(f"/api/jobs/{other['id']}/cancel").status_code == 200
     # after homing, the stopped job can be resumed and the drawing completed
     server.home()
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200

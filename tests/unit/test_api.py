@@ -327,8 +327,19 @@ async def test_upload_keeps_original_under_generated_name(api, tmp_path):
 async def test_upload_with_start(api):
     started = (await upload(api.client, start="true")).json()
     assert started["state"] == "running" and "start_error" not in started
-    queued = (await upload(api.client, start="1")).json()
-    assert queued["state"] == "queued" and started["id"] in queued["start_error"]
+    waiting = (await upload(api.client, start="1")).json()
+    assert waiting["state"] == "waiting" and started["id"] in waiting["waiting"]
+    assert "start_error" not in waiting
+    api.link.auto_ack = True
+    api.link.step()
+    await settle(lambda: api.queue.jobs[waiting["id"]].state == "done")  # by itself, after it
+    assert api.queue.jobs[started["id"]].finished_at <= api.queue.jobs[waiting["id"]].started_at
+
+
+async def test_upload_refuses_an_unknown_after_action(api):
+    response = await upload(api.client, after="dance")
+    assert response.status_code == 422
+    assert "after" in response.json()["detail"]["errors"][0]["message"]
 
 
 async def test_raw_body_upload(api):
@@ -347,24 +358,69 @@ async def test_start_runs_to_done(api):
     assert [n for n, _ in api.link.streamed] == list(range(1, 21))
 
 
-async def test_start_conflicts(api):
+async def test_start_waits_for_the_machine(api):
     first = (await upload(api.client)).json()
     second = (await upload(api.client)).json()
     api.link.set_state("Alarm", alarm=1)
     response = await api.client.post(f"/api/jobs/{first['id']}/start")
-    assert response.status_code == 409 and "$X" in response.json()["detail"]
+    assert response.status_code == 200
+    assert response.json()["state"] == "waiting" and "$X" in response.json()["waiting"]
     api.link.status.connected = False
-    response = await api.client.post(f"/api/jobs/{first['id']}/start")
-    assert response.status_code == 409 and "not connected" in response.json()["detail"]
-    api.link.status.connected = True
-    api.link.set_state("Idle")
-    assert (await api.client.post(f"/api/jobs/{first['id']}/start")).status_code == 200
     response = await api.client.post(f"/api/jobs/{second['id']}/start")
-    assert response.status_code == 409 and first["id"] in response.json()["detail"]
+    assert response.json()["state"] == "waiting" and "not connected" in response.json()["waiting"]
+    again = await api.client.post(f"/api/jobs/{first['id']}/start")  # still waits, new reason
+    assert again.json()["state"] == "waiting" and "not connected" in again.json()["waiting"]
+    api.link.status.connected = True
+    api.link.set_state("Idle", alarm=None)  # e.g. homed: the first in queue order starts
+    assert api.queue.jobs[first["id"]].state == "running"
+    assert api.queue.jobs[second["id"]].state == "waiting"
+    assert first["id"] in api.queue.jobs[second["id"]].waiting
     assert (await api.client.delete(f"/api/jobs/{first['id']}")).status_code == 409
     assert (await api.client.post("/api/machine/jog", json={"dx": 1})).status_code == 409
     response = await api.client.post("/api/machine/command", json={"line": "G0 X1"})
     assert response.status_code == 409
+    cancelled = await api.client.post(f"/api/jobs/{second['id']}/cancel")
+    assert cancelled.json()["state"] == "cancelled"
+
+
+async def test_a_job_too_large_for_the_work_area_is_refused(api):
+    job = (await upload(api.client)).json()
+    api.link.settings[130] = 10.0  # the fake program is 15 mm wide
+    response = await api.client.post(f"/api/jobs/{job['id']}/start")
+    assert response.status_code == 409 and "work area" in response.json()["detail"]
+    assert api.queue.jobs[job["id"]].state == "queued"
+
+
+@pytest.mark.parametrize(("action", "expected"), [
+    ("park", ["M5", "G0 X5.000 Y7.500", "G4 P0"]), ("home", ["M5", "$H"]), ("none", [])])
+async def test_after_the_job(tmp_path, monkeypatch, action, expected):
+    monkeypatch.setattr(Importer, "_import", fake_import)
+    app, link = make_app(tmp_path, after_job="home", park=(5.0, 7.5))
+    link.auto_ack = True
+    async with serving(app) as client:
+        queue = app.state.components.queue
+        first = (await upload(client, start="true", after=action)).json()
+        second = (await upload(client, start="true")).json()  # the server's default: home
+        await settle(lambda: queue.jobs[second["id"]].state == "done")
+        assert queue.jobs[first["id"]].after == action
+        assert link.commands == [*expected, "M5", "$H"]  # the second waited for the first's
+
+
+async def test_home_on_connect_homes_a_plotter_in_alarm(tmp_path, monkeypatch):
+    monkeypatch.setattr(Importer, "_import", fake_import)
+    app, link = make_app(tmp_path, home_on_connect=True)
+    async with serving(app) as client:
+        link.status.state = "Alarm"
+        link.emit("connected")
+        link.set_state("Alarm")
+        await settle(lambda: link.commands == ["$H"])
+        link.set_state("Idle")
+        job = (await upload(client, start="true")).json()
+        assert job["state"] == "running"
+        link.emit("connected")  # connected in Idle: no homing
+        link.set_state("Idle")
+        await asyncio.sleep(0.1)
+        assert link.commands == ["$H"]
 
 
 async def test_estop_stops_running_job_at_last_ack(api):
@@ -784,3 +840,35 @@ def test_a_flooding_ws_client_is_closed_and_its_stops_are_never_limited(sync_cli
                 ws.receive_text()
     assert closed.value.code == 1008
     assert sync_client.link.estop_calls >= 3  # the stops before the close all went out
+
+
+async def test_frame_traces_the_bounds_with_the_pen_up(api):
+    job = (await upload(api.client)).json()
+    response = await api.client.post(f"/api/jobs/{job['id']}/frame")
+    assert response.status_code == 200 and response.json()["state"] == "queued"
+    corners = ["0.000 Y0.000", "15.000 Y0.000", "15.000 Y0.000", "0.000 Y0.000", "0.000 Y0.000"]
+    assert api.link.commands == ["M5", *(f"G0 X{c}" for c in corners), "G4 P0"]
+    api.link.set_state("Alarm", alarm=1)
+    refused = await api.client.post(f"/api/jobs/{job['id']}/frame")
+    assert refused.status_code == 409 and "Alarm" in refused.json()["detail"]
+    missing = await api.client.post("/api/jobs/nope/frame")
+    assert missing.status_code == 404
+
+
+async def test_hold_and_continue_without_a_job(api):
+    refused = await api.client.post("/api/machine/hold")
+    assert refused.status_code == 409 and "Idle" in refused.json()["detail"]
+    api.link.set_state("Jog")
+    assert (await api.client.post("/api/machine/hold")).status_code == 200
+    api.link.set_state("Hold")
+    assert (await api.client.post("/api/machine/continue")).status_code == 200
+    assert api.link.realtime_bytes == [b"!", b"~"]
+
+
+async def test_hold_and_continue_of_the_running_job(api):
+    job = (await upload(api.client, start="true")).json()
+    assert (await api.client.post("/api/machine/hold")).status_code == 200
+    assert api.queue.jobs[job["id"]].state == "paused"
+    assert (await api.client.post("/api/plotters/plotter1/machine/continue")).status_code == 200
+    assert api.queue.jobs[job["id"]].state == "running"
+    assert api.link.realtime_bytes == [b"!", b"~"]

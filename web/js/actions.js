@@ -4,7 +4,7 @@
 import { api, ApiError, uploadJob } from "./api.js";
 import { LOG_LIMIT } from "./views/console.js";
 import { buildGeometry } from "./preview-data.js";
-import { previewJob } from "./store.js";
+import { holdAction, previewJob } from "./store.js";
 
 const POLL_MS = 2000; // REST polling while the WebSocket is down
 const asList = (data, key) => (Array.isArray(data) ? data : (data && data[key]) || []);
@@ -119,12 +119,21 @@ export function createActions(store, socket, estop) {
   }
 
   function upsertJob(job) {
+    const before = s.jobs.find((j) => sameId(j.id, job.id));
+    if (job.state === "pen_change" && (!before || before.state !== "pen_change")) notifyPenChange(job);
     store.update((st) => {
       const i = st.jobs.findIndex((j) => sameId(j.id, job.id));
       if (i >= 0) st.jobs[i] = { ...st.jobs[i], ...job };
       else st.jobs.push(job);
     });
     ensurePreview();
+  }
+
+  /** A browser notification when a pen change is due and the page is in the background. */
+  function notifyPenChange(job) {
+    if (!document.hidden || typeof Notification === "undefined" || Notification.permission !== "granted") return;
+    const body = job.pen_change ? job.pen_change.message : `“${job.name}” waits for a pen change`;
+    new Notification("plotbridge: change the pen", { body, tag: `pen-${job.id}` });
   }
 
   async function loadJobs() {
@@ -442,6 +451,10 @@ export function createActions(store, socket, estop) {
           await loadJobs();
           return;
         }
+        if (verb === "start" && job.layers && job.layers.length > 1 && typeof Notification !== "undefined"
+            && Notification.permission === "default") {
+          Notification.requestPermission().catch(() => {}); // asked on the click: pen changes notify
+        }
         const updated = await api.post(`${path}/${verb}`);
         if (updated && updated.id !== undefined) upsertJob(updated);
         if (verb === "start") {
@@ -472,6 +485,13 @@ export function createActions(store, socket, estop) {
     },
     estopAll() {
       if (!socket.send({ type: "estop", all: true })) api.post("/api/estop").catch(() => {});
+    },
+    /** The big Hold/Continue button: `!` or `~` by the WebSocket, REST if it is closed. */
+    holdOrContinue() {
+      const what = holdAction(s);
+      if (!what) return;
+      const type = what === "hold" ? "pause" : "resume";
+      if (!socket.send({ type, plotter: s.plotter })) machineCall(machinePath(what));
     },
     holdPlotter(name) {
       const job = s.jobs.find((j) => j.plotter === name && j.state === "running");

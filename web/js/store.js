@@ -2,7 +2,8 @@
 // Actions mutate state through update(); renderers read it; a frame renders once.
 
 export const MOVING_STATES = new Set(["Run", "Jog", "Home"]);
-export const ACTIVE_JOB_STATES = new Set(["running", "paused"]);
+export const ACTIVE_JOB_STATES = new Set(["running", "paused", "pen_change"]);
+const HOLDABLE_STATES = new Set(["Run", "Jog"]);
 
 export function initialState() {
   return {
@@ -61,6 +62,17 @@ export function previewJob(state) {
 
 export function jobActive(state) {
   return state.jobs.some((j) => ACTIVE_JOB_STATES.has(j.state));
+}
+
+/** What the big Hold button does for the selected plotter: "hold", "continue" or null. */
+export function holdAction(state) {
+  const m = state.machine;
+  if (!m || !m.connected) return null;
+  const mine = (j) => !state.plotter || !j.plotter || j.plotter === state.plotter;
+  const job = state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state) && mine(j));
+  if (m.state === "Hold" || (job && job.state !== "running")) return "continue";
+  if (HOLDABLE_STATES.has(m.state) || job) return "hold";
+  return null;
 }
 
 /** Whether the stop is confirmed: acknowledged, and the board reports a non-moving state. */

@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse, JSONResponse, Response
 
 from plotbridge.api.deps import GUARD, Parts, upload_error
 from plotbridge.errors import Refused
-from plotbridge.jobs.model import Job
+from plotbridge.jobs.model import AFTER_JOB, Job
 from plotbridge.models import MoveBody, PatchJobBody, upload_openapi
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
@@ -38,6 +38,9 @@ async def upload(request: Request, c: Parts) -> Any:
             options, placement, start = parse_upload_fields(params)
         except ValueError as exc:
             return upload_error(422, str(exc))
+        after = params.get("after") or None
+        if after is not None and after not in AFTER_JOB:
+            return upload_error(422, f"after: one of {', '.join(AFTER_JOB)}, got {after!r}")
         pattern = params.get("pattern")
         if pattern:
             kind, source, filename = "pattern", pattern, pattern
@@ -51,7 +54,8 @@ async def upload(request: Request, c: Parts) -> Any:
         options["name"] = name
         job = await c.queue.create(kind=kind, source=source, filename=filename, name=name,
                                    options=options, placement=placement,
-                                   target=params.get("plotter") or None)  # fmt: skip
+                                   target=params.get("plotter") or None,
+                                   after=after)  # fmt: skip
     except UploadRefused as exc:
         return upload_error(exc.status, exc.message)
     finally:
@@ -91,12 +95,20 @@ async def start_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, 
 
 @router.post("/jobs/{job_id}/pause", response_model=Job)
 async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
-    return c.queue.pause(job_id).public()
+    c.queue.pause(job_id)
+    return c.queue.get(job_id).public()
 
 
 @router.post("/jobs/{job_id}/resume", response_model=Job)
 async def resume_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
-    return c.queue.resume(job_id, plotter).public()
+    c.queue.resume(job_id, plotter)
+    return c.queue.get(job_id).public()
+
+
+@router.post("/jobs/{job_id}/frame", response_model=Job)
+async def frame_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
+    """Trace the job's bounding box with the pen up; answers once the carriage is back."""
+    return (await c.queue.frame(job_id, plotter)).public()
 
 
 @router.post("/jobs/{job_id}/cancel", response_model=Job)

@@ -55,6 +55,18 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
         plotter.estop("REST")  # synchronous, before any await
         return {"status": "stopped", "machine": plotter.machine()}
 
+    @routes.post("/machine/hold")
+    async def hold(plotter: Board, c: Parts) -> dict[str, Any]:
+        """Feed hold of the plotter's job, or of its machine: the pen lifts, position kept."""
+        c.queue.pause(plotter=plotter.name)
+        return {"machine": plotter.machine()}
+
+    @routes.post("/machine/continue")
+    async def go_on(plotter: Board, c: Parts) -> dict[str, Any]:
+        """Cycle start after a hold: the pen lowers where it lifted, motion goes on."""
+        c.queue.resume(plotter=plotter.name)
+        return {"machine": plotter.machine()}
+
     @routes.post("/machine/unlock")
     async def unlock(plotter: Board) -> dict[str, Any]:
         log.info("%s: unlock ($X) requested", plotter.name)

@@ -13,13 +13,17 @@ from pydantic import BaseModel, ConfigDict, Field
 from pydantic_core import to_jsonable_python
 
 JobState = Literal[
-    "queued", "waiting", "running", "paused", "done", "failed", "cancelled", "stopped",
-    "interrupted",
+    "queued", "waiting", "running", "paused", "pen_change", "done", "failed", "cancelled",
+    "stopped", "interrupted",
 ]  # fmt: skip
 
-ACTIVE: frozenset[str] = frozenset({"running", "paused"})
+ACTIVE: frozenset[str] = frozenset({"running", "paused", "pen_change"})
 FINISHED: frozenset[str] = frozenset({"done", "failed", "cancelled", "stopped"})
 RESUMABLE: frozenset[str] = frozenset({"interrupted", "stopped"})
+
+AfterJob = Literal["park", "home", "none"]
+"""What a plotter does once a job is done: pen up and park, home, or nothing."""
+AFTER_JOB: tuple[str, ...] = ("park", "home", "none")
 
 
 class Bounds(BaseModel):
@@ -93,6 +97,10 @@ class Job(BaseModel):
     """The plotter asked for on upload or start; None: the first free one it fits."""
     waiting: str | None = None
     """Why a `waiting` job does not run yet."""
+    after: AfterJob | None = None
+    """What the plotter does once this job is done; None: the server's default."""
+    pen_change: dict[str, Any] | None = None
+    """In `pen_change`: {"layer" (1-based), "layers", "name", "colour", "message"}."""
     # the server's own:
     kind: Literal["file", "pattern"] = Field("file", exclude=True)
     source: str = Field("", exclude=True)

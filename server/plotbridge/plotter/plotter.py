@@ -18,7 +18,7 @@ from typing import Any
 
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
-from plotbridge.jobs.model import Job
+from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
 from plotbridge.plotter.link import CommandError, Link, LinkDown, LinkEvent
 from plotbridge.plotter.runner import Report, Runner
@@ -28,6 +28,7 @@ from plotbridge.virtual import VirtualPlotter
 log = logging.getLogger("plotbridge.plotter")
 
 MACHINE_INTERVAL = 0.1  # s between machine reports while moving (the contract asks >= 5 Hz)
+HOMING_S = 120.0  # s a homing cycle may take on the largest work area
 CONSOLE_FORBIDDEN = "?!~\x18\r\n"  # realtime bytes and line ends: not a console line
 
 
@@ -42,17 +43,21 @@ class WorkArea:
 
 class Plotter:
     def __init__(self, name: str, link: Link, events: EventHub, jobs_dir: Path, *,
-                 virtual: VirtualPlotter | None = None,
-                 work_area: WorkArea | None = None) -> None:  # fmt: skip
+                 virtual: VirtualPlotter | None = None, work_area: WorkArea | None = None,
+                 home_on_connect: bool = False, after_job: AfterJob = "none",
+                 park: tuple[float, float] = (0.0, 0.0)) -> None:  # fmt: skip
         self.name = name
         self.link = link
         self.events = events
         self.virtual = virtual
         self.configured_area = work_area
+        self.home_on_connect = home_on_connect
         self.on_ready: Callable[[Plotter], None] = lambda _: None
         self.on_job: Report = lambda _job, _save: None
-        self.runner = Runner(name, link, jobs_dir, self._job_changed, self._job_finished)
+        self.runner = Runner(name, link, jobs_dir, self._job_changed, self._job_finished,
+                             after_job=after_job, park=park)  # fmt: skip
         self._task: asyncio.Task[None] | None = None
+        self._homing: asyncio.Task[None] | None = None
         self._unsubscribe: Callable[[], None] | None = None
         self._last_machine: dict[str, Any] | None = None
         self._last_machine_sent = 0.0
@@ -67,10 +72,11 @@ class Plotter:
         if self._unsubscribe:
             self._unsubscribe()
         await self.runner.close()
-        if self._task:
-            self._task.cancel()
-            with contextlib.suppress(BaseException):
-                await self._task
+        for task in (self._homing, self._task):
+            if task:
+                task.cancel()
+                with contextlib.suppress(BaseException):
+                    await task
 
     # ---- state ----------------------------------------------------------------------
 
@@ -101,6 +107,8 @@ class Plotter:
         """Why no job can start on this plotter now, or None when one can."""
         if self.job is not None:
             return f"{self.name} runs job {self.job.id} ({self.job.name})"
+        if self.runner.busy:
+            return self.runner.busy
         state = self.state
         if state == "Disconnected":
             return f"{self.name} is not connected; check the cable or power"
@@ -146,6 +154,19 @@ class Plotter:
         self.reset_now()
         self.stopped(source)
 
+    def realtime(self, byte: bytes) -> None:
+        """A feed hold (`!`) of a moving board, or cycle start (`~`) of a held one, for a
+        board no job runs on (GRBL would take an idle board into Hold)."""
+        wanted = ("Run", "Jog") if byte == b"!" else ("Hold",)
+        if self.state not in wanted:
+            verb = "hold" if byte == b"!" else "continue"
+            raise Refused(409, f"nothing to {verb}: {self.name} is {self.state} and runs no job")
+        try:
+            self.link.realtime(byte)
+        except LinkDown as exc:
+            raise Refused(409, f"{self.name} is not connected") from exc
+        log.info("%s: %s", self.name, "feed hold" if byte == b"!" else "cycle start")
+
     def reset_now(self) -> None:
         """The emergency stop's soft reset byte, written at once."""
         self.link.estop()
@@ -171,6 +192,30 @@ class Plotter:
             raise Refused(409, f"{self.name} is not connected") from exc
         except TimeoutError as exc:
             raise Refused(409, f"the board did not answer {line!r} within {wait:g} s") from exc
+
+    async def trace_frame(self, job: Job) -> None:
+        """Pen up around the job's bounds and back to the first corner, so the user sees
+        where it will draw. The plotter takes no job meanwhile."""
+        bounds = job.bounds
+        if bounds is None:
+            raise Refused(409, f"job {job.id} has no bounds to trace")
+        if self.runner.busy:
+            raise Refused(409, self.runner.busy)
+        if self.state != READY_STATE:
+            raise Refused(409, self.not_ready() or f"{self.name} is {self.state}")
+        corners = [(bounds.min_x, bounds.min_y), (bounds.max_x, bounds.min_y),
+                   (bounds.max_x, bounds.max_y), (bounds.min_x, bounds.max_y),
+                   (bounds.min_x, bounds.min_y)]  # fmt: skip
+        lines = ["M5", *(f"G0 X{x:.3f} Y{y:.3f}" for x, y in corners), "G4 P0"]
+        self.runner.busy = f"{self.name} traces the frame of job {job.id}"
+        log.info("%s: tracing the frame of job %s", self.name, job.id)
+        try:
+            for line in lines:  # G4 P0 is answered once the carriage has stopped
+                await self.send("trace the frame", line, wait=120)
+        finally:
+            self.runner.busy = None
+            if self.state == READY_STATE:
+                self.on_ready(self)
 
     async def jog(self, dx: float, dy: float, feed: float) -> list[str]:
         if self.job is not None:
@@ -231,11 +276,28 @@ class Plotter:
         elif event.kind == "connected":
             log.info("%s connected: %s", self.name, self.link.status.firmware)
             self._send_machine(force=True)
+            if self.home_on_connect and self.job is None:
+                self._homing = asyncio.create_task(self._home(time.time()),
+                                                   name=f"home-{self.name}")  # fmt: skip
             self.on_ready(self)
         elif event.kind == "disconnected":
             log.warning("%s disconnected: %s", self.name, event.message)
             self.runner.lost()
             self._send_machine(force=True)
+
+    async def _home(self, since: float) -> None:
+        """`--home-on-connect`: home a plotter that came up in Alarm (waiting jobs follow)."""
+        for _ in range(60):  # the first status report of this connection (polled at 8 Hz)
+            if self.link.status.updated_at > since:
+                break
+            await asyncio.sleep(0.05)
+        if self.state != "Alarm" or self.job is not None:
+            return
+        log.info("%s connected in Alarm: homing (--home-on-connect)", self.name)
+        try:
+            await self.link.command("$H", timeout=HOMING_S)
+        except Exception as exc:
+            log.warning("%s: homing on connect failed: %s", self.name, exc)
 
     def _send_machine(self, force: bool = False) -> None:
         machine = self.machine()

@@ -14,11 +14,11 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
 from pathlib import Path
 
 from plotbridge.errors import Refused
-from plotbridge.jobs.model import Job
+from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
@@ -30,15 +30,36 @@ log = logging.getLogger("plotbridge.runner")
 PROGRESS_INTERVAL = 0.2  # s between job progress messages (5 Hz)
 SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
+AFTER_JOB_S = 120.0  # s a park move or a homing cycle after a job may take
 
 Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
 
 
+def layer_pauses(job: Job) -> list[int]:
+    """The program lines of the `M0`s between the job's layers (docs/INTERNALS.md, Layers)."""
+    return [int(layer["first_line"]) - 1 for layer in job.layers[1:]]
+
+
+async def _until(lines: AsyncIterator[tuple[int, str]],
+                 stop: int | None) -> AsyncIterator[tuple[int, str]]:  # fmt: skip
+    """The lines before program line `stop` (all with None); the preamble (0) passes."""
+    async with contextlib.aclosing(lines):
+        async for number, text in lines:
+            if stop is not None and number >= stop:
+                return
+            yield number, text
+
+
 class Runner:
     def __init__(self, plotter: str, link: Link, jobs_dir: Path, report: Report,
-                 finished: Callable[[Job], None]) -> None:  # fmt: skip
+                 finished: Callable[[Job], None], after_job: AfterJob = "none",
+                 park: tuple[float, float] = (0.0, 0.0)) -> None:  # fmt: skip
         self.plotter = plotter
+        self.after_job = after_job
+        self.park = park
+        self.busy: str | None = None
+        """Why the plotter takes no job although none runs (the after-the-job action)."""
         self.link = link
         self.jobs_dir = jobs_dir
         self.report = report
@@ -50,6 +71,7 @@ class Runner:
         self._last_progress = 0.0
         self._last_save = 0.0
         self._control_at = 0.0
+        self._pen_done = asyncio.Event()
 
     # ---- starting and stopping -----------------------------------------------
 
@@ -79,7 +101,17 @@ class Runner:
         return self._hold_or_go(b"!", "running", "paused")
 
     def resume(self) -> Job:
+        job = self.job
+        if job is not None and job.state == "pen_change":
+            return self._pen_loaded(job, "resumed")
         return self._hold_or_go(b"~", "paused", "running")
+
+    def _pen_loaded(self, job: Job, how: str) -> Job:
+        job.state = "running"
+        self._pen_done.set()
+        self.report(job, True)
+        log.info("job %s: pen change done (%s)", job.id, how)
+        return job
 
     async def cancel(self, job: Job) -> None:
         """Cancel the running job: what the board holds is stopped too."""
@@ -117,6 +149,10 @@ class Runner:
         job = self.job
         if job is None or not job.active:
             return
+        if job.state == "pen_change":  # the board's resume button (Pn:S) ends the change
+            if "S" in (status.pins or ""):
+                self._pen_loaded(job, "the board's resume button")
+            return
         queued = self.link.facts.queued_blocks(status.planner_free)
         if queued is not None:
             job.safe_line = first_unexecuted_line(self._motion, job.lines_done, queued,
@@ -141,17 +177,32 @@ class Runner:
         program = self.jobs_dir / job.id / "program.gcode"
         try:
             preamble = await asyncio.to_thread(resume_preamble, program, line) if line > 1 else []
-            reader = ProgramReader(program, line, preamble)
-            self._motion = reader.motion  # filled as the reader goes
-            start_time = time.time()
-            async with contextlib.aclosing(reader.lines()) as lines:
-                await self.link.stream(wire.compact_async(lines, self.link.settings), self._on_ack)
-            state = await self._wait_done(start_time)
-            if not job.active:
-                return  # settled meanwhile (estop, cancel)
+            pauses = layer_pauses(job)
+            while True:  # one layer (from `line` to the next layer's M0) at a time
+                pause = next((m0 for m0 in pauses if m0 >= line), None)
+                reader = ProgramReader(program, line, preamble)
+                self._motion, self._floor = reader.motion, line  # motion: filled as it goes
+                start_time = time.time()
+                async with contextlib.aclosing(_until(reader.lines(), pause)) as lines:
+                    await self.link.stream(wire.compact_async(lines, self.link.settings),
+                                           self._on_ack)  # fmt: skip
+                state = await self._wait_done(start_time)
+                if not job.active:
+                    return  # settled meanwhile (estop, cancel)
+                if pause is None or state != "Idle":
+                    break
+                job.lines_done = pause  # the M0 itself is not sent: the server pauses instead
+                if not await self._pen_change(job, pause):
+                    return  # stopped, cancelled or lost during the change
+                line, preamble = pause + 1, []
             if state == "Idle":
                 job.lines_done = job.lines_total
+                after = self._after_lines(job)
+                if after:
+                    action = job.after or self.after_job
+                    self.busy = f"{self.plotter} finishes job {job.id} ({action})"
                 self._finish(job, "done", None)
+                await self._after(job, after)
             elif state == "Alarm":
                 self._finish(job, "failed", f"the board raised an alarm: {self._alarm_text()}")
             else:
@@ -175,7 +226,52 @@ class Runner:
         finally:
             if self.job is job:
                 self.job = None
+            self.busy = None
             self.finished(job)
+
+    def _park_lines(self) -> list[str]:
+        """Pen up, carriage to the park position; G4 P0 is answered once it stands."""
+        x, y = self.park
+        return ["M5", f"G0 X{x:.3f} Y{y:.3f}", "G4 P0"]
+
+    def _after_lines(self, job: Job) -> list[str]:
+        """The G-code of the job's "after the job" action (the server's default if unset)."""
+        action = job.after or self.after_job
+        if action == "park":
+            return self._park_lines()
+        if action == "home":
+            return ["M5", "$H"]
+        return []
+
+    async def _pen_change(self, job: Job, pause: int) -> bool:
+        """Between layers: pen up, carriage parked, the job `pen_change` until it is
+        resumed (UI, REST, WebSocket, or the board's resume button). False when the job
+        ended meanwhile (emergency stop, cancel, link lost)."""
+        for line in self._park_lines():
+            await self.link.command(line, timeout=AFTER_JOB_S)
+        index = next(i for i, layer in enumerate(job.layers) if layer["first_line"] - 1 == pause)
+        layer = job.layers[index]
+        name, colour = layer.get("name") or f"layer {index + 1}", layer.get("colour") or ""
+        message = (f"Layer {index + 1} of {len(job.layers)}, '{name}': load its pen"
+                   + (f" ({colour})" if colour else "") + ", then continue")  # fmt: skip
+        job.state = "pen_change"
+        job.pen_change = {"layer": index + 1, "layers": len(job.layers), "name": name,
+                          "colour": colour, "message": message}  # fmt: skip
+        self._progress(job)
+        self.report(job, True)
+        log.info("job %s: pen change before layer %d (%s)", job.id, index + 1, name)
+        self._pen_done.clear()
+        await self._pen_done.wait()  # resumed, or the job ended (_finish)
+        job.pen_change = None
+        return job.state == "running"
+
+    async def _after(self, job: Job, lines: list[str]) -> None:
+        for line in lines:
+            try:
+                await self.link.command(line, timeout=AFTER_JOB_S)
+            except Exception as exc:  # the job is done; the board says what went wrong
+                log.warning("after job %s: %s failed: %s", job.id, line, exc)
+                return
 
     async def _wait_done(self, since: float) -> str:
         """After the last ok: wait until the board is Idle (or fails)."""
@@ -248,6 +344,7 @@ class Runner:
         job.state = state  # type: ignore[assignment]
         job.error = error
         job.finished_at = time.time()
+        self._pen_done.set()
         self._progress(job)
         if state == "done":
             job.eta_s = 0.0

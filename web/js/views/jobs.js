@@ -8,14 +8,18 @@ import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
 const RESUMABLE = new Set(["paused", "interrupted", "stopped"]);
 const DELETABLE = new Set(["queued", "done", "failed", "cancelled", "stopped", "interrupted"]);
 const STARTABLE = new Set(["queued", "done", "failed", "cancelled"]);
+// A job started while another runs (or the machine is not ready) waits for its turn.
+const CANCELLABLE = new Set(["running", "paused", "pen_change", "interrupted", "waiting"]);
 
 /** Which buttons a job row offers, in the order shown. Pure. */
 export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
   const b = [];
-  if (STARTABLE.has(job.state)) b.push({ verb: "start", label: "Start", disabled: anyActive });
+  if (STARTABLE.has(job.state)) b.push({ verb: "start", label: anyActive ? "Start next" : "Start" });
   if (job.state === "running") b.push({ verb: "pause", label: "Pause" });
+  if (job.state === "pen_change") b.push({ verb: "resume", label: "Continue", aria: "Pen loaded: continue" });
   if (RESUMABLE.has(job.state)) b.push({ verb: "resume", label: "Resume", disabled: anyActive && job.state !== "paused" });
-  if (ACTIVE_JOB_STATES.has(job.state) || job.state === "interrupted") b.push({ verb: "cancel", label: "Cancel" });
+  if (CANCELLABLE.has(job.state)) b.push({ verb: "cancel", label: "Cancel" });
+  if (job.bounds && !ACTIVE_JOB_STATES.has(job.state)) b.push({ verb: "frame", label: "Frame", aria: "Trace the frame (pen up)", disabled: anyActive });
   if (waitingIndex >= 0) {
     b.push({ verb: "up", label: "↑", aria: "Move up", disabled: waitingIndex === 0 });
     b.push({ verb: "down", label: "↓", aria: "Move down", disabled: waitingIndex === waitingCount - 1 });

@@ -2,7 +2,7 @@
 
 import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
 import { ALARMS, mm } from "../format.js";
-import { estopConfirmed } from "../store.js";
+import { estopConfirmed, holdAction } from "../store.js";
 
 function machineLabel(m) {
   if (!m) return "…";
@@ -48,6 +48,12 @@ export function bannersFor(state) {
     });
   }
   for (const job of state.jobs) {
+    if (job.state === "pen_change" && job.pen_change) {
+      out.push({
+        key: `pen-${job.id}`, level: "warn", text: `“${job.name}”: ${job.pen_change.message}.`,
+        actions: [{ label: "Continue", action: "resume-job", id: job.id }],
+      });
+    }
     if (job.state === "interrupted") {
       out.push({
         key: `int-${job.id}`, level: "warn",
@@ -67,6 +73,15 @@ export function bindMachine(actions) {
   $("#estop-home").addEventListener("click", () => actions.home());
   $("#estop-unlock").addEventListener("click", () => actions.unlock());
   $("#estop-close").addEventListener("click", () => actions.dismissEstop());
+  $("#hold").addEventListener("click", () => actions.holdOrContinue());
+  document.addEventListener("keydown", (e) => {
+    // H (or the Pause key) holds or continues; never while typing in a field
+    if ((e.key !== "h" && e.key !== "H" && e.key !== "Pause") || e.ctrlKey || e.metaKey || e.altKey) return;
+    if (e.target.closest && e.target.closest("input, textarea, select, [contenteditable]")) return;
+    if (e.repeat) return;
+    e.preventDefault();
+    actions.holdOrContinue();
+  });
 }
 
 export function renderMachine(state) {
@@ -99,6 +114,16 @@ export function renderMachine(state) {
     });
 
   renderEstop(state);
+  renderHold(state);
+}
+
+/** The big Hold/Continue button: stays focusable (aria-disabled) when there is nothing to hold. */
+function renderHold(state) {
+  const what = holdAction(state);
+  const button = $("#hold");
+  setText(button, what === "continue" ? "CONTINUE" : "HOLD");
+  setAttr(button, "data-action", what || "");
+  setAttr(button, "aria-disabled", String(!what));
 }
 
 function renderEstop(state) {

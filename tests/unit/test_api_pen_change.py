@@ -1,0 +1,99 @@
+"""Pen changes between a job's layers: the real app around the scripted fake link."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+from plotbridge.jobs.imports import Importer
+from plotbridge.jobs.model import Imported
+
+from tests.unit.test_api import make_app, serving, settle, upload
+
+LAYER = ["G0 X{x} Y0", "M3", "G1 X{x2} Y0 F3000", "M5"]
+
+
+def layered_program() -> tuple[list[str], list[dict]]:
+    """Three layers of one stroke each, an M0 between them (docs/INTERNALS.md, Layers)."""
+    program = ["G21", "G90", "M5"]
+    layers = []
+    for index, (name, colour) in enumerate((("a", "#000000"), ("b", "#ff0000"),
+                                            ("c", "#0000ff"))):  # fmt: skip
+        if index:
+            program.append("M0")
+        first = len(program) + 1 if index else 1
+        program += [line.format(x=10 * index, x2=10 * index + 5) for line in LAYER]
+        layers.append({"name": name, "colour": colour, "first_line": first,
+                       "last_line": len(program), "strokes": 1, "pen_down_mm": 5.0,
+                       "estimate_s": 1.0})  # fmt: skip
+    return program, layers
+
+
+async def layered_import(self, kind, source, filename, dest, options):
+    program, layers = layered_program()
+    Path(dest, "program.gcode").write_text("\n".join(program) + "\n")  # noqa: ASYNC240
+    Path(dest, "preview.json").write_text(json.dumps({"strokes": []}))  # noqa: ASYNC240
+    return Imported.of(SimpleNamespace(
+        format="svg", lines_total=len(program), estimate_s=3.0,
+        bounds={"min_x": 0, "min_y": 0, "max_x": 25, "max_y": 0},
+        stats={"pen_down_mm": 15.0}, timeline=[(len(program), 3.0)], layers=layers,
+    ))  # fmt: skip
+
+
+async def test_pen_change_parks_prompts_and_continues(tmp_path, monkeypatch):
+    monkeypatch.setattr(Importer, "_import", layered_import)
+    program, layers = layered_program()
+    app, link = make_app(tmp_path, park=(2.0, 3.0))
+    link.auto_ack = True
+    async with serving(app) as client:
+        queue = app.state.components.queue
+        job = (await upload(client, start="true")).json()
+        await settle(lambda: queue.jobs[job["id"]].state == "pen_change")
+        changing = (await client.get(f"/api/jobs/{job['id']}")).json()
+        prompt = changing["pen_change"]
+        assert prompt["layer"] == 2 and prompt["layers"] == 3 and prompt["name"] == "b"
+        assert prompt["message"].startswith("Layer 2 of 3, 'b'") and "#ff0000" in prompt["message"]
+        first_m0 = layers[1]["first_line"] - 1
+        assert [n for n, _ in link.streamed] == list(range(1, first_m0))  # not the M0
+        assert link.commands == ["M5", "G0 X2.000 Y3.000", "G4 P0"]  # pen up, parked
+        assert changing["lines_done"] == first_m0
+        # nothing else may take the plotter meanwhile
+        other = (await upload(client, start="true")).json()
+        assert other["state"] == "waiting"
+
+        resumed = await client.post(f"/api/jobs/{job['id']}/resume")  # the UI's Continue
+        assert resumed.status_code == 200 and resumed.json()["state"] == "running"
+        await settle(lambda: queue.jobs[job["id"]].state == "pen_change")
+        assert queue.jobs[job["id"]].pen_change["layer"] == 3
+        link.set_state("Idle", pins="S")  # the board's resume button
+        await settle(lambda: queue.jobs[job["id"]].state == "done")
+        m0s = {layer["first_line"] - 1 for layer in layers[1:]}
+        mine = [n for n, _ in link.streamed][: len(program) - len(m0s)]
+        assert mine == [n for n in range(1, len(program) + 1) if n not in m0s]
+        assert queue.jobs[job["id"]].pen_change is None
+        await settle(lambda: queue.jobs[other["id"]].state == "pen_change")  # the next job
+
+
+async def test_stop_during_a_pen_change_makes_the_job_resumable(tmp_path, monkeypatch):
+    monkeypatch.setattr(Importer, "_import", layered_import)
+    app, link = make_app(tmp_path)
+    link.auto_ack = True
+    async with serving(app) as client:
+        queue = app.state.components.queue
+        job = (await upload(client, start="true")).json()
+        await settle(lambda: queue.jobs[job["id"]].state == "pen_change")
+        assert (await client.post("/api/machine/estop")).status_code == 202
+        await settle(lambda: queue.first.job is None and queue.first.runner.busy is None)
+        stopped = queue.jobs[job["id"]]
+        assert stopped.state == "stopped" and stopped.resume_line is not None
+
+
+def test_the_progress_label_shows_the_pen_change_prompt():
+    from plotbridge.progress import describe
+
+    job = {"state": "pen_change", "pen_change": {"message": "Layer 2 of 3, 'b': load its pen"}}
+    assert describe("d.svg", job) == "d.svg [pen_change]: Layer 2 of 3, 'b': load its pen"
+    assert describe("d.svg", {"state": "waiting", "waiting": "plotter1 is in Alarm"}).endswith(
+        ": plotter1 is in Alarm")
+    assert describe("d.svg", {"state": "running"}) == "d.svg [running]"
