@@ -21,6 +21,8 @@ pytestmark = pytest.mark.e2e
 
 FEED = 3000  # mm/min in the test drawings
 TOLERANCE = 0.15  # mm: a step is 0.0125 mm; the trace keeps vertices bending > ~1 step
+STEP_MM = 1 / 80
+ESTOP_REDRAW_MM = 2 * STEP_MM  # one step, and one more for the trace's rounding of the ends
 
 
 def drawing(circles: int = 1, radius: float = 15.0, segments: int = 72) -> str:
@@ -118,8 +120,19 @@ def _assert_stopped(server, plotter, job_id: str, sent_at: float) -> None:
     assert plotter.trace()["steps"] == trace["steps"]
 
 
+def drawn_once_mm(server, plotter, gcode: str) -> float:
+    """The pen-down length the simulator traces for `gcode` plotted without a stop: the
+    reference a resumed plot's trace is measured against (the trace's own rounding of
+    the vertices is the same in both)."""
+    plotter.clear()
+    job = submit(server, gcode)
+    assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
+    return plotter.trace()["draw_mm"]
+
+
 def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
+    once = drawn_once_mm(server, plotter, drawing(circles=6))
     plotter.clear()
     job = submit(server, drawing(circles=6))
     server.wait_progress(job["id"], 40)
@@ -135,7 +148,13 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
     assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
-    assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
+    expected = preview(server, job["id"])["strokes"]
+    trace = plotter.trace()
+    assert_same_drawing(expected, trace["strokes"])
+    # resumed where the steps stopped (the first report after the reset tells it)
+    redrawn = trace["draw_mm"] - once
+    print(f"estop: {redrawn:.4f} mm drawn twice (allowed {ESTOP_REDRAW_MM})")
+    assert redrawn <= ESTOP_REDRAW_MM, f"{redrawn:.3f} mm drawn twice"
 
 
 def test_estop_does_not_wait_for_an_import(server, plotter):

@@ -36,6 +36,7 @@ class FakeLink:
 
     def __init__(self, device: str = "/dev/fake") -> None:
         self.device = device
+        self.poll_hz = 8.0
         self.facts = BoardFacts()
         self.status = MachineStatus(
             connected=True, state="Idle", x=0.0, y=0.0, pen="up", firmware="1.1h", alarm=None,

@@ -23,13 +23,15 @@ from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the impo
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
 from plotbridge.program.reader import ProgramReader
-from plotbridge.resume import first_unexecuted_line, resume_preamble
+from plotbridge.resume import Mark, ResumePoint, first_unexecuted_line, locate, resume_preamble
 
 log = logging.getLogger("plotbridge.runner")
 
 PROGRESS_INTERVAL = 0.2  # s between job progress messages (5 Hz)
 SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
+JOB_POLL_HZ = 15.0  # status reports while a job runs: a lost link redraws at most 1/15 s
+MARK_FILE = "resume.mark"  # in the job folder: the last report's line range and position
 
 Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
@@ -50,6 +52,12 @@ class Runner:
         self._last_progress = 0.0
         self._last_save = 0.0
         self._control_at = 0.0
+        self._mark: Mark | None = None        # the last report's, for the job streaming
+        self._unsaved_mark: Mark | None = None
+        self._mark_writer: asyncio.Task[None] | None = None
+        self._stopped_job: Job | None = None  # waits for the exact position after a reset
+        self._stopped_at = 0.0
+        self._idle_poll_hz = link.poll_hz
 
     # ---- starting and stopping -----------------------------------------------
 
@@ -64,6 +72,9 @@ class Runner:
             job.lines_done, job.progress, job.resume_line = 0, 0.0, None
         self._floor = line
         self._motion = bytearray()
+        self._mark = None
+        self._stopped_job = None
+        self.link.poll_hz = JOB_POLL_HZ
         self.report(job, True)
         log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
                  "resumed" if resumed else "started", self.plotter, line)  # fmt: skip
@@ -91,8 +102,7 @@ class Runner:
         """After an emergency stop: the job (if any) is `stopped`, resumable."""
         job = self.job
         if job is not None and job.active:
-            job.resume_line = self._resume_line(job)
-            self._finish(job, "stopped", "emergency stop")
+            self._estopped(job)
 
     def lost(self) -> None:
         """The plotter dropped out: its job is `interrupted`, resumable."""
@@ -116,12 +126,42 @@ class Runner:
     def on_status(self, status: MachineStatus) -> None:
         job = self.job
         if job is None or not job.active:
+            self._exact_stop(status)
             return
         queued = self.link.facts.queued_blocks(status.planner_free)
         if queued is not None:
             job.safe_line = first_unexecuted_line(self._motion, job.lines_done, queued,
                                                   self._floor)  # fmt: skip
+            if status.x is not None and status.y is not None:
+                self._keep_mark(job, Mark(job.safe_line, job.lines_done, status.x, status.y))
         self._follow_buttons(job, status.state)
+
+    def _exact_stop(self, status: MachineStatus) -> None:
+        """The first report after an emergency stop's reset: where the steps stopped."""
+        job = self._stopped_job
+        if (job is None or job.state != "stopped" or status.updated_at <= self._stopped_at
+                or status.state not in ("Alarm", "Idle") or status.x is None
+                or status.y is None or self._mark is None):
+            return
+        self._stopped_job = None
+        self._keep_mark(job, Mark(self._mark.first, job.lines_done, status.x, status.y))
+
+    def _keep_mark(self, job: Job, mark: Mark) -> None:
+        """Remember the mark and write it to the job folder, one write at a time (the
+        latest wins: a report that comes while a write is under way waits for it)."""
+        self._mark = mark
+        self._unsaved_mark = mark
+        if self._mark_writer is None or self._mark_writer.done():
+            path = self.jobs_dir / job.id / MARK_FILE
+            self._mark_writer = asyncio.get_running_loop().create_task(self._write_marks(path))
+
+    async def _write_marks(self, path: Path) -> None:
+        while self._unsaved_mark is not None:
+            mark, self._unsaved_mark = self._unsaved_mark, None
+            try:
+                await asyncio.to_thread(mark.save, path)
+            except OSError as exc:
+                log.warning("could not keep the resume mark in %s: %s", path, exc)
 
     def _follow_buttons(self, job: Job, state: str) -> None:
         """The board's pause and resume buttons change the job state too."""
@@ -140,7 +180,8 @@ class Runner:
     async def _run(self, job: Job, line: int) -> None:
         program = self.jobs_dir / job.id / "program.gcode"
         try:
-            preamble = await asyncio.to_thread(resume_preamble, program, line) if line > 1 else []
+            line, preamble = await asyncio.to_thread(self._preamble, job, program, line)
+            self._floor = line
             reader = ProgramReader(program, line, preamble)
             self._motion = reader.motion  # filled as the reader goes
             start_time = time.time()
@@ -173,9 +214,27 @@ class Runner:
                 with contextlib.suppress(Exception):
                     await self.halt()
         finally:
+            self.link.poll_hz = self._idle_poll_hz
             if self.job is job:
                 self.job = None
             self.finished(job)
+
+    def _preamble(self, job: Job, program: Path, line: int) -> tuple[int, list[str]]:
+        """What goes before program line `line` (blocking): nothing from the start (the
+        last run's mark goes); on a resume, the way to the point where the pen stopped
+        when the last run's mark tells it, else to the start of `line`."""
+        path = self.jobs_dir / job.id / MARK_FILE
+        mark = Mark.load(path)
+        if line <= 1:
+            path.unlink(missing_ok=True)
+            return 1, []
+        point = locate(program, mark) if mark is not None else ResumePoint(line)
+        if point.at is None:  # two safe bounds: the later wins
+            point = ResumePoint(max(point.line, line))
+        if point.line != line:
+            log.info("job %s resumes at line %d, at %s (conservative line %d)",
+                     job.id, point.line, point.at, line)  # fmt: skip
+        return point.line, resume_preamble(program, point)
 
     async def _wait_done(self, since: float) -> str:
         """After the last ok: wait until the board is Idle (or fails)."""
@@ -214,13 +273,17 @@ class Runner:
         if exc.reason == "disconnected":
             self._interrupt(job)
         elif exc.reason == "estop":
-            job.resume_line = self._resume_line(job)
-            self._finish(job, "stopped", "emergency stop")
+            self._estopped(job)
         elif exc.reason == "cancelled":
             self._finish(job, "cancelled", None)
         else:  # error or alarm from the board
             line = exc.error_line or job.lines_done + 1
             self._finish(job, "failed", f"line {line}: {exc.message or exc}")
+
+    def _estopped(self, job: Job) -> None:
+        job.resume_line = self._resume_line(job)
+        self._stopped_job, self._stopped_at = job, time.time()
+        self._finish(job, "stopped", "emergency stop")
 
     def _interrupt(self, job: Job) -> None:
         if not job.active:
