@@ -182,6 +182,20 @@ class JobQueue:
             log.info("job %s waits: %s", job.id, reason)
         return job
 
+    def restart(self, job_id: str, target: str | None = None) -> Job:
+        """Start a finished job (stopped, interrupted, failed...) again from its first line,
+        without a new upload; refused, it keeps its resume line."""
+        job = self.get(job_id)
+        if job.active or job.state in ("queued", "waiting"):
+            raise Refused(409, f"job {job_id} is {job.state}: start it instead")
+        kept = job.resume_line
+        job.resume_line = None
+        try:
+            return self.start(job_id, target)
+        except Refused:
+            job.resume_line = kept
+            raise
+
     def dispatch(self) -> None:
         """Start what waits (and, with auto-start, what is queued) on free plotters, in order."""
         for job in list(self.jobs.values()):

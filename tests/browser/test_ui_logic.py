@@ -135,6 +135,8 @@ def test_job_buttons_follow_the_state(modules):
           verbs(m.jobButtons({state: 'paused'}, -1, 0, true)),
           verbs(m.jobButtons({state: 'stopped'}, -1, 0, false)),
           verbs(m.jobButtons({state: 'done'}, -1, 0, false)),
+          verbs(m.jobButtons({state: 'interrupted'}, -1, 0, false)),
+          verbs(m.jobButtons({state: 'failed'}, -1, 0, true)),
         ];
     """)
     assert got == [
@@ -142,8 +144,10 @@ def test_job_buttons_follow_the_state(modules):
         ["start-", "up", "down-", "delete"],
         ["pause", "cancel"],
         ["resume", "cancel"],
-        ["resume", "delete"],
+        ["resume", "restart", "delete"],
         ["start", "delete"],
+        ["resume", "restart", "cancel", "delete"],
+        ["restart-", "delete"],
     ]
 
 

@@ -772,3 +772,32 @@ def test_leftovers_of_a_crash_are_removed_at_start(tmp_path):
     make_app(tmp_path)
     assert list((tmp_path / "jobs").iterdir()) == []
     assert list((tmp_path / "tmp").iterdir()) == []
+
+
+async def test_restart_runs_an_interrupted_job_from_its_first_line(api):
+    from plotbridge.plotter.link import StreamAborted
+
+    job = (await upload(api.client)).json()
+    jid = job["id"]
+    await api.client.post(f"/api/jobs/{jid}/start")
+    for _ in range(12):
+        api.link.step()
+        await asyncio.sleep(0.01)
+    api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
+    await settle(lambda: api.queue.jobs[jid].state == "interrupted")
+    kept = api.queue.jobs[jid].resume_line
+    api.link.set_state("Alarm", planner_free=15)
+    refused = await api.client.post(f"/api/jobs/{jid}/restart")  # the plotter is not ready
+    assert refused.status_code == 409
+    assert kept and api.queue.jobs[jid].resume_line == kept, "a refused restart keeps it"
+    api.link.set_state("Idle", planner_free=15)
+    api.link.auto_ack = True
+    sent = len(api.link.streamed)
+    response = await api.client.post(f"/api/jobs/{jid}/restart")
+    assert response.status_code == 200, response.text
+    await settle(lambda: api.queue.jobs[jid].state == "done")
+    again = api.link.streamed[sent:]
+    assert again[0][0] == 1 and all(n != 0 for n, _ in again), "no resume preamble"
+    assert [n for n, _ in again] == list(range(1, len(again) + 1))
+    # a running job cannot be restarted; an unknown one is 404
+    assert (await api.client.post("/api/jobs/nope/restart")).status_code == 404

@@ -89,6 +89,12 @@ async def start_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, 
     return c.queue.start(job_id, plotter).public()
 
 
+@router.post("/jobs/{job_id}/restart", response_model=Job)
+async def restart_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
+    """A stopped, interrupted, failed (or done) job again from its first line."""
+    return c.queue.restart(job_id, plotter).public()
+
+
 @router.post("/jobs/{job_id}/pause", response_model=Job)
 async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
     return c.queue.pause(job_id).public()

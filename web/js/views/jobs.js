@@ -7,7 +7,9 @@ import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
 // The server resumes stopped and interrupted jobs from their resume line.
 const RESUMABLE = new Set(["paused", "interrupted", "stopped"]);
 const DELETABLE = new Set(["queued", "done", "failed", "cancelled", "stopped", "interrupted"]);
-const STARTABLE = new Set(["queued", "done", "failed", "cancelled"]);
+const STARTABLE = new Set(["queued", "done", "cancelled"]);
+// Started again from the first line, without a new upload.
+const RESTARTABLE = new Set(["stopped", "interrupted", "failed"]);
 
 /** Which buttons a job row offers, in the order shown. Pure. */
 export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
@@ -15,6 +17,7 @@ export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
   if (STARTABLE.has(job.state)) b.push({ verb: "start", label: "Start", disabled: anyActive });
   if (job.state === "running") b.push({ verb: "pause", label: "Pause" });
   if (RESUMABLE.has(job.state)) b.push({ verb: "resume", label: "Resume", disabled: anyActive && job.state !== "paused" });
+  if (RESTARTABLE.has(job.state)) b.push({ verb: "restart", label: "Restart from the beginning", disabled: anyActive });
   if (ACTIVE_JOB_STATES.has(job.state) || job.state === "interrupted") b.push({ verb: "cancel", label: "Cancel" });
   if (waitingIndex >= 0) {
     b.push({ verb: "up", label: "↑", aria: "Move up", disabled: waitingIndex === 0 });
