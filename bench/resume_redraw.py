@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import shutil
+import signal
 import sys
 import tempfile
 import time
@@ -128,6 +129,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--sim-speed", type=float, default=1.0)
     args = parser.parse_args()
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # the servers' finally blocks run
     failed = False
     for name, gcode in (("long strokes", long_strokes()), ("0.5 mm segments", short_segments())):
         for kind, target in TARGETS.items():

@@ -240,8 +240,8 @@ class JobQueue:
         return previous is None or previous is plotter or previous.work_area == plotter.work_area
 
     def _begin(self, job: Job, plotter: Plotter) -> None:
-        line = (job.resume_line or 1) if job.state in RESUMABLE else 1
-        plotter.runner.begin(job, line)
+        resume = job.state in RESUMABLE and job.resume_line is not None
+        plotter.runner.begin(job, (job.resume_line or 1) if resume else 1, resume)
 
     # ---- control -------------------------------------------------------------------------
 

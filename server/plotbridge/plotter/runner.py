@@ -61,9 +61,9 @@ class Runner:
 
     # ---- starting and stopping -----------------------------------------------
 
-    def begin(self, job: Job, line: int) -> None:
-        """Start streaming `job` from `line` (1: from the start; more: a resume)."""
-        resumed = line > 1
+    def begin(self, job: Job, line: int, resumed: bool = False) -> None:
+        """Start streaming `job` from its start, or resume it (from where the last run's
+        mark shows the pen stopped, else from `line`)."""
         self.job = job
         job.state, job.error, job.waiting = "running", None, None
         job.plotter = self.plotter
@@ -78,7 +78,8 @@ class Runner:
         self.report(job, True)
         log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
                  "resumed" if resumed else "started", self.plotter, line)  # fmt: skip
-        self._task = asyncio.create_task(self._run(job, line), name=f"run-{self.plotter}")
+        self._task = asyncio.create_task(self._run(job, line, resumed),
+                                         name=f"run-{self.plotter}")  # fmt: skip
 
     async def close(self) -> None:
         if self._task:
@@ -177,10 +178,11 @@ class Runner:
 
     # ---- streaming -------------------------------------------------------------------
 
-    async def _run(self, job: Job, line: int) -> None:
+    async def _run(self, job: Job, line: int, resumed: bool) -> None:
         program = self.jobs_dir / job.id / "program.gcode"
         try:
-            line, preamble = await asyncio.to_thread(self._preamble, job, program, line)
+            line, preamble = await asyncio.to_thread(self._preamble, job, program, line,
+                                                     resumed)  # fmt: skip
             self._floor = line
             reader = ProgramReader(program, line, preamble)
             self._motion = reader.motion  # filled as the reader goes
@@ -219,13 +221,14 @@ class Runner:
                 self.job = None
             self.finished(job)
 
-    def _preamble(self, job: Job, program: Path, line: int) -> tuple[int, list[str]]:
+    def _preamble(self, job: Job, program: Path, line: int,
+                  resumed: bool) -> tuple[int, list[str]]:  # fmt: skip
         """What goes before program line `line` (blocking): nothing from the start (the
         last run's mark goes); on a resume, the way to the point where the pen stopped
         when the last run's mark tells it, else to the start of `line`."""
         path = self.jobs_dir / job.id / MARK_FILE
         mark = Mark.load(path)
-        if line <= 1:
+        if not resumed:
             path.unlink(missing_ok=True)
             return 1, []
         point = locate(program, mark) if mark is not None else ResumePoint(line)
