@@ -5,6 +5,7 @@ on a 360 x 740 phone; refused uploads; the 200,000-point preview's frame time.""
 from __future__ import annotations
 
 import math
+import os
 import time
 
 import pytest
@@ -415,6 +416,27 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     b = page.evaluate("window.plotbridge.preview.geom.bounds")
     assert 9 < b["minX"] and b["maxX"] < 139 and 9 < b["minY"] and b["maxY"] < 201, b
     screenshot(page, "desktop-placement")
+    # a 180° turn keeps the bounds: the preview drawn must still be the new one, not the
+    # browser's cached copy of the old (the endpoint is no-cache with a changing ETag)
+    evil_id = job_id(page, evil)
+    preview_file = server.data_dir / "jobs" / evil_id / "preview.json"
+    hour_ago = time.time() - 3600
+    os.utime(preview_file, (hour_ago, hour_ago))  # an hour old: heuristically fresh for long
+    page.evaluate(
+        "async (id) => { const {api} = await import('/js/api.js');"
+        " await api.get(`/api/jobs/${id}/preview`); }", evil_id
+    )  # the browser caches that copy, as the preview of an old job would be
+    first = page.evaluate(
+        "() => Array.from(window.plotbridge.preview.geom.strokes.coords.slice(0, 2))"
+    )
+    page.select_option("#placement select[name=rotate]", "180")
+    page.wait_for_function(
+        """(p) => {
+            const c = window.plotbridge.preview.geom?.strokes.coords;
+            return !!c && (Math.abs(c[0] - p[0]) > 1 || Math.abs(c[1] - p[1]) > 1);
+        }""",
+        arg=first,
+    )
     # a paper larger than the work area is refused with the reason, the job is kept as it was
     page.select_option("#placement select[name=paper]", "A3")
     page.wait_for_function("() => document.querySelector('#place-error').textContent !== ''")

@@ -671,10 +671,16 @@ async def test_settings_and_jog_refuse_non_finite_numbers(api):
 
 async def test_patch_renames_and_reimports_queued_job(api):
     job = (await upload(api.client)).json()
+    first = await api.client.get(f"/api/jobs/{job['id']}/preview")
+    assert first.headers["cache-control"] == "no-cache" and first.headers["etag"]
     response = await api.client.patch(
         f"/api/jobs/{job['id']}", json={"name": "renamed", "placement": {"rotate": 90}}
     )
     assert response.status_code == 200
+    # the preview is never served stale: the re-import gives it a new validator
+    second = await api.client.get(f"/api/jobs/{job['id']}/preview",
+                                  headers={"If-None-Match": first.headers["etag"]})  # fmt: skip
+    assert second.status_code == 200 and second.headers["etag"] != first.headers["etag"]
     assert response.json()["name"] == "renamed" and response.json()["placement"]["rotate"] == 90
     bad = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"rotate": 45}})
     assert bad.status_code == 422

@@ -121,7 +121,10 @@ async def preview(job_id: str, c: Parts) -> Response:
     path = c.queue.preview_path(job_id)
     if not path.exists():
         raise Refused(404, f"job {job_id} has no preview")
-    return FileResponse(path, media_type="application/json")
+    # A placement change rewrites the file, so its ETag (mtime, size) changes; no-cache
+    # makes the browser ask every time instead of drawing a stale preview from its cache.
+    return FileResponse(path, media_type="application/json",
+                        headers={"Cache-Control": "no-cache"})  # fmt: skip
 
 
 @router.get("/patterns")
