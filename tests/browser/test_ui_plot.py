@@ -468,6 +468,25 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
         assert fallback_ms <= elapsed < fallback_ms + 700, elapsed
         page.evaluate("() => { WebSocket.prototype.send = window.__send; }")
 
+    # Esc in a text field leaves the field and never stops; outside it, it stops
+    page.click("#estop-close")
+    page.evaluate("""() => {
+        window.__estops = 0;
+        const send = WebSocket.prototype.send;
+        WebSocket.prototype.send = function (data) {
+            if (String(data).includes('"estop"')) window.__estops += 1;
+            return send.call(this, data);
+        };
+    }""")
+    page.focus("#placement input[name=margin]")
+    page.keyboard.press("Escape")
+    assert page.evaluate("document.activeElement.name") != "margin"  # left the field
+    page.keyboard.press("Escape")  # now the stop key: events come in order
+    page.wait_for_function("() => window.__estops >= 1")
+    assert page.evaluate("window.__estops") == 1
+    page.wait_for_selector("#estop-panel:not([hidden])")
+    page.evaluate("() => { WebSocket.prototype.send = window.__send; }")
+
     # the live connection drops with the server and comes back by itself
     page.click("#estop-close")
     page.evaluate("""() => {
