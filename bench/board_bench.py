@@ -1,11 +1,13 @@
 """Per board profile: flash and RAM against the chip budget, the sustained
 step rate (step/dir) or phase rate (four-wire) with no late step, and lines
-per second of 0.5 mm segments. Figures in simulated time (plotsim, unthrottled).
+per second of 0.5 mm segments. Figures in simulated time (plotsim).
 
 - size: avr-size of `make BOARD=NAME` (text+data flash, data+bss RAM);
 - rate: one long X move commanded at the target rate, acceleration high; the
-  cruise is sampled from plotsim's trace in windows, and a window below the
-  commanded rate (by more than one step) is a late step;
+  cruise is sampled from plotsim's trace in windows, and a window more than
+  one step behind the commanded rate is a late step (a window's edges fall
+  between steps, so one step is the resolution; the lowest window rate is
+  printed as well);
 - lines/s: 1000 G1 segments of 0.5 mm around a circle, streamed with GRBL
   character counting (128 bytes), between the first and last ok.
 
@@ -55,8 +57,8 @@ def sizes(elf: Path) -> tuple[int, int]:
     return sec["text"] + sec["data"], sec["data"] + sec.get("bss", 0)
 
 
-def start(board: str, elf: Path, tmp: Path) -> tuple[Plotter, Grbl]:
-    p = Plotter(PLOTSIM, elf, tmp / f"{board}.ee", 0, (0, 0),
+def start(board: str, elf: Path, tmp: Path, speed: float) -> tuple[Plotter, Grbl]:
+    p = Plotter(PLOTSIM, elf, tmp / f"{board}-{speed:g}.ee", speed, (0, 0),
                 ["--board", board, "--width", "100000", "--height", "100000",
                  "--max-step-rate", "1000000"]).start()
     g = Grbl(p.port)
@@ -107,8 +109,10 @@ def lines_per_s(p: Plotter, g: Grbl, spm: float, max_feed: float) -> float:
     per_turn = int(2 * math.pi * r / 0.5)
     g.ok(f"G0 X{100 + r:.2f} Y100")
     g.ok("G4 P0")
-    lines = [f"G1 X{100 + r * math.cos(2 * math.pi * k / per_turn):.2f}"
-             f"Y{100 + r * math.sin(2 * math.pi * k / per_turn):.2f}F{max_feed:.0f}"
+    g.ok(f"G1 F{max_feed:.0f}")
+    # short modal lines, as senders stream them
+    lines = [f"X{100 + r * math.cos(2 * math.pi * k / per_turn):.2f}"
+             f"Y{100 + r * math.sin(2 * math.pi * k / per_turn):.2f}"
              for k in range(1, n + 1)]
     inflight: list[int] = []
     t_first = t_last = None
@@ -143,11 +147,17 @@ def main() -> int:
             (flash_max, ram_max), spm, drive = BOARDS[board]
             elf = build(board)
             flash, ram = sizes(elf)
-            p, g = start(board, elf, Path(d))
+            hz = TARGET_HZ[drive]
+            p, g = start(board, elf, Path(d), 0)  # unthrottled: only simulated time counts
             try:
-                hz = TARGET_HZ[drive]
                 low, short = step_rate(p, g, spm, hz)
-                # the drive's own limit sets the feed for the line test
+            finally:
+                g.close()
+                p.cleanup()
+            # real time, so this script's own latency between lines costs the
+            # firmware no simulated time; the drive's own limit sets the feed
+            p, g = start(board, elf, Path(d), 1)
+            try:
                 lps = lines_per_s(p, g, spm, min(12000, 0.8 * hz / spm * 60))
             finally:
                 g.close()
@@ -157,7 +167,7 @@ def main() -> int:
                 (f"flash <= {flash_max} B", f"{flash} B", flash <= flash_max),
                 (f"RAM <= {ram_max} B", f"{ram} B", ram <= ram_max),
                 (f"{what} {hz} Hz/axis, no late step", f"lowest window {low:.0f} Hz, "
-                 f"{short} short windows", short == 0 and low >= hz * 0.995),
+                 f"{short} short windows", short == 0),
                 (f"0.5 mm segments >= {TARGET_LINES_S} lines/s", f"{lps:.0f} lines/s",
                  lps >= TARGET_LINES_S),
             ]

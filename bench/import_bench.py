@@ -6,9 +6,15 @@
     `linemerge linesort` on the same generated SVGs (target: travel no worse,
     time no slower);
 (c) estimate against the virtual plotter's simulated plot time on five drawings of
-    different character (target: within 2% each).
+    different character (target: within 2% each);
+(d) SVG import speed per drawing (vpype's benchmark drawings from --vpype-drawings DIR,
+    a checkout's tests/data/test_svg/benchmark; else generated ones of the same kinds):
+    our SVG stage (parse, resolve, flatten) against vpype's `read` (target: no slower),
+    and our whole import (parse, optimize, estimate, preview) against vpype's
+    `read linemerge linesort` (target: within 2x).
 
-Usage: python bench/import_bench.py [--lines N] [--skip a,b,c] [--sim-speed X]
+Usage: python bench/import_bench.py [--lines N] [--skip a,b,c,d] [--sim-speed X]
+                                    [--vpype-drawings DIR]
 """
 
 from __future__ import annotations
@@ -203,7 +209,7 @@ def bench_vs_vpype(tmp: Path) -> None:
         vp_travel = sum(lc.pen_up_length()[0] for lc in doc.layers.values()) * PX_MM
         vp_lines = sum(len(lc) for lc in doc.layers.values())
         # The optimization steps alone, on drawings already read.
-        drawn = read_svg(src, ImportOptions(), ErrorLog())
+        drawn = [s for lay in read_svg(src, ImportOptions(), ErrorLog()) for s in lay.strokes]
         t = time.perf_counter()
         optimize_strokes(drawn, 0.02, time.monotonic() + time_budget(len(drawn)))
         ours_opt = time.perf_counter() - t
@@ -220,6 +226,66 @@ def bench_vs_vpype(tmp: Path) -> None:
         print(f"    time, optimization only: ours {ours_opt:.3f} s vs vpype linemerge+linesort "
               f"{vp_opt:.3f} s: ratio {ours_opt / vp_opt:.2f} "
               f"[{'MET' if ours_opt <= vp_opt else 'NOT MET'}]")
+
+
+# ---------------------------------------------------------------- (d) SVG import speed
+
+def speed_drawings(tmp: Path, directory: Path | None) -> dict[str, Path]:
+    """vpype's benchmark drawings when given, else generated drawings of the same kinds
+    (quadratic and cubic Béziers, circles, long polylines, many short lines)."""
+    if directory is not None:
+        return {p.stem: p for p in sorted(directory.glob("*.svg"))}
+    rng = random.Random(4)
+
+    def pt() -> str:
+        return f"{rng.uniform(0, 1000):.2f},{rng.uniform(0, 700):.2f}"
+
+    kinds = {
+        "900_quad_beziers": [f'<path d="M {pt()} Q {pt()} {pt()}"/>' for _ in range(900)],
+        "300_beziers": [f'<path d="M {pt()} C {pt()} {pt()} {pt()}"/>' for _ in range(300)],
+        "500_circles": [f'<circle cx="{rng.uniform(0, 1000):.1f}" cy="{rng.uniform(0, 700):.1f}" '
+                        f'r="{rng.uniform(1, 50):.1f}"/>' for _ in range(500)],
+        "500_polylines": ['<polyline points="' + " ".join(pt() for _ in range(400)) + '"/>'
+                          for _ in range(500)],
+        "7k_lines": [f'<line x1="{rng.uniform(0, 1000):.1f}" y1="{rng.uniform(0, 700):.1f}" '
+                     f'x2="{rng.uniform(0, 1000):.1f}" y2="{rng.uniform(0, 700):.1f}"/>'
+                     for _ in range(7000)],
+    }
+    out = {}
+    for name, shapes in kinds.items():
+        p = tmp / f"gen_{name}.svg"
+        p.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="1000" height="700" '
+                     'fill="none" stroke="black">' + "".join(shapes) + "</svg>")
+        out[name] = p
+    return out
+
+
+def _best(fn, runs: int = 3) -> float:
+    """Best wall time of a few runs (the machine is shared: the best is the least noisy)."""
+    times = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def bench_svg_speed(tmp: Path, directory: Path | None) -> None:
+    import vpype_cli
+
+    big = MachineProfile(width=10_000, height=10_000)
+    for name, src in speed_drawings(tmp, directory).items():
+        ours_read = _best(lambda src=src: read_svg(src, ImportOptions(), ErrorLog()))
+        vp_read = _best(lambda src=src: vpype_cli.execute(f"read '{src}'"))
+        ours_all = _best(lambda src=src: import_file(
+            src, src.name, tmp / f"speed_{src.stem}", ImportOptions(), big))
+        vp_all = _best(lambda src=src: vpype_cli.execute(f"read '{src}' linemerge linesort"))
+        met = "MET" if ours_read <= vp_read else "NOT MET"
+        print(f"(d) {name}: SVG stage ours {ours_read:.3f} s vs vpype read {vp_read:.3f} s: "
+              f"ratio {ours_read / vp_read:.2f} [{met}]")
+        met = "MET" if ours_all <= 2 * vp_all else "NOT MET"
+        print(f"    whole import ours {ours_all:.3f} s vs vpype read linemerge linesort "
+              f"{vp_all:.3f} s: ratio {ours_all / vp_all:.2f} (target <= 2) [{met}]")
 
 
 # ---------------------------------------------------------------- (c) estimate vs plot
@@ -320,6 +386,8 @@ def main() -> int:
     ap.add_argument("--skip", default="")
     ap.add_argument("--sim-speed", type=float, default=1.0,
                     help="virtual plotter speed for (c); 1 keeps the sender realistic")
+    ap.add_argument("--vpype-drawings", type=Path, default=None,
+                    help="vpype's benchmark drawings for (d) (default: generated ones)")
     args = ap.parse_args()
     skip = set(args.skip.split(","))
     with tempfile.TemporaryDirectory(prefix="import-bench-") as d:
@@ -330,6 +398,8 @@ def main() -> int:
             bench_vs_vpype(tmp)
         if "c" not in skip:
             bench_accuracy(tmp, args.sim_speed)
+        if "d" not in skip:
+            bench_svg_speed(tmp, args.vpype_drawings)
     return 0
 
 

@@ -3,6 +3,7 @@
 #include "inputs.h"
 #include "machine.h"
 #include "numparse.h"
+#include "planner.h"
 #include "report.h"
 #include "settings.h"
 #include "status.h"
@@ -25,11 +26,12 @@ static void print_settings(void)
 static void print_modes(void)
 {
     RPT("[GC:G");
-    report_uint(gc.motion);
-    RPT(" G54 G17 ");
-    report_pstr(gc.inches ? PSTR("G20") : PSTR("G21"));
+    report_uint(gc.motion == MOTION_NONE ? 80 : gc.motion);
+    RPT(" G54 G");
+    report_uint(17 + gc.plane);
+    report_pstr(gc.inches ? PSTR(" G20") : PSTR(" G21"));
     report_pstr(gc.incremental ? PSTR(" G91") : PSTR(" G90"));
-    RPT(" G94 M0 ");
+    RPT(" G94 ");
     report_pstr(mach.pen_down ? PSTR("M3") : PSTR("M5"));
     RPT(" M9 T0 F");
     report_fixed(gc.feed, 0);
@@ -45,10 +47,12 @@ static void print_offsets(void)
         RPT(":0.000,0.000,0.000]\r\n");
     }
     RPT("[G92:");
-    report_fixed(-gc.offset[0], 3);
+    report_fixed(gc.offset[0], 3);
     RPT(",");
-    report_fixed(-gc.offset[1], 3);
-    RPT(",0.000]\r\n[TLO:0.000]\r\n");
+    report_fixed(gc.offset[1], 3);
+    RPT(",");
+    report_fixed(gc.z_offset, 3);
+    RPT("]\r\n[TLO:0.000]\r\n");
 }
 
 static uint8_t set_setting(const char *line)
@@ -77,7 +81,7 @@ uint8_t dollar_execute(const char *line)
 {
     const char *arg = line + 1;
     if (arg[0] == 0) {
-        RPT("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\n");
+        RPT("[HLP:$$ $# $G $I $x=val $J=line $C $X $H ~ ! ? ctrl-x]\r\n");
         return STATUS_OK;
     }
     if (arg[0] == 'J' && arg[1] == '=') {
@@ -105,7 +109,9 @@ uint8_t dollar_execute(const char *line)
         print_offsets();
         return STATUS_OK;
     case 'I':
-        RPT(FW_BUILD "\r\n[OPT:,15,128]\r\n");
+        RPT(FW_BUILD "\r\n[OPT:,");
+        report_uint(PLAN_SIZE - 1); /* the same count as Bf: when idle */
+        RPT(",128]\r\n");
         return STATUS_OK;
     case 'X':
         if (inputs_read() & PIN_ESTOP)

@@ -10,11 +10,20 @@
 #define M300_THRESHOLD 40.0f /* M300 S30 down, S50 up */
 
 /* word letters that carry a value, as bits for repeat detection */
-enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_COUNT };
-static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N'};
+enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_COUNT };
+static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N', 'T'};
+#define WB(w) (1u << (w))
+#define MAX_LINE_NUMBER 9999999.0f /* GRBL's limit on N */
 
-/* non-modal G commands (one per line) */
-enum { NM_NONE, NM_DWELL, NM_G28, NM_G92 };
+/* non-modal G commands (GRBL's group 0, one per line) */
+enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1 };
+
+/* An unknown G/M number: a fraction on G0-G9 is "needs an integer" (23),
+ * anything else unsupported (20). */
+static uint8_t bad_code(uint16_t code10)
+{
+    return code10 % 10 && code10 < 100 ? ERR_NOT_INTEGER : ERR_UNSUPPORTED;
+}
 
 void gc_init(gc_state_t *st)
 {
@@ -27,6 +36,7 @@ void gc_program_end(gc_state_t *st)
 {
     st->motion = MOTION_G1;
     st->incremental = 0;
+    st->plane = 0;
 }
 
 static uint8_t word_index(char letter)
@@ -48,7 +58,7 @@ static uint8_t arc_center_from_radius(const float *s, const float *t, float r, u
     float h2 = 4.0f * r * r - d2;
     if (h2 < 0.0f) {
         if (h2 < -ARC_RADIUS_ABS_TOL * d2)
-            return ERR_INVALID_TARGET;
+            return ERR_ARC_RADIUS;
         h2 = 0.0f;
     }
     float h = -sqrtf(h2) / sqrtf(d2);
@@ -68,12 +78,14 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     uint16_t seen = 0;
     int8_t motion = -1;
     uint8_t non_modal = NM_NONE, g53 = 0, pen = PEN_KEEP, m300 = 0;
-    uint8_t g_units = 0, g_dist = 0; /* groups seen on this line */
-    uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pen_groups = 0;
+    uint8_t g_units = 0, g_dist = 0, g_plane = 0; /* groups seen on this line */
+    uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pause = 0, m_stop_groups = 0, m_pen_groups = 0;
 
     memset(blk, 0, sizeof(*blk));
     for (uint8_t i = 0; line[i];) {
         char letter = line[i++];
+        if (letter == '/') /* block delete: GRBL ignores the character */
+            continue;
         if (letter < 'A' || letter > 'Z')
             return ERR_EXPECTED_LETTER;
         float v;
@@ -84,23 +96,29 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 return ERR_UNSUPPORTED;
             uint16_t code10 = (uint16_t)lroundf(v * 10.0f);
             if (fabsf(v * 10.0f - (float)code10) > 0.001f)
-                return ERR_UNSUPPORTED;
+                return ERR_NOT_INTEGER;
             if (letter == 'G') {
                 if (jog && code10 != 200 && code10 != 210 && code10 != 900 && code10 != 910 &&
                     code10 != 530)
                     return ERR_INVALID_JOG;
                 switch (code10) {
-                case 0: case 10: case 20: case 30:
+                case 0: case 10: case 20: case 30: case 800:
                     if (motion >= 0)
                         return ERR_MODAL_CONFLICT;
-                    motion = (int8_t)(code10 / 10);
+                    motion = code10 == 800 ? MOTION_NONE : (int8_t)(code10 / 10);
                     break;
-                case 40: case 280: case 920:
+                case 40: case 280: case 920: case 921:
                     if (non_modal)
                         return ERR_MODAL_CONFLICT;
-                    non_modal = code10 == 40 ? NM_DWELL : code10 == 280 ? NM_G28 : NM_G92;
+                    non_modal = code10 == 40 ? NM_DWELL : code10 == 280 ? NM_G28 :
+                                code10 == 920 ? NM_G92 : NM_G92_1;
                     break;
                 case 530: g53 = 1; break;
+                case 170: case 180: case 190:
+                    if (g_plane++)
+                        return ERR_MODAL_CONFLICT;
+                    st.plane = (uint8_t)(code10 / 10 - 17);
+                    break;
                 case 200: case 210:
                     if (g_units++)
                         return ERR_MODAL_CONFLICT;
@@ -111,8 +129,11 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                         return ERR_MODAL_CONFLICT;
                     st.incremental = code10 == 910;
                     break;
-                case 170: case 940: case 540: break; /* XY plane, mm/min, G54: all we have */
-                default: return ERR_UNSUPPORTED;
+                /* accepted, nothing to do on a pen plotter: G40 (no cutter
+                 * compensation), G49 (no tool length offset), G54 (the one
+                 * work system), G61 (exact path), G91.1 (IJK relative), G94 */
+                case 400: case 490: case 540: case 610: case 911: case 940: break;
+                default: return bad_code(code10);
                 }
             } else {
                 if (jog)
@@ -123,10 +144,12 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 case 3000: m300 = 1; m_pen_groups++; break;
                 case 170: m_motors = MOTORS_ON; break;
                 case 180: case 840: m_motors = MOTORS_OFF; break;
-                case 20: case 300: m_end = 1; break;
-                default: return ERR_UNSUPPORTED;
+                case 0: case 10: m_pause = 1; m_stop_groups++; break;
+                case 20: case 300: m_end = 1; m_stop_groups++; break;
+                case 80: case 90: break; /* coolant: no coolant on a plotter */
+                default: return bad_code(code10);
                 }
-                if (m_pen_groups > 1)
+                if (m_pen_groups > 1 || m_stop_groups > 1)
                     return ERR_MODAL_CONFLICT;
             }
             continue;
@@ -134,49 +157,62 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         uint8_t w = word_index(letter);
         if (w == W_COUNT)
             return jog ? ERR_INVALID_JOG : ERR_UNSUPPORTED;
-        if (seen & (1u << w))
+        if (seen & WB(w))
             return ERR_WORD_REPEATED;
-        seen |= (uint16_t)(1u << w);
+        /* words whose value must not be negative (GRBL's rule) */
+        if (v < 0.0f && w >= W_F)
+            return ERR_NEGATIVE;
+        seen |= (uint16_t)WB(w);
         val[w] = v;
     }
 
     if (st.inches) /* lengths (X Y Z I J R F) to mm once; mm lines multiply nothing */
         for (uint8_t w = W_X; w <= W_F; w++)
-            if (seen & (1u << w))
+            if (seen & WB(w))
                 val[w] *= 25.4f;
-    uint8_t axes = (uint8_t)(seen & ((1u << W_X) | (1u << W_Y)));
+    uint8_t axes = (uint8_t)(seen & (WB(W_X) | WB(W_Y)));
     if (jog) {
-        if (seen & ~((1u << W_X) | (1u << W_Y) | (1u << W_F) | (1u << W_N)))
+        if (seen & ~(WB(W_X) | WB(W_Y) | WB(W_F) | WB(W_N)))
             return ERR_INVALID_JOG;
-        if (!axes || !(seen & (1u << W_F)))
+        if (!axes || !(seen & WB(W_F)))
             return ERR_INVALID_JOG;
         motion = MOTION_G1;
     }
-    if ((seen & (1u << W_N)) && (val[W_N] < 0.0f || val[W_N] != (float)(uint32_t)val[W_N]))
-        return ERR_BAD_NUMBER;
-    if (seen & (1u << W_F)) {
-        if (val[W_F] < 0.0f)
-            return ERR_NEGATIVE;
+    if ((seen & WB(W_N)) && val[W_N] > MAX_LINE_NUMBER)
+        return ERR_LINE_NUMBER;
+    if ((seen & WB(W_T)) && val[W_T] > 255.0f)
+        return ERR_TOOL_NUMBER;
+    if (seen & WB(W_F)) {
         if (jog)
             blk->feed = val[W_F];
         else
             st.feed = val[W_F];
     }
     if (m300) {
-        if (!(seen & (1u << W_S)))
+        if (!(seen & WB(W_S)))
             return ERR_VALUE_WORD_MISSING;
         pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
     }
-    if (seen & (1u << W_Z)) {
-        float z = st.incremental ? st.z + val[W_Z] : val[W_Z];
-        if (fabsf(z) > GC_MAX_COORD)
-            return ERR_INVALID_TARGET;
-        st.z = z;
-        if (pen == PEN_KEEP)  /* an explicit M3/M5 on the same line wins */
-            pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
+    if (seen & WB(W_Z)) {
+        /* Z is the pen, decided on machine Z so that no offset can flip it;
+         * only a motion moves the pen (G92 Z and G53 Z never do) */
+        if (non_modal == NM_G92) {
+            st.z_offset = st.z - val[W_Z];
+        } else if (non_modal == NM_NONE && !g53) {
+            if ((motion >= 0 ? motion : st.motion) == MOTION_NONE)
+                return ERR_AXIS_WORDS_UNUSED;
+            float z = st.incremental ? st.z + val[W_Z] : val[W_Z] + st.z_offset;
+            if (fabsf(z) > GC_MAX_COORD)
+                return ERR_INVALID_TARGET;
+            st.z = z;
+            if (pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
+                pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
+        }
     }
-    if (g53 && (non_modal || (motion != MOTION_G0 && motion != MOTION_G1 && !jog)))
-        return ERR_UNSUPPORTED;
+    if (g53 && non_modal)
+        return ERR_MODAL_CONFLICT; /* both in GRBL's non-modal group */
+    if (g53 && !jog && (motion >= 0 ? motion : st.motion) > MOTION_G1)
+        return ERR_G53_MOTION;
 
     /* where the axis words point, in machine mm */
     float target[N_AXIS];
@@ -195,11 +231,11 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
             return ERR_INVALID_TARGET;
     }
 
-    uint16_t used = (uint16_t)((1u << W_X) | (1u << W_Y) | (1u << W_Z) | (1u << W_F) | (1u << W_N) |
-                               (1u << W_S));
+    uint16_t used = (uint16_t)(WB(W_X) | WB(W_Y) | WB(W_Z) | WB(W_F) | WB(W_N) | WB(W_S) | WB(W_T));
     blk->pen = pen;
     blk->motors = m_motors;
     blk->program_end = m_end;
+    blk->pause = m_pause;
     memcpy(blk->start, st.pos, sizeof(st.pos));
 
     if (non_modal == NM_DWELL) {
@@ -222,6 +258,13 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         for (uint8_t a = 0; a < N_AXIS; a++)
             if (axes & (1u << a))
                 st.offset[a] = st.pos[a] - val[a];
+        blk->wco_changed = 1;
+    } else if (non_modal == NM_G92_1) {
+        if (motion >= 0)
+            return ERR_AXIS_COMMAND_CONFLICT;
+        memset(st.offset, 0, sizeof(st.offset));
+        st.z_offset = 0.0f;
+        blk->wco_changed = 1;
     } else if (non_modal == NM_G28) {
         if (motion >= 0)
             return ERR_AXIS_COMMAND_CONFLICT;
@@ -234,9 +277,11 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         if (motion >= 0)
             st.motion = (uint8_t)motion;
         uint8_t moving = axes != 0;
-        if (!moving && motion >= MOTION_G2)
-            return ERR_NO_AXIS_WORDS;
-        if (moving || (motion >= 0 && st.motion >= MOTION_G2)) {
+        if (moving && st.motion == MOTION_NONE)
+            return ERR_AXIS_WORDS_UNUSED;
+        if (!moving && (motion == MOTION_G2 || motion == MOTION_G3))
+            return seen & WB(W_Z) ? ERR_ARC_NO_PLANE_AXIS : ERR_NO_AXIS_WORDS;
+        if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
             if (st.motion != MOTION_G0) {
                 float f = jog ? blk->feed : st.feed;
                 if (f <= 0.0f)
@@ -245,6 +290,8 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
             }
             blk->action = st.motion == MOTION_G0 ? ACT_RAPID : st.motion == MOTION_G1 ? ACT_LINE : ACT_ARC;
             if (blk->action == ACT_ARC) {
+                if (st.plane)
+                    return ERR_UNSUPPORTED; /* an arc through Z: the pen has no Z motor */
                 blk->clockwise = st.motion == MOTION_G2;
                 if (seen & (1u << W_R)) {
                     if (seen & ((1u << W_I) | (1u << W_J)))

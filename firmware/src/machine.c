@@ -54,11 +54,19 @@ void machine_alarm(uint8_t code)
     plan_reset();
     seg_reset();
     machine_resync();
+    machine_pen_up_now();
     mach.alarm = code;
     mach.hold = mach.jog = mach.jog_cancel = 0;
+    seg_hold(0);
     mach.abort = 1;
     if (code != ALARM_LOCKED)
         report_alarm(code);
+}
+
+/* a hold (or M0) has brought everything to a stop */
+static uint8_t hold_stopped(void)
+{
+    return (seg_hold_reached() || !machine_moving()) && !stepper_busy();
 }
 
 void machine_report_status(void)
@@ -71,8 +79,10 @@ void machine_report_status(void)
         RPT("Home");
     else if (mach.check)
         RPT("Check");
+    else if (mach.hold && mach.jog)
+        RPT("Jog"); /* a jog being cancelled, as GRBL reports it */
     else if (mach.hold)
-        report_pstr(seg_hold_reached() && !stepper_busy() ? PSTR("Hold:0") : PSTR("Hold:1"));
+        report_pstr(hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1"));
     else if (mach.jog && machine_moving())
         RPT("Jog");
     else if (machine_moving())
@@ -100,20 +110,45 @@ void machine_report_status(void)
     RPT(",0");
     if (in) {
         RPT("|Pn:");
-        if (in & PIN_X_LIMIT)
-            RPT("X");
-        if (in & PIN_Y_LIMIT)
-            RPT("Y");
-        if (in & PIN_ESTOP)
-            RPT("R");
-        if (in & PIN_PAUSE)
-            RPT("H");
-        if (in & PIN_RESUME)
-            RPT("S");
+        /* one letter per PIN_* bit, lowest first: X Y limits, R stop, H pause, S resume */
+        for (uint8_t b = 0; b < 5; b++, in >>= 1)
+            if (in & 1)
+                serial_write(pgm_read_byte(PSTR("XYRHS") + b));
     }
     if (mach.pen_down)
         RPT("|A:S");
+    /* WCO as GRBL refreshes it: after a change, then every 30th report
+     * while busy and every 10th while idle */
+    if (mach.wco_countdown) {
+        mach.wco_countdown--;
+    } else {
+        mach.wco_countdown = machine_moving() ? 29 : 9;
+        RPT("|WCO:");
+        for (uint8_t a = 0; a < N_AXIS; a++) {
+            report_fixed(gc.offset[a] / div, 3);
+            RPT(",");
+        }
+        report_fixed(gc.z_offset / div, 3);
+    }
+    /* Ov likewise: after a change, then every 20th report while busy, every 10th idle */
+    if (mach.ov_countdown) {
+        mach.ov_countdown--;
+    } else {
+        mach.ov_countdown = machine_moving() ? 19 : 9;
+        RPT("|Ov:");
+        for (uint8_t i = 0; i < 3; i++) {
+            if (i)
+                RPT(",");
+            report_uint(rt_ov[i]);
+        }
+    }
     RPT(">\r\n");
+}
+
+void machine_pen_up_now(void)
+{
+    servo_set_us(settings.pen_up_us);
+    mach.pen_down = mach.pen_lifted = mach.resuming = 0;
 }
 
 static void start_hold(void)
@@ -144,6 +179,10 @@ void machine_poll(void)
         mach.reset = RESET_NOW;
         mach.abort = 1;
     }
+    if (f & RT_OVERRIDE) {
+        planner_set_overrides(rt_ov[OV_FEED], rt_ov[OV_RAPID]);
+        mach.ov_countdown = 0;
+    }
     if (f & RT_STATUS)
         machine_report_status();
     if (f & (RT_HOLD | RT_JOG_CANCEL)) {
@@ -152,12 +191,27 @@ void machine_poll(void)
         else
             start_hold();
     }
-    if ((f & RT_RESUME) && mach.hold && !mach.jog_cancel && !mach.alarm) {
+    if ((f & RT_RESUME) && mach.hold && !mach.jog_cancel && !mach.alarm && !mach.resuming) {
+        /* the pen goes back down where it was lifted; motion waits out the settle */
+        if (mach.pen_lifted)
+            servo_set_us(settings.pen_down_us);
+        mach.pen_lifted = 0;
+        mach.resuming = 1;
+        mach.resume_at = machine_ms() + settings.pen_settle_ms;
+    }
+    if (mach.resuming && (int32_t)(machine_ms() - mach.resume_at) >= 0) {
+        mach.resuming = 0;
         mach.hold = 0;
         seg_hold(0);
     }
     if (mach.alarm || mach.reset)
         return;
+    /* a pen-safe hold: once stopped on the path, the pen leaves the paper */
+    if (mach.hold && mach.pen_down && !mach.pen_lifted && !mach.resuming && !mach.jog &&
+        hold_stopped()) {
+        servo_set_us(settings.pen_up_us);
+        mach.pen_lifted = 1;
+    }
     seg_fill();
     if (!(mach.hold && seg_hold_reached() && seg_head == seg_tail))
         stepper_start();
@@ -333,7 +387,8 @@ uint8_t machine_execute(const gc_block_t *blk)
     case ACT_ARC: {
         arc_t arc;
         e = arc_init(&arc, blk->start, blk->target, blk->center, blk->clockwise, settings.arc_tolerance);
-        for (uint16_t k = 1; !e && k <= arc.segments; k++) {
+        /* check mode queues nothing: the chords would only starve the watchdog */
+        for (uint16_t k = 1; !e && !mach.check && k <= arc.segments; k++) {
             float p[N_AXIS];
             arc_point(&arc, k, p);
             e = line_to(p, blk->feed, 0);
@@ -352,8 +407,17 @@ uint8_t machine_execute(const gc_block_t *blk)
         break;
     default: break;
     }
-    if (!e && blk->program_end)
+    if (!e && blk->program_end) {
         machine_pen(0);
+        report_msg(PSTR("Pgm End"));
+    }
+    if (!e && blk->pause && !mach.check && machine_sync()) {
+        /* M0/M1: a feed hold at this point of the program (Hold:0 until ~) */
+        mach.hold = 1;
+        seg_hold(1);
+    }
+    if (blk->wco_changed)
+        mach.wco_countdown = 0;
     if (!e && blk->motors == MOTORS_OFF && !mach.check && machine_sync())
         stepper_enable(0);
     if (mach.abort)

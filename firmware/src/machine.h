@@ -22,6 +22,11 @@ typedef struct {
     uint8_t pen_down;
     uint8_t dwelling;
     uint8_t homed;
+    uint8_t pen_lifted;    /* a hold lifted the pen (pen_down stays set) */
+    uint8_t resuming;      /* pen lowered again after a hold: waiting out the settle */
+    uint8_t wco_countdown; /* status reports until WCO is shown again (0: next one) */
+    uint8_t ov_countdown;  /* the same for Ov */
+    uint32_t resume_at;    /* machine_ms() when motion may go on */
 } machine_t;
 
 extern machine_t mach;
@@ -36,6 +41,7 @@ uint8_t machine_jog(const char *body);
 /* Soft limits: 1 (and ALARM:2 after the queued motion ends) if blk leaves the work area. */
 uint8_t machine_check_limits(const gc_block_t *blk);
 void machine_pen(uint8_t down);
+void machine_pen_up_now(void);        /* alarm, reset: the servo lifts at once, no wait */
 uint8_t machine_dwell_ms(uint32_t ms);
 void machine_resync(void);            /* planner and parser take the stepper position */
 void machine_report_status(void);

@@ -39,7 +39,7 @@ static uint8_t execute_gcode(const char *line)
 
 static uint8_t execute_line(const char *line)
 {
-    if (line[0] == 0)
+    if (line[0] == 0 || (line[0] == '%' && line[1] == 0)) /* '%' program delimiters: ignored */
         return STATUS_OK;
     if (line[0] == '$')
         return dollar_execute(line);
@@ -55,15 +55,17 @@ static void soft_reset(void)
     linebuf_reset(&lb);
     uint8_t alarm = mach.alarm;
     uint8_t homed = mach.homed;
-    uint8_t pen = mach.pen_down;
     machine_init();
     mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
     mach.dwelling = 0;
     seg_hold(0);
     mach.alarm = alarm;
     mach.homed = homed;
-    if (pen)
-        machine_pen(0);
+    machine_pen_up_now(); /* as GRBL stops the spindle on every reset */
+    mach.wco_countdown = mach.ov_countdown = 0;
+    /* overrides back to 100% on every reset, as GRBL */
+    rt_ov[OV_FEED] = rt_ov[OV_RAPID] = rt_ov[OV_SPINDLE] = 100;
+    planner_set_overrides(100, 100);
     report_banner();
     if (mach.alarm)
         report_unlock_hint();

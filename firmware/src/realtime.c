@@ -6,6 +6,18 @@
 
 volatile uint8_t rt_flags;
 volatile uint8_t rt_alarm;
+volatile uint8_t rt_ov[3] = {100, 100, 100};
+
+/* 0x90-0x94 feed and 0x99-0x9D spindle: reset to 100, +10, -10, +1, -1,
+ * kept within 10..200 */
+static void step_override(uint8_t which, uint8_t op)
+{
+    int8_t d = op <= 2 ? 10 : 1; /* no table: it would sit in RAM */
+    if (!(op & 1))
+        d = (int8_t)-d;
+    int16_t v = op ? rt_ov[which] + d : 100;
+    rt_ov[which] = (uint8_t)(v < 10 ? 10 : v > 200 ? 200 : v);
+}
 
 void realtime_raise(uint8_t flags)
 {
@@ -35,9 +47,16 @@ uint8_t realtime_byte(uint8_t c)
         rt_flags |= RT_RESET;
         return 1;
     default:
-        /* GRBL's other extended realtime commands (overrides, 0x80-0xFF) are
-         * not supported: swallowed here, so they never corrupt a line */
-        return c >= 0x80;
+        if (c >= 0x90 && c <= 0x94)
+            step_override(OV_FEED, (uint8_t)(c - 0x90));
+        else if (c >= 0x95 && c <= 0x97)
+            rt_ov[OV_RAPID] = (uint8_t)(100 >> (c - 0x95)); /* 100, 50, 25 */
+        else if (c >= 0x99 && c <= 0x9D)
+            step_override(OV_SPINDLE, (uint8_t)(c - 0x99));
+        else /* GRBL's other extended bytes (0x80-0xFF): swallowed, never part of a line */
+            return c >= 0x80;
+        rt_flags |= RT_OVERRIDE;
+        return 1;
     }
 }
 

@@ -10,7 +10,12 @@
 #define RT_RESET 0x08
 #define RT_ALARM 0x10   /* rt_alarm holds the code */
 #define RT_JOG_CANCEL 0x20
+#define RT_OVERRIDE 0x40 /* rt_ov changed: the planner takes the new feed/rapid percentages */
 
+/* GRBL's override percentages: feed 10..200, rapid 25/50/100, spindle
+ * 10..200 (the spindle is the pen: accepted and reported only) */
+enum { OV_FEED, OV_RAPID, OV_SPINDLE };
+extern volatile uint8_t rt_ov[3];
 extern volatile uint8_t rt_flags;
 extern volatile uint8_t rt_alarm;
 

@@ -4,8 +4,9 @@
 
 settings_t settings;
 
-const uint8_t settings_ids[] = {0, 1, 2, 3, 4, 5, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27,
-                                60, 61, 62, 63, 100, 101, 110, 111, 120, 121, 130, 131};
+const uint8_t settings_ids[] = {0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27,
+                                30, 31, 32, 60, 61, 62, 63, 100, 101, 102, 110, 111, 112,
+                                120, 121, 122, 130, 131, 132};
 const uint8_t settings_count = sizeof(settings_ids);
 
 void settings_defaults(settings_t *s)
@@ -85,7 +86,22 @@ static uint16_t *word_field(settings_t *s, uint8_t id)
     }
 }
 
-uint8_t settings_is_integer(uint8_t id) { return float_field(&settings, id) == 0; }
+/* Rows senders list that a pen plotter has no use for, with fixed values:
+ * $6 probe invert, $30/$31 spindle range (S words are ignored), $32 laser
+ * mode, and the Z axis (the pen servo, not a motor) $102 $112 $122 $132. */
+static uint8_t fixed_value(uint8_t id, float *value)
+{
+    switch (id) {
+    case 6: case 31: case 32: *value = 0.0f; return 1;
+    case 30: *value = 1000.0f; return 1;
+    case 102: case 122: *value = 100.0f; return 1;
+    case 112: *value = 1000.0f; return 1;
+    case 132: *value = 10.0f; return 1;
+    default: return 0;
+    }
+}
+
+uint8_t settings_is_integer(uint8_t id) { return float_field(&settings, id) == 0 && id < 100; }
 
 uint8_t settings_set(settings_t *s, uint8_t id, float value)
 {
@@ -93,6 +109,11 @@ uint8_t settings_set(settings_t *s, uint8_t id, float value)
         return ERR_BAD_NUMBER;
     if (value < 0.0f)
         return ERR_NEGATIVE;
+    float fixed;
+    if (fixed_value(id, &fixed))
+        return value > fixed - 0.001f && value < fixed + 0.001f ? STATUS_OK : ERR_INVALID_DOLLAR;
+    if (id == 20 && value != 0.0f && !s->homing_enable)
+        return ERR_SOFT_LIMIT_NO_HOME;
     float *f = float_field(s, id);
     if (f) {
         /* zero or absurd values would divide by zero or overflow step counts */
@@ -143,6 +164,8 @@ uint8_t settings_set(settings_t *s, uint8_t id, float value)
 uint8_t settings_get(const settings_t *s, uint8_t id, float *value)
 {
     settings_t *m = (settings_t *)s; /* the field lookups do not write */
+    if (fixed_value(id, value))
+        return 1;
     float *f = float_field(m, id);
     if (f) {
         *value = *f;

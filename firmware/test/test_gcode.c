@@ -66,10 +66,20 @@ void test_gcode_errors(void)
     CHECK(parse("M3M5") == ERR_MODAL_CONFLICT);
     CHECK(parse("G20G21") == ERR_MODAL_CONFLICT);
     CHECK(parse("G5") == ERR_UNSUPPORTED);
-    CHECK(parse("G1.5") == ERR_UNSUPPORTED);
+    CHECK(parse("G1.5") == ERR_NOT_INTEGER);
     CHECK(parse("G38.2") == ERR_UNSUPPORTED);
     CHECK(parse("M6") == ERR_UNSUPPORTED);
-    CHECK(parse("T1") == ERR_UNSUPPORTED);
+    CHECK(parse("T1") == STATUS_OK);
+    CHECK(parse("T256") == ERR_TOOL_NUMBER);
+    CHECK(parse("N10000000G0X1") == ERR_LINE_NUMBER);
+    CHECK(parse("M0M2") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G53G2X1I1") == ERR_G53_MOTION);
+    CHECK(parse("G53G92X1") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G18G2X1I1F100") == ERR_UNSUPPORTED);
+    CHECK(parse("G17G40G49G61G91.1G94G54M8M9") == STATUS_OK);
+    CHECK(parse("/G0X1") == STATUS_OK);
+    CHECK(parse("G80X1") == ERR_AXIS_WORDS_UNUSED);
+    CHECK(parse("G0") == STATUS_OK);
     CHECK(parse("A5") == ERR_UNSUPPORTED);
     CHECK(parse("G4") == ERR_VALUE_WORD_MISSING);
     CHECK(parse("G4P-1") == ERR_NEGATIVE);
@@ -82,7 +92,7 @@ void test_gcode_errors(void)
     CHECK(parse("G0X1234567890") == ERR_BAD_NUMBER);
     CHECK(parse("G0X200000") == ERR_INVALID_TARGET);
     CHECK(parse("G1X1F1e5") == ERR_EXPECTED_LETTER); /* no exponents in G-code: 'e' is not a word here */
-    CHECK(parse("N-1") == ERR_BAD_NUMBER);
+    CHECK(parse("N-1") == ERR_NEGATIVE);
     /* a failed line changes nothing */
     gc_state_t before = st;
     CHECK(parse("G91G1X1") == ERR_UNDEFINED_FEED);
@@ -114,7 +124,7 @@ void test_gcode_arcs(void)
     /* errors */
     CHECK(parse("G2X5Y5") == ERR_NO_OFFSETS);
     CHECK(parse("G2I5") == ERR_NO_AXIS_WORDS);
-    CHECK(parse("G2X50Y0R1") == ERR_INVALID_TARGET);          /* radius too small for the chord */
+    CHECK(parse("G2X50Y0R1") == ERR_ARC_RADIUS); /* GRBL: radius too small for the chord */          /* radius too small for the chord */
     CHECK(parse("G2X20Y0I5J0") == ERR_INVALID_TARGET);        /* end not on the circle */
     CHECK(parse("G2X10Y10R10I1") == ERR_UNUSED_WORDS);
     CHECK(parse("G2X10Y10R-999999999") == ERR_INVALID_TARGET); /* found by the fuzzer */
@@ -133,4 +143,12 @@ void test_gcode_pen(void)
     CHECK(parse("G0X1Z2") == STATUS_OK && blk.pen == PEN_UP && blk.action == ACT_RAPID);
     CHECK(parse("M5Z-1") == STATUS_OK && blk.pen == PEN_UP); /* the explicit M word wins */
     CHECK(parse("G0X2") == STATUS_OK && blk.pen == PEN_KEEP);
+    /* offsets never move the pen, and cannot flip the threshold (machine Z) */
+    CHECK(parse("G0Z5") == STATUS_OK && blk.pen == PEN_UP);
+    CHECK(parse("G92X0Y0Z0") == STATUS_OK && blk.pen == PEN_KEEP && blk.wco_changed);
+    CHECK(parse("G0Z0") == STATUS_OK && blk.pen == PEN_UP); /* work Z 0 is machine Z 5 */
+    CHECK(parse("G53G0X30Y30Z0") == STATUS_OK && blk.pen == PEN_KEEP);
+    CHECK(parse("G92.1") == STATUS_OK && blk.pen == PEN_KEEP && blk.wco_changed);
+    CHECK(parse("G0Z0") == STATUS_OK && blk.pen == PEN_DOWN);
+    CHECK(parse("G28Z5") == STATUS_OK && blk.pen == PEN_KEEP);
 }

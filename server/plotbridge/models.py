@@ -6,6 +6,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
+from plotbridge.importing.fields import openapi_fields
 from plotbridge.papers import PAPER_PATTERN
 
 
@@ -110,6 +111,7 @@ def upload_openapi() -> dict[str, Any]:
         "optimize": {"type": "boolean", "description": "merge and reorder strokes"},
         "layers": {"type": "string", "description": "SVG group ids, labels or stroke colours"},
         **Placement.model_json_schema()["properties"],
+        **openapi_fields(),
     }
     query = ("name", "pattern", "start", "optimize", "paper", "fit", "scale", "rotate")
     return {

@@ -17,6 +17,7 @@ from starlette.datastructures import UploadFile
 from starlette.formparsers import MultiPartException, MultiPartParser
 from starlette.requests import Request
 
+from plotbridge.importing.fields import import_fields
 from plotbridge.models import Placement
 
 CHUNK = 64 * 1024
@@ -137,5 +138,6 @@ def parse_upload_fields(params: dict[str, str]) -> tuple[dict[str, Any], dict[st
         options["optimize"] = optimize
     if params.get("layers"):
         options["layers"] = [part.strip() for part in params["layers"].split(",") if part.strip()]
+    options.update(import_fields(params))
     placement_public = {k: v for k, v in options.items() if k in Placement.model_fields}
     return options, placement_public, bool(flag("start"))

@@ -125,8 +125,8 @@ def drawn(plotters) -> dict[str, dict]:
         p, g = plotters[board]
         p.clear()
         for line in drawing():
-            g.ok(line, timeout=120)
-        g.wait_state("Idle", 60)
+            g.ok(line, timeout=300)
+        g.wait_state("Idle", 300)
         return p.trace()
     return parallel(draw)
 
@@ -182,14 +182,14 @@ def test_idle_deenergize_reset_and_move_lose_no_step(plotters, board: str) -> No
     p, g = plotters[board]
     spm = STEPS_PER_MM[board]
     g.ok("$1=30")
-    g.ok("G90 G1 X5 Y5 F1000")
-    g.wait_state("Idle", 60)
+    g.ok("G90 G1 X5 Y5 F3000")
+    g.wait_state("Idle", 300)
     p.wait_trace(lambda t: not t["enabled"], timeout=20)
     if board in FOUR_WIRE:
         assert p.trace()["coils"] == {"x": 0, "y": 0}
     for target in ((7.33, 6.17), (3.07, 9.01)):
         g.ok(f"G1 X{target[0]} Y{target[1]} F1000")
-        g.wait_state("Idle", 60)
+        g.wait_state("Idle", 300)
         p.wait_trace(lambda t: not t["enabled"], timeout=20)
         g.ser.write(b"\x18")  # soft reset while de-energized
         g.wait_for(BANNER, 30)
@@ -213,12 +213,12 @@ def test_direction_convention_as_grbl(plotters, board: str) -> None:
     for mask in (0, 3):
         g.ok("$3=0")
         g.ok("G90 G1 X20 Y20 F1000")
-        g.wait_state("Idle", 60)
+        g.wait_state("Idle", 300)
         before = p.trace()["steps"]
         g.ok(f"$3={mask}")
         g.ok("G91 G1 X2 Y1 F1000")
         g.ok("G90")
-        g.wait_state("Idle", 60)
+        g.wait_state("Idle", 300)
         t = p.trace()
         moved[mask] = (t["steps"]["x"] - before["x"], t["steps"]["y"] - before["y"])
         if board not in FOUR_WIRE:  # a direction pin to look at
@@ -231,26 +231,26 @@ def test_direction_convention_as_grbl(plotters, board: str) -> None:
 @pytest.mark.parametrize("board", [b for b in BOARDS if SWITCHES[b]])
 def test_homing_and_limit_hits(plotters, board: str) -> None:
     p, g = plotters[board]
-    g.ok("$H", timeout=120)
+    g.ok("$H", timeout=300)
     t = p.trace()
     assert t["limit_ends"] == {"x_min": False, "x_max": False, "y_min": False, "y_max": False}
     assert abs(t["position"]["x"]) < 2 and abs(t["position"]["y"]) < 2
     g.ok("$20=0")  # soft limits off: let the carriage reach the far switch
     g.ser.write(b"G1 X310 F3000\n")
-    g.wait_for(r"^ALARM:1$", 60)
+    g.wait_for(r"^ALARM:1$", 300)
     t = p.trace()
     assert t["limit_ends"]["x_max"] and not t["limit_ends"]["x_min"]
     # the near end: back inside, then past the min switch
     g.ok("$X")
     g.ok("G1 X100 F3000")
-    g.wait_state("Idle", 60)
+    g.wait_state("Idle", 300)
     g.ser.write(b"G1 X-20 F3000\n")
-    g.wait_for(r"^ALARM:1$", 60)
+    g.wait_for(r"^ALARM:1$", 300)
     assert p.trace()["limit_ends"]["x_min"]
     g.ok("$X")
     g.ok("G1 X10 F3000")
     g.ok("$20=1")
-    g.wait_state("Idle", 60)
+    g.wait_state("Idle", 300)
 
 
 @pytest.mark.parametrize("board", [b for b in BOARDS if not SWITCHES[b]])

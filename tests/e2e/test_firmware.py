@@ -10,54 +10,16 @@ from __future__ import annotations
 import itertools
 import math
 import random
-import re
 import time
-from collections.abc import Iterator
 
 import pytest
 
-from tests.fixtures.grbl import Grbl
+from tests.fixtures.grbl import Grbl, clean, mpos, no_false_acks, unlocked
 
 pytestmark = pytest.mark.e2e
 
 STEP_MM = 1 / 80
 TOL = 0.02  # mm: a step and a bit
-
-
-def mpos(status: str) -> tuple[float, float]:
-    m = re.search(r"MPos:([-\d.]+),([-\d.]+)", status)
-    assert m, status
-    return float(m.group(1)), float(m.group(2))
-
-
-def no_false_acks(lines: list[str]) -> None:
-    """Only acknowledgements may contain 'ok' or 'error'."""
-    for line in lines:
-        if re.fullmatch(r"ok|error:\d+", line):
-            continue
-        assert "ok" not in line and "error" not in line, line
-
-
-def clean(trace: dict) -> None:
-    assert trace["violations"] == {
-        "short_pulse": 0, "dir_setup": 0, "step_while_disabled": 0, "overspeed": 0
-    }, trace["violations"]
-
-
-@pytest.fixture
-def grbl(plotter) -> Iterator[Grbl]:
-    g = Grbl(plotter.port)
-    # the banner went out before we connected; a soft reset repeats it
-    g.ser.write(b"\x18")
-    g.wait_for(r"^Grbl 1\.1h \['\$' for help\]$", 10)
-    yield g
-    no_false_acks(g.lines)
-    g.close()
-
-
-def unlocked(g: Grbl) -> Grbl:
-    g.ok("$X")
-    return g
 
 
 def stroke_points(trace: dict) -> list[list[tuple[float, float]]]:
@@ -244,6 +206,7 @@ def test_hard_limit_hit(plotter, grbl: Grbl) -> None:
 
 
 def test_feed_hold_and_resume(plotter, grbl: Grbl) -> None:
+    """A pen-safe hold: stopped on the path, pen lifted; lowered at the same point on resume."""
     unlocked(grbl)
     grbl.ok("G0 X10 Y10")
     grbl.ok("M3")
@@ -251,20 +214,24 @@ def test_feed_hold_and_resume(plotter, grbl: Grbl) -> None:
     time.sleep(0.2)
     grbl.ser.write(b"!")
     held = grbl.wait_state("Hold:0", 30)
+    plotter.wait_trace(lambda t: t["pen"] == "up", 10)
     x_held = plotter.trace()["position"]["x"]
     assert 10 < x_held < 210
     time.sleep(0.3)
     assert plotter.trace()["position"]["x"] == x_held  # really stopped
     assert mpos(held)[0] == pytest.approx(x_held, abs=0.001)
+    assert "|A:S" in grbl.status()  # the program's pen is still down: it comes back on resume
     grbl.ser.write(b"~")
     grbl.wait_state("Run", 10)
     grbl.ok("M5")
     grbl.wait_state("Idle", 60)
     trace = plotter.trace()
     clean(trace)
-    (stroke,) = [s for s in stroke_points(trace) if len(s) > 1]
-    # one straight line, through the stop, ending exactly at the target
-    assert len(stroke) == 2 and math.dist(stroke[-1], (210, 10)) < TOL
+    first, second = [s for s in stroke_points(trace) if len(s) > 1]
+    # two straight pieces meeting at the hold point (within a step), ending exactly at the target
+    assert math.dist(first[-1], (x_held, 10)) <= STEP_MM + 1e-9
+    assert math.dist(second[0], (x_held, 10)) <= STEP_MM + 1e-9
+    assert len(second) == 2 and math.dist(second[-1], (210, 10)) < TOL
 
 
 def test_soft_reset_mid_move(plotter, grbl: Grbl) -> None:

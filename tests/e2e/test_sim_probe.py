@@ -142,7 +142,9 @@ def test_speed_paces_simulated_time(plotter_factory: PlotterFactory, sim_build: 
     # fall behind (the suite shares 2 cores), so only a loose lower bound
     assert 0.5 < rates[1] < 1.1, rates
     assert 1.0 < rates[2] < 2.2, rates
-    assert rates[0] > 1.5 * rates[1], rates  # unthrottled: as fast as the host allows
+    # unthrottled: ahead of the wall clock, which a paced run never is (how far ahead
+    # depends on what else the host runs)
+    assert rates[0] > 1.1, rates
 
 
 def test_limit_switch_closes_past_the_edge(

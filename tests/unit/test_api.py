@@ -370,9 +370,9 @@ async def test_start_conflicts(api):
 async def test_estop_stops_running_job_at_last_ack(api):
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
-    for _ in range(5):
+    for n in range(1, 6):
         api.link.step()
-        await asyncio.sleep(0.01)
+        await settle(lambda n=n: api.queue.jobs[job["id"]].lines_done == n, within=10.0)
     response = await api.client.post("/api/machine/estop")
     assert response.status_code == 202
     assert api.link.estop_calls == 1

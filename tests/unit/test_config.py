@@ -17,11 +17,13 @@ def parse(*argv: str) -> argparse.Namespace:
 
 def test_serial_repeats_and_virtual_counts(tmp_path, monkeypatch):
     monkeypatch.delenv("PLOTBRIDGE_SERIAL", raising=False)
+    monkeypatch.delenv("PLOTBRIDGE_BOARD", raising=False)
     two = plotters_from_args(parse("--serial", "/dev/a", "--serial", "/dev/b"), tmp_path)
     assert [(p.name, p.device) for p in two] == [("plotter1", "/dev/a"), ("plotter2", "/dev/b")]
     assert [p.name for p in plotters_from_args(parse("--virtual", "3"), tmp_path)] == [
         "plotter1", "plotter2", "plotter3"]
-    assert plotters_from_args(parse(), tmp_path) == [PlotterConfig("plotter1")]
+    assert plotters_from_args(parse(), tmp_path) == [PlotterConfig("plotter1", board="uno-cnc-shield")]
+    assert plotters_from_args(parse("--board", "mega-ramps14"), tmp_path)[0].board == "mega-ramps14"
     with pytest.raises(ConfigError, match="between 1 and 16"):
         plotters_from_args(parse("--virtual", "0"), tmp_path)
 

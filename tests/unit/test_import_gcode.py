@@ -82,8 +82,8 @@ def test_all_errors_reported_with_line_numbers(tmp_path):
     text = "\n".join([
         "G0 X10 Y10",
         "M3",
-        "G1 X20",                       # 3: no feed rate ever given
-        "T1",                           # 4: unsupported word
+        "G1 X20 F0",                    # 3: feed rate not positive
+        "Q1",                           # 4: unsupported word
         "G1 X500 Y10 F100",             # 5: outside the work area
         "G2 X30 Y10 I3 J0",             # 6: radius 3 at the start, 7 at the end
         "G38.2 X1",                     # 7: unsupported command
@@ -96,7 +96,7 @@ def test_all_errors_reported_with_line_numbers(tmp_path):
     lines = {err["line"]: err["message"] for err in e.value.errors}
     assert set(lines) == {3, 4, 5, 6, 7, 8}
     assert "feed" in lines[3]
-    assert "T1" in lines[4]
+    assert "Q1" in lines[4]
     assert "outside the work area" in lines[5]
     assert "radius" in lines[6]
     assert "G38.2" in lines[7]

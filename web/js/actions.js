@@ -40,6 +40,15 @@ export function placementFromJob(placement, fallback) {
   };
 }
 
+/** The upload form's import options (pen dialect, fills, font) as form fields. */
+function appendImportOptions(form) {
+  const options = document.getElementById("import-options");
+  if (!options) return;
+  for (const [key, value] of new FormData(options)) {
+    if (value !== "") form.append(key, value);
+  }
+}
+
 /** Errors of a refused upload as a list to show, by line. */
 export function uploadErrors(err) {
   const d = err.detail;
@@ -324,6 +333,7 @@ export function createActions(store, socket, estop) {
       form.append("file", file, file.name);
       form.append("name", file.name);
       appendPlacement(form, s.placement);
+      appendImportOptions(form);
       const progress = (loaded, total) => store.update(() => {
         Object.assign(record, { loaded, total, status: loaded >= total ? "processing" : "uploading" });
       });

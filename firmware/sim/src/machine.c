@@ -136,6 +136,23 @@ static void move(struct machine *mc, int axis, int delta, uint64_t cycle)
 	update_limits(mc);
 }
 
+/* a step of either drive kind: its rate, the overspeed check, the counters */
+static void count_step(struct machine *mc, struct motor *m, uint64_t cycle)
+{
+	if (m->have_step && cycle > m->last_step) {
+		double rate = mc->cfg.freq / (double)(cycle - m->last_step);
+		if (rate > m->max_rate)
+			m->max_rate = rate;
+		if (rate > mc->cfg.max_step_rate)
+			mc->v.overspeed++;
+	}
+	m->have_step = 1;
+	m->last_step = cycle;
+	m->pulses++;
+	mc->stepped = 1;
+	mc->changed = 1;
+}
+
 static void step_rise(struct machine *mc, int axis, uint64_t cycle)
 {
 	struct motor *m = &mc->m[axis];
@@ -147,18 +164,7 @@ static void step_rise(struct machine *mc, int axis, uint64_t cycle)
 		if ((double)(cycle - m->dir_change) < DIR_SETUP_S * f)
 			mc->v.dir_setup++;
 	}
-	if (m->have_step && cycle > m->last_step) {
-		double rate = f / (double)(cycle - m->last_step);
-		if (rate > m->max_rate)
-			m->max_rate = rate;
-		if (rate > mc->cfg.max_step_rate)
-			mc->v.overspeed++;
-	}
-	m->have_step = 1;
-	m->last_step = cycle;
-	m->pulses++;
-	mc->stepped = 1;
-	mc->changed = 1;
+	count_step(mc, m, cycle);
 	if (!mc->enabled) {
 		mc->v.step_while_disabled++;
 		return;
@@ -242,17 +248,7 @@ void machine_coils(struct machine *mc, int axis, int pattern, uint64_t cycle)
 		int d = (s - m->phase + 8) % 8; /* the rotor follows the nearest way */
 		int delta = d <= 4 ? d : d - 8;
 		if (delta == stride || delta == -stride) {
-			m->pulses++;
-			mc->stepped = 1;
-			if (m->have_step && cycle > m->last_step) {
-				double rate = mc->cfg.freq / (double)(cycle - m->last_step);
-				if (rate > m->max_rate)
-					m->max_rate = rate;
-				if (rate > mc->cfg.max_step_rate)
-					mc->v.overspeed++;
-			}
-			m->have_step = 1;
-			m->last_step = cycle;
+			count_step(mc, m, cycle);
 			move(mc, axis, delta / stride, cycle);
 		} else if (delta != 0) {
 			/* a jump the rotor cannot follow (opposite state, or two states

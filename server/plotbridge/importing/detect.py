@@ -63,7 +63,7 @@ def detect_format(path: Path, filename: str, encoding: str) -> str:
     head = head.lstrip("\ufeff")
     stripped = head.lstrip()
     if stripped.startswith("<"):
-        if re.search(r"<svg[\s>]", head):
+        if re.search(r"<(?:[A-Za-z_][\w.-]*:)?svg[\s>]", head):
             return "svg"
         raise ImportFailed.one(415, "XML/HTML file that is not SVG: not an accepted format")
     ext = Path(filename).suffix.lower()

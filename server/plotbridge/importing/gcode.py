@@ -10,11 +10,20 @@ import math
 import re
 from collections.abc import Iterable, Iterator
 
+from .fields import PEN_DIALECTS as UPLOAD_DIALECTS
 from .models import ErrorLog, ImportOptions
-from .ops import ARC, DWELL, MOVE, PEN
+from .ops import ARC, DWELL, LAYER, MOVE, PALETTE, PEN
 
-MAX_LINE = 256
-PEN_DIALECTS = ("auto", "m3", "z", "m300", "servo-z")
+MAX_LINE = 256          # characters of commands on a line (comments do not count)
+MAX_RAW_LINE = 1 << 16  # characters of a line with its comments
+PEN_DIALECTS = (*UPLOAD_DIALECTS, "servo-z")
+M280_DOWN_MAX = 50.0    # M280 servo angles at or below this lower the pen
+M300_DOWN_MAX = 40.0    # M300 S30 lowers the pen, S50 (and S255, servo off) lift it
+# Dialects where the motion mode decides the pen: G0 travels, G1/G2/G3 draw (laser: while
+# the laser is on, M3/M4 to M5; none: always).
+MOTION_PEN = ("laser", "none")
+_PAUSE = re.compile(r"\s*(?:N\d+\s*)?M0*([01])(?![0-9.])\s*(.*)", re.I)
+_CONSOLE = ("$", "?", "~", "!")
 _BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
 _WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
 _COMMENT = re.compile(r"\([^)]*\)|;.*")
@@ -27,9 +36,11 @@ _FAST = re.compile(rf"[ \t]*G0?([01])[ \t]*X[ \t]*{_NUM}[ \t]*Y[ \t]*{_NUM}"
 # G words accepted without effect on a plotter (plane XY, feed per minute, work
 # coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
 _NOOP_G = {17.0, 94.0, 54.0, 61.0, 64.0, 40.0, 49.0, 80.0, 91.1}
-# M words accepted without effect: program end, motors on/off, coolant.
-_NOOP_M = {2.0, 30.0, 17.0, 18.0, 84.0, 7.0, 8.0, 9.0}
-_AXIS_WORDS = frozenset("XYZIJRFSPN")
+# M words accepted without effect: program end, coolant.
+_NOOP_M = {2.0, 30.0, 7.0, 8.0, 9.0}
+# M words dropped with a warning: motors on and off (the server manages the motors).
+_MOTOR_M = {17.0, 18.0, 84.0}
+_AXIS_WORDS = frozenset("XYZIJRFSPNT")
 ARC_RADIUS_ABS = 0.005
 ARC_RADIUS_REL = 0.001
 
@@ -38,8 +49,9 @@ def _num(v: float) -> str:
     return f"{v:g}"
 
 
-def _no_feed(mode: int) -> str:
-    return f"G{mode} with no feed rate: no F on this line or before it"
+def _no_feed(mode: int, feed: float) -> str:
+    return (f"G{mode} with no feed rate before it: drawn at {feed:g} mm/min "
+            "(the import's feed)")
 
 
 def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
@@ -97,6 +109,14 @@ class GcodeReader:
         self.x = self.y = 0.0
         self.z: float | None = None
         self.pen: bool | None = None
+        self.off_x = self.off_y = self.off_z = 0.0     # G92 offsets (machine - program)
+        self.g30 = (0.0, 0.0)
+        self.laser = False          # laser dialect: on from M3/M4 to M5
+        self.drawn = False          # something drawn since the last layer started
+        self.layer_count = 1
+        self.pending_layer: str | None = None
+        self.tool: float | None = None
+        self.default_feed = options.feed
 
     def ops(self, lines: Iterable[tuple[int, str]]) -> Iterator[tuple]:
         if self.dialect == "servo-z" and self.servo_down is None:
@@ -105,10 +125,16 @@ class GcodeReader:
         out: list[tuple] = []
         block = self._block
         fast = _FAST.fullmatch
+        motion_pen = self.dialect in MOTION_PEN
         for line_no, raw in lines:
             if len(raw) > MAX_LINE:
-                self.errors.add(line_no, f"line longer than {MAX_LINE} characters")
-                continue
+                if len(raw) > MAX_RAW_LINE:
+                    self.errors.add(line_no, f"line longer than {MAX_RAW_LINE} characters")
+                    continue
+                if len(_COMMENT.sub("", raw)) > MAX_LINE:
+                    self.errors.add(line_no, f"line longer than {MAX_LINE} characters "
+                                             "(without its comments)")
+                    continue
             m = fast(raw)
             if m is not None and not self.relative and not self.inches:
                 g, xs, ys, fs = m.groups()
@@ -120,15 +146,31 @@ class GcodeReader:
                         m = None    # the general path reports it
                 if m is not None:
                     self.motion = mode = int(g)
-                    self.x = x = float(xs)
-                    self.y = y = float(ys)
+                    self.x = x = float(xs) + self.off_x
+                    self.y = y = float(ys) + self.off_y
+                    if motion_pen:
+                        self._motion_pen(out, line_no, mode)
+                        if out:
+                            yield from out
+                            out.clear()
                     if mode == 0:
                         yield (MOVE, line_no, x, y, None)
-                    elif self.feed is None:
-                        self.errors.add(line_no, _no_feed(1))
                     else:
+                        if self.feed is None:
+                            self.errors.warn(line_no, _no_feed(1, self.default_feed))
+                            self.feed = self.default_feed
                         yield (MOVE, line_no, x, y, self.feed)
                     continue
+            head = raw.lstrip()
+            if head[:1] in _CONSOLE:
+                self.errors.warn(line_no, f"console command '{head[:20]}' dropped: it is "
+                                          "for a terminal, not part of a drawing")
+                continue
+            pause = _PAUSE.fullmatch(raw)
+            if pause is not None and not _BLOCK_AFTER_PAUSE.match(pause.group(2)):
+                message = _COMMENT.sub("", pause.group(2)).strip() or None
+                self._boundary(message)
+                continue
             if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
                 text = strip_line(raw, line_no, self.errors)
                 if not text:
@@ -146,9 +188,29 @@ class GcodeReader:
                 out.clear()
 
     def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
+        if down and self.pending_layer is not None:
+            if not self.drawn and self.pending_layer and self.layer_count == 1:
+                out.append((LAYER, line_no, self.pending_layer, PALETTE[0]))   # names layer 1
+            elif self.drawn:
+                self.layer_count += 1
+                name = self.pending_layer or f"layer {self.layer_count}"
+                out.append((LAYER, line_no, name, PALETTE[(self.layer_count - 1) % len(PALETTE)]))
+                self.drawn = False
+            self.pending_layer = None
+        if down:
+            self.drawn = True
         if self.pen is not down:
             self.pen = down
             out.append((PEN, line_no, down))
+
+    def _motion_pen(self, out: list[tuple], line_no: int, mode: int) -> None:
+        self._pen(out, line_no, mode != 0 and (self.dialect == "none" or self.laser))
+
+    def _boundary(self, name: str | None) -> None:
+        """A pause or tool change: what is drawn after it is a new layer (made when the pen
+        next goes down, so a pause before anything is drawn makes none)."""
+        if not self.pending_layer:     # the first name given (a pause's message) stays
+            self.pending_layer = name or ""
 
     def _block(self, out: list[tuple], line_no: int, words: list[tuple[str, str]]) -> None:
         """Appends the ops of one line to `out` (a plain function: this runs per line)."""
@@ -172,11 +234,14 @@ class GcodeReader:
                 return
         motion = None
         dwell = False
+        home: float | None = None
         for g in gs:
             if g in (0.0, 1.0, 2.0, 3.0):
                 motion = int(g)
             elif g == 4.0:
                 dwell = True
+            elif g in (28.0, 30.0, 92.0, 92.1, 30.1, 28.1):
+                home = g
             elif g == 20.0:
                 self.inches = True
             elif g == 21.0:
@@ -194,22 +259,49 @@ class GcodeReader:
                 errors.add(line_no, "feed rate F must be positive")
                 return
             self.feed = vals["F"] * unit
+        if "T" in vals and 280.0 not in ms:     # T on an M280 line is the servo's time
+            self.tool = vals["T"]
+            if 6.0 not in ms:
+                self._boundary(f"tool T{_num(vals['T'])}")
         for m in ms:
             if m in (3.0, 4.0, 5.0):
                 if self.dialect in ("auto", "m3"):
                     self._pen(out, line_no, m != 5.0)
+                elif self.dialect == "laser":
+                    self.laser = m != 5.0
+                    if not self.laser:
+                        self._pen(out, line_no, False)
+            elif m == 6.0:
+                tool = f"tool T{_num(self.tool)}" if self.tool is not None else None
+                self._boundary(tool)
+            elif m in (0.0, 1.0):
+                self._boundary(None)
+            elif m == 280.0:
+                s_angle = vals.get("S")
+                if s_angle is None:
+                    errors.add(line_no, "M280 needs a servo angle S")
+                    return
+                if self.dialect in ("auto", "m280"):
+                    if self.servo_down is not None:
+                        down = abs(s_angle - self.servo_down) < 0.5
+                    else:
+                        down = s_angle <= M280_DOWN_MAX
+                    self._pen(out, line_no, down)
+            elif m in _MOTOR_M:
+                errors.warn(line_no, f"M{_num(m)} (motors on/off) dropped: the server "
+                                     "manages the motors")
             elif m == 300.0:
                 s = vals.get("S")
-                if s == 30.0:
-                    self._pen(out, line_no, True)
-                elif s == 50.0:
-                    self._pen(out, line_no, False)
-                else:
-                    errors.add(line_no, "M300 needs S30 (pen down) or S50 (pen up)")
+                if s is None:
+                    errors.add(line_no, "M300 needs a servo angle S (S30 pen down, S50 up)")
                     return
+                self._pen(out, line_no, s <= M300_DOWN_MAX)
             elif m not in _NOOP_M:
                 errors.add(line_no, f"unsupported command M{_num(m)}")
                 return
+        if home is not None:
+            self._home(out, line_no, home, vals, unit)
+            return
         if dwell:
             p = vals.get("P")
             if p is None or p < 0:
@@ -218,7 +310,7 @@ class GcodeReader:
             out.append((DWELL, line_no, p))
             return
         if "Z" in vals:
-            z = vals["Z"] * unit
+            z = vals["Z"] * unit + (0.0 if self.relative else self.off_z)
             if self.relative and self.dialect != "servo-z":
                 z += self.z or 0.0
             self.z = z
@@ -239,13 +331,14 @@ class GcodeReader:
         if self.relative:
             tx, ty = x + vals.get("X", 0.0) * unit, y + vals.get("Y", 0.0) * unit
         else:
-            tx = vals["X"] * unit if "X" in vals else x
-            ty = vals["Y"] * unit if "Y" in vals else y
+            tx = vals["X"] * unit + self.off_x if "X" in vals else x
+            ty = vals["Y"] * unit + self.off_y if "Y" in vals else y
         mode = self.motion
+        if self.dialect in MOTION_PEN:
+            self._motion_pen(out, line_no, mode)
         if mode != 0 and self.feed is None:
-            errors.add(line_no, _no_feed(mode))
-            self.x, self.y = tx, ty
-            return
+            errors.warn(line_no, _no_feed(mode, self.default_feed))
+            self.feed = self.default_feed
         if mode in (0, 1):
             self.x, self.y = tx, ty
             out.append((MOVE, line_no, tx, ty, None if mode == 0 else self.feed))
@@ -276,6 +369,47 @@ class GcodeReader:
         self.x, self.y = tx, ty
         out.append((ARC, line_no, tx, ty, i, j, self.feed, cw))
 
+    def _home(self, out: list[tuple], line_no: int, g: float, vals: dict[str, float],
+              unit: float) -> None:
+        """G92 (offsets), G28/G30 (pen-up travel home or to the stored position, through
+        the point given), G28.1/G30.1 (store the position)."""
+        if g == 92.0:
+            if not any(k in vals for k in "XYZ"):
+                self.errors.add(line_no, "G92 needs an axis word (X, Y or Z)")
+                return
+            if "X" in vals:
+                self.off_x = self.x - vals["X"] * unit
+            if "Y" in vals:
+                self.off_y = self.y - vals["Y"] * unit
+            if "Z" in vals:
+                self.off_z = (self.z or 0.0) - vals["Z"] * unit
+            return
+        if g == 92.1:
+            self.off_x = self.off_y = self.off_z = 0.0
+            return
+        if g == 30.1:
+            self.g30 = (self.x, self.y)
+            return
+        if g == 28.1:
+            return
+        # Only the axes named go home; with none named, all do. The pen goes up first.
+        named = [a for a in "XYZ" if a in vals]
+        self._pen(out, line_no, False)
+        axes = [a for a in "XY" if a in vals] if named else ["X", "Y"]
+        if not axes:
+            return
+        if named:
+            if self.relative:
+                ix, iy = self.x + vals.get("X", 0.0) * unit, self.y + vals.get("Y", 0.0) * unit
+            else:
+                ix = vals["X"] * unit + self.off_x if "X" in vals else self.x
+                iy = vals["Y"] * unit + self.off_y if "Y" in vals else self.y
+            out.append((MOVE, line_no, ix, iy, None))
+        hx, hy = (0.0, 0.0) if g == 28.0 else self.g30
+        self.x = hx if "X" in axes else self.x
+        self.y = hy if "Y" in axes else self.y
+        out.append((MOVE, line_no, self.x, self.y, None))
+
     def _centre_from_radius(self, line_no: int, x: float, y: float, tx: float, ty: float,
                             r: float, cw: bool) -> tuple[float, float] | None:
         dx, dy = tx - x, ty - y
@@ -301,18 +435,35 @@ class GcodeReader:
         return cx - x, cy - y
 
 
+_LASER_SNIFF = 1 << 16
+_BLOCK_AFTER_PAUSE = re.compile(r"[GMXYZFST]\s*[-+.\d]", re.I)
 _Z_WORD = re.compile(r"Z\s*([-+]?(?:\d+\.?\d*|\.\d+))", re.I)
 _M300 = re.compile(r"M\s*300\b", re.I)
 
 
+_M280 = re.compile(r"M\s*280\b", re.I)
+_M3 = re.compile(r"^[^\n]*?\bM0*[34](?![0-9.])", re.I | re.M)
+_LASER_G0 = re.compile(r"\bM0*[34](?![0-9.])(?:(?!\bM0*5(?![0-9.]))[\s\S])*?^\s*G0*0(?![0-9.])"
+                       r"[^\n]*[XY](?:(?!\bM0*5(?![0-9.]))[\s\S])*?^\s*G0*1(?![0-9.])",
+                       re.I | re.M)
+
+
 def sniff_dialect(head: str) -> str:
-    """The pen dialect a file's beginning shows: M300 words; Z moving between at least
-    two heights (M3/M5 are then the spindle of a Z-axis machine); else M3/M5."""
+    """The pen dialect a file's beginning shows: M300 or M280 words; Z moving between at
+    least two heights (M3/M5 are then the spindle of a Z-axis machine); M3 switched on
+    and then G0 travel between G1 strokes with no M5 (a laser's file: G0 is pen-up
+    travel, as GRBL's laser mode); M3/M5; no pen command at all: every G1 draws."""
     text = _COMMENT.sub("", head)
     if _M300.search(text):
         return "m300"
+    if _M280.search(text):
+        return "m280"
     if len({float(z) for z in _Z_WORD.findall(text)}) >= 2:
         return "z"
+    if _M3.search(text) is None:
+        return "none"
+    if _LASER_G0.search(text[:_LASER_SNIFF]):
+        return "laser"
     return "m3"
 
 

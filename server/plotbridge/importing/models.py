@@ -62,6 +62,12 @@ class ImportOptions:
     z_threshold: float = 0.0
     servo_down_angle: float | None = None
     feed: float = 3000.0  # mm/min for drawing moves of SVG, coordinates and patterns
+    fill: str = "none"    # SVG fills: "none", "outline" (filled-only shapes), "hatch"
+    hatch_spacing: float = 0.5   # mm between hatch lines (the default pen's width)
+    hatch_angle: float = 45.0    # degrees, counter-clockwise on the page
+    hatch_cross: bool = False    # a second hatch at right angles
+    font: str = "futural"        # single-stroke font for SVG text (svgtext.FONTS)
+    clip_to_page: bool = True    # SVG: drop what lies outside the document's page
 
 
 @dataclass
@@ -74,6 +80,12 @@ class ImportResult:
     bounds: dict[str, float]
     stats: dict[str, float]
     timeline: list[tuple[int, float]] = field(default_factory=list)
+    # [{"name", "colour", "first_line", "last_line", "strokes", "pen_down_mm",
+    #   "estimate_s"}] in plotting order (docs/INTERNALS.md, "Layers")
+    layers: list[dict] = field(default_factory=list)
+    warnings: list[dict] = field(default_factory=list)     # [{"line", "message"}]
+    # SVG text set in a substitute font: [{"element", "text", "font", "substitute"}]
+    substitutions: list[dict] = field(default_factory=list)
 
 
 class ImportFailed(Exception):
@@ -100,6 +112,20 @@ class ErrorLog:
     def __init__(self) -> None:
         self.errors: list[dict] = []
         self.count = 0
+        self.warnings: list[dict] = []
+        self.warning_count = 0
+        self.substitutions: list[dict] = []
+
+    def warn(self, line: int | None, message: str) -> None:
+        """Something dropped or changed that the user should know about; the import goes
+        on. Repeats of one message are counted, not listed again."""
+        self.warning_count += 1
+        for w in self.warnings:
+            if w["message"] == message:
+                w["count"] = w.get("count", 1) + 1
+                return
+        if len(self.warnings) < MAX_ERRORS:
+            self.warnings.append({"line": line, "message": message})
 
     def add(self, line: int | None, message: str) -> None:
         self.count += 1

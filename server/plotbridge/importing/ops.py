@@ -7,6 +7,7 @@ An op is a tuple whose first item is its kind and whose second is the source lin
 - ``(MOVE, line, x, y, feed)``: feed in mm/min, ``None`` for a rapid (G0)
 - ``(ARC, line, x, y, i, j, feed, cw)``: centre offset (i, j) from the start point
 - ``(DWELL, line, seconds)``
+- ``(LAYER, line, name, colour)``: what follows is a new layer (a pen change before it)
 
 Coordinates are absolute millimetres.
 """
@@ -15,10 +16,22 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
 
-PEN, MOVE, ARC, DWELL = 0, 1, 2, 3
+PEN, MOVE, ARC, DWELL, LAYER = 0, 1, 2, 3, 4
 
 Stroke = list[tuple[float, float]]
+# Colours for layers whose source names none (G-code tool changes, coordinates).
+PALETTE = ("#000000", "#1f5fbf", "#c0282d", "#2e8b3e", "#8a4fb5", "#d77a12", "#0e8c8c")
+
+
+@dataclass
+class Layer:
+    """Strokes drawn with one pen: a layer of the job (docs/INTERNALS.md, "Layers")."""
+
+    name: str
+    colour: str
+    strokes: list[Stroke] = field(default_factory=list)
 
 
 def arc_sweep(sx: float, sy: float, x: float, y: float, i: float, j: float,
@@ -67,6 +80,13 @@ def arc_extent(sx: float, sy: float, x: float, y: float, i: float, j: float,
     return min(xs), min(ys), max(xs), max(ys)
 
 
+def layers_to_ops(layers: Iterable[Layer], feed: float) -> Iterator[tuple]:
+    """Each layer's marker, then pen-up travel to each stroke's start and pen down along it."""
+    for layer in layers:
+        yield (LAYER, None, layer.name, layer.colour)
+        yield from strokes_to_ops(layer.strokes, feed)
+
+
 def strokes_to_ops(strokes: Iterable[Stroke], feed: float) -> Iterator[tuple]:
     """Pen-up travel to each stroke's start, then pen down along it."""
     for stroke in strokes:
@@ -79,16 +99,25 @@ def strokes_to_ops(strokes: Iterable[Stroke], feed: float) -> Iterator[tuple]:
     yield (PEN, None, False)
 
 
-def ops_to_strokes(ops: Iterable[tuple], tolerance: float) -> tuple[list[Stroke], float]:
-    """Pen-down polylines (arcs flattened) and the feed they were drawn at (the most
-    recent drawing feed; used when the strokes are written again)."""
-    strokes: list[Stroke] = []
+def ops_to_layers(ops: Iterable[tuple], tolerance: float) -> tuple[list[Layer], float]:
+    """Pen-down polylines (arcs flattened) by layer, and the feed they were drawn at (the
+    most recent drawing feed; used when the strokes are written again)."""
+    layers = [Layer(name="layer 1", colour=PALETTE[0])]
+    strokes = layers[0].strokes
     cur: Stroke | None = None
     x = y = 0.0
     down = False
     feed = 0.0
     for op in ops:
         kind = op[0]
+        if kind == LAYER:
+            if layers[-1].strokes:
+                layers.append(Layer(name=op[2], colour=op[3]))
+            else:
+                layers[-1] = Layer(name=op[2], colour=op[3])
+            strokes = layers[-1].strokes
+            cur = None
+            continue
         if kind == PEN:
             down = op[2]
             cur = None
@@ -109,4 +138,4 @@ def ops_to_strokes(ops: Iterable[tuple], tolerance: float) -> tuple[list[Stroke]
                 strokes.append(cur)
             cur.extend(pts)
         x, y = op[2], op[3]
-    return strokes, feed
+    return [lay for lay in layers if lay.strokes], feed

@@ -9,11 +9,13 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
 from .coords import read_coords
 from .detect import check_text, detect_format, numbered_lines
 from .gcode import read_ops, sniff_dialect
 from .models import ErrorLog, ImportFailed, ImportOptions, ImportResult, MachineProfile
-from .ops import ARC, MOVE, PEN, Stroke, arc_extent, ops_to_strokes, strokes_to_ops
+from .ops import ARC, MOVE, PALETTE, PEN, Layer, Stroke, arc_extent, layers_to_ops, ops_to_layers
 from .optimize import optimize_strokes, time_budget, travel
 from .patterns import pattern_strokes
 from .placement import Bounds, Transform, needs_bounds, placement
@@ -82,6 +84,7 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
         raise
     planner = writer.planner
     after = writer.travel_mm
+    timeline = planner.timeline.finish(writer.line, round(planner.time, 3))
     return ImportResult(
         format=fmt,
         program_path=program,
@@ -95,27 +98,59 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
             "travel_after_mm": round(after, 3),
             "pen_lifts": writer.pen_lifts,
         },
-        timeline=planner.timeline.finish(writer.line, round(planner.time, 3)),
+        timeline=timeline,
+        layers=layer_table(writer.layers, timeline),
+        warnings=list(errors.warnings),
+        substitutions=list(errors.substitutions),
     )
 
 
-def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: ImportOptions,
-                   profile: MachineProfile, errors: ErrorLog, feed: float | None = None,
-                   optimize: bool = True) -> ImportResult:
-    """Places, optionally optimizes, and writes a drawing given as pen-down polylines."""
+def layer_table(layers: list[dict], timeline: list[tuple[int, float]]) -> list[dict]:
+    """The writer's layers with each one's estimated time (from the timeline)."""
+    if not timeline:
+        return layers
+    lines = [0] + [n for n, _ in timeline]
+    secs = [0.0] + [t for _, t in timeline]
+
+    def at(line: int) -> float:
+        return float(np.interp(line, lines, secs))
+
+    return [{**lay, "estimate_s": round(at(lay["last_line"]) - at(lay["first_line"] - 1), 1)}
+            for lay in layers]
+
+
+def import_layers(layers: list[Layer], fmt: str, dest_dir: Path, options: ImportOptions,
+                  profile: MachineProfile, errors: ErrorLog, feed: float | None = None,
+                  optimize: bool = True) -> ImportResult:
+    """Places, optionally optimizes (within each layer, never across), and writes a
+    drawing given as layers of pen-down polylines, in layer order."""
     errors.raise_if_any()
-    bounds = strokes_bounds(strokes)
+    bounds = strokes_bounds([s for lay in layers for s in lay.strokes])
     if bounds is None:
         raise ImportFailed.one(422, "nothing to draw")
     transform = placement(bounds, options, profile)
-    placed = [[transform.apply(x, y) for x, y in s] for s in strokes]
-    before = travel(placed)
+    placed = [Layer(lay.name, lay.colour, [[transform.apply(x, y) for x, y in s]
+                                           for s in lay.strokes]) for lay in layers]
+    before = travel([s for lay in placed for s in lay.strokes])
     if optimize:
-        deadline = time.monotonic() + time_budget(len(placed))
-        placed = optimize_strokes(placed, options.tolerance, deadline)
+        deadline = time.monotonic() + time_budget(sum(len(lay.strokes) for lay in placed))
+        start = (0.0, 0.0)
+        for lay in placed:
+            lay.strokes = optimize_strokes(lay.strokes, options.tolerance, deadline, start)
+            if lay.strokes:
+                start = lay.strokes[-1][-1]
+    placed = [lay for lay in placed if lay.strokes]
     draw_feed = feed or options.feed
-    return write_program(lambda: strokes_to_ops(placed, draw_feed), fmt, dest_dir, Transform(),
+    return write_program(lambda: layers_to_ops(placed, draw_feed), fmt, dest_dir, Transform(),
                          profile, errors, travel_before=before)
+
+
+def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: ImportOptions,
+                   profile: MachineProfile, errors: ErrorLog,
+                   optimize: bool = True) -> ImportResult:
+    """A drawing of one layer (coordinates lists, patterns)."""
+    return import_layers([Layer("layer 1", PALETTE[0], strokes)], fmt, dest_dir, options,
+                         profile, errors, optimize=optimize)
 
 
 def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOptions,
@@ -131,9 +166,9 @@ def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOpt
     except ValueError as e:
         raise ImportFailed.one(422, str(e)) from None
     if options.optimize:
-        strokes, feed = ops_to_strokes(ops(), min(options.tolerance, 0.01) or 0.01)
-        return import_strokes(strokes, "gcode", dest_dir, options, profile, errors,
-                              feed=feed or None)
+        layers, feed = ops_to_layers(ops(), min(options.tolerance, 0.01) or 0.01)
+        return import_layers(layers, "gcode", dest_dir, options, profile, errors,
+                             feed=feed or None)
     bounds = None
     if needs_bounds(options):
         bounds = drawn_bounds(ops())
@@ -156,9 +191,9 @@ def import_file(source: Path, filename: str, dest_dir: Path, options: ImportOpti
     optimize = options.optimize is not False
     errors = ErrorLog()
     if fmt == "svg":
-        strokes = read_svg(source, options, errors)
-    else:
-        strokes = read_coords(numbered_lines(source, encoding), errors)
+        return import_layers(read_svg(source, options, errors), fmt, dest_dir, options, profile,
+                             errors, optimize=optimize)
+    strokes = read_coords(numbered_lines(source, encoding), errors)
     return import_strokes(strokes, fmt, dest_dir, options, profile, errors, optimize=optimize)
 
 

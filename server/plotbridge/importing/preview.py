@@ -22,11 +22,14 @@ class PreviewBuilder:
         self.max_points = max_points
         self.tolerance = BASE_TOLERANCE
         self.strokes: list[np.ndarray] = []
+        self.colour: str | None = None   # of the strokes drawn from now on (their layer's)
+        self.colours: list[str | None] = []
         self.travel: list[tuple[float, float, float, float]] = []
         self.points = 0
         self._raw: list[tuple[float, float]] = []
-        # Raw pieces waiting for the next batch: (points, continues into the next piece).
-        self._pending: list[tuple[list[tuple[float, float]], bool]] = []
+        # Raw pieces waiting for the next batch: (points, continues into the next piece,
+        # colour).
+        self._pending: list[tuple[list[tuple[float, float]], bool, str | None]] = []
         self._pending_points = 0
         self._open: np.ndarray | None = None   # simplified start of a stroke still going
         self._travel_from: tuple[float, float] | None = None
@@ -62,7 +65,7 @@ class PreviewBuilder:
             self._raw = []
 
     def _queue(self, continues: bool) -> None:
-        self._pending.append((self._raw, continues))
+        self._pending.append((self._raw, continues, self.colour))
         self._pending_points += len(self._raw)
         if self._pending_points >= _BATCH:
             self._simplify_pending()
@@ -70,13 +73,13 @@ class PreviewBuilder:
     def _simplify_pending(self) -> None:
         if not self._pending:
             return
-        sizes = [len(p) for p, _ in self._pending]
-        pts = np.array([q for p, _ in self._pending for q in p], dtype=float)
+        sizes = [len(p) for p, _, _ in self._pending]
+        pts = np.array([q for p, _, _ in self._pending for q in p], dtype=float)
         ends = np.cumsum(sizes)
         fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
         keep = simplify_mask(pts, self.tolerance, fixed)
-        for (_, continues), lo, hi in zip(self._pending, ends - np.array(sizes), ends,
-                                          strict=True):
+        for (_, continues, colour), lo, hi in zip(self._pending, ends - np.array(sizes), ends,
+                                                  strict=True):
             piece = pts[lo:hi][keep[lo:hi]]
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])
@@ -85,6 +88,7 @@ class PreviewBuilder:
                 self._open = piece
             else:
                 self.strokes.append(piece)
+                self.colours.append(colour)
                 self.points += len(piece)
         self._pending, self._pending_points = [], 0
         self._fit()
@@ -109,6 +113,7 @@ class PreviewBuilder:
         self._fit()
         return {
             "strokes": [np.round(s, 3).tolist() for s in self.strokes],
+            "colours": self.colours,
             "travel": [[[round(a, 3), round(b, 3)], [round(c, 3), round(d, 3)]]
                        for a, b, c, d in self.travel],
             "bounds": bounds,

@@ -7,7 +7,7 @@ from collections.abc import Iterable
 
 from ..motion.estimate import Estimator
 from .models import ErrorLog, MachineProfile
-from .ops import ARC, DWELL, MOVE, PEN, arc_extent, arc_points
+from .ops import ARC, DWELL, LAYER, MOVE, PALETTE, PEN, arc_extent, arc_points
 from .placement import Transform
 from .preview import PreviewBuilder
 
@@ -44,6 +44,10 @@ class ProgramWriter:
         self._buf: list[str] = []
         self.last = ""
         self._feed_texts: dict[float, str] = {}
+        self.layers: list[dict] = []
+        # Pen-up travel that left the work area (source line, x, y): clamped to the
+        # area when no stroke follows it (a trailing move home), an error otherwise.
+        self._outside: tuple[int | None, float, float] | None = None
         for text in HEADER:
             self._write(text)
         # The pen is up when a job starts: the firmware skips the settle time of a pen
@@ -102,11 +106,42 @@ class ProgramWriter:
             elif kind == DWELL:
                 self._write(f"G4 P{op[2]:.3f}")
                 self.planner.stop(self.line, op[2])
+            elif kind == LAYER:
+                self.layer(op[2], op[3])
+
+    def layer(self, name: str, colour: str) -> None:
+        """Starts a layer. Between layers the program lifts the pen and has an `M0`
+        line: the pen-change pause (docs/INTERNALS.md, "Layers")."""
+        if self.layers:
+            self.pen(None, False)
+            lay = self.layers[-1]
+            if self.pen_lifts == lay["strokes"]:      # nothing drawn in it yet: renamed
+                lay.update(name=name, colour=colour)
+                self.preview.colour = colour
+                return
+            self._end_layer()
+            self._write("M0")
+            self.planner.stop(self.line, 0.0)
+        self.layers.append({"name": name, "colour": colour, "first_line": self.line + 1,
+                            "pen_down_mm": self.pen_down_mm, "strokes": self.pen_lifts})
+        self.preview.end_stroke()
+        self.preview.colour = colour
+
+    def _end_layer(self) -> None:
+        lay = self.layers[-1]
+        lay["last_line"] = self.line
+        lay["pen_down_mm"] = round(self.pen_down_mm - lay["pen_down_mm"], 3)
+        lay["strokes"] = self.pen_lifts - lay["strokes"]
 
     def pen(self, src_line: int | None, down: bool) -> None:
         if down == self.down:
             return
+        if down and not self.layers:
+            self.layer("layer 1", PALETTE[0])
         self.down = down
+        if down and self._outside is not None:
+            self._check(*self._outside)
+            self._outside = None
         self._write("M3" if down else "M5")
         if down:
             self.preview.end_stroke()
@@ -124,9 +159,18 @@ class ProgramWriter:
             return
         a = self._area
         if not (a[0] <= x <= a[2] and a[1] <= y <= a[3]):
-            self._check(src_line, x, y)
-            self.x, self.y = x, y     # the import fails; only keep finding errors
-            return
+            if self.down:
+                self._check(src_line, x, y)
+                self.x, self.y = x, y     # the import fails; only keep finding errors
+                return
+            if self._outside is None:
+                self._outside = (src_line, x, y)
+            x = min(max(x, 0.0), self.profile.width)
+            y = min(max(y, 0.0), self.profile.height)
+            xt, yt = f"{x:.3f}", f"{y:.3f}"
+            x, y = float(xt), float(yt)
+            if x == x0 and y == y0:
+                return
         if feed is None:
             self._write(f"G0 X{xt} Y{yt}")
         else:
@@ -188,6 +232,12 @@ class ProgramWriter:
         elif self.last != "M5":
             self._write("M5")
             self.planner.stop(self.line, 0.0)
+        if self._outside is not None:
+            line, x, y = self._outside
+            self.errors.warn(line, f"pen-up travel after the last stroke to X{x:.3f} "
+                                   f"Y{y:.3f} is outside the work area: clamped to its edge")
+        if self.layers:
+            self._end_layer()
         self.planner.flush()
         self.flush()
 

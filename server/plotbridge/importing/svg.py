@@ -1,122 +1,678 @@
-"""SVG: every visible shape as pen-down polylines in millimetres, plotter-oriented.
+"""SVG as a browser renders it, as pen-down polylines in millimetres, by layer.
 
-The XML is first parsed with defusedxml, which refuses DTDs and entities (no
-billion laughs, no external files); svgelements then resolves transforms, viewBox,
-physical units and styles. SVG's Y axis points down the page, the plotter's away
-from the operator: the page is flipped so the drawing reads the same on paper.
+The document is parsed safely (svgxml.py), then walked here: styles cascade and
+inherit (svgstyle.py), `<use>` places its target (symbols with their viewBox), nested
+viewports and `clip-path` clip (shapely), `<switch>` draws its first matching child,
+`<mask>`, `<defs>` and other non-rendered content is never drawn, text is set in a
+single-stroke font (svgtext.py), and fills are outlined or hatched on request
+(fill.py). Shapes that would not be visible are skipped. An element that cannot be
+read is skipped with a warning naming it. SVG's Y axis points down the page, the
+plotter's away from the operator: the page is flipped so the drawing reads the same.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass, replace
 from pathlib import Path
+from xml.etree.ElementTree import Element
 
 import numpy as np
-import svgelements as se
-from defusedxml import ElementTree as SafeET
-from defusedxml.common import DefusedXmlException
+import shapely
+from shapely.geometry import Polygon
+from shapely.geometry.base import BaseGeometry
 
+from . import curves, fill, svgtext
+from .curves import Affine, compose
 from .models import ErrorLog, ImportFailed, ImportOptions
-from .ops import Stroke
+from .ops import Layer
+from .svgstyle import (
+    ROOT_STYLE,
+    Stylesheet,
+    cascade,
+    href,
+    length,
+    local,
+    numbers,
+    opacity,
+    paint,
+    url_id,
+)
+from .svgxml import parse_svg_xml
 
 PX_MM = 25.4 / 96.0
-INKSCAPE_LABEL = "{http://www.inkscape.org/namespaces/inkscape}label"
-MAX_SEGMENT_POINTS = 1 << 14
+INKSCAPE = "{http://www.inkscape.org/namespaces/inkscape}"
+NOT_RENDERED = frozenset({
+    "defs", "symbol", "clipPath", "mask", "marker", "pattern", "linearGradient",
+    "radialGradient", "style", "title", "desc", "metadata", "script", "filter",
+    "foreignObject", "font", "font-face", "cursor", "view", "animate", "set",
+    "animateTransform", "animateMotion", "image", "namedview",
+})
+SHAPES = frozenset({"path", "rect", "circle", "ellipse", "line", "polyline", "polygon"})
+MAX_ELEMENTS = 500_000   # elements drawn, counting each <use> copy: bounds clone bombs
+MAX_DEPTH = 64
+LANGUAGES = ("en",)
 
 
-def _flatten(seg, tol_px: float) -> np.ndarray:
-    """Points along a curve segment (t in (0, 1]) with chords within tol_px of it."""
-    n = 8
-    while True:
-        ts = np.linspace(0.0, 1.0, n + 1)
-        pts = np.asarray(seg.npoint(ts), dtype=float)
-        mids = np.asarray(seg.npoint((ts[:-1] + ts[1:]) / 2), dtype=float)
-        dev = np.hypot(*(mids - (pts[:-1] + pts[1:]) / 2).T)
-        if dev.max(initial=0.0) <= tol_px or n >= MAX_SEGMENT_POINTS:
-            return pts[1:]
-        n *= 4
+@dataclass(frozen=True)
+class Ctx:
+    m: Affine                          # user units -> page millimetres, y down
+    style: dict
+    opacity: float = 1.0
+    clip: BaseGeometry | None = None   # page millimetres
+    clip_box: tuple[float, float, float, float] | None = None   # when clip is that box
+    chain: tuple[str, ...] = ()        # ids and labels of enclosing groups
+    layer: str | None = None           # enclosing Inkscape layer
+    vw: float = 100.0                  # viewport size in user units (for %)
+    vh: float = 100.0
+    uses: frozenset = frozenset()      # ids of the <use> targets being drawn
+    depth: int = 0
 
 
-def path_strokes(path: se.Path, tol_px: float) -> list[list[tuple[float, float]]]:
-    strokes: list[list[tuple[float, float]]] = []
-    cur: list[tuple[float, float]] = []
-    for seg in path.segments():
-        if isinstance(seg, se.Move):
-            if len(cur) > 1:
-                strokes.append(cur)
-            cur = [(seg.end.x, seg.end.y)]
-            continue
-        if seg.start is None or seg.end is None:
-            continue
-        if not cur:
-            cur = [(seg.start.x, seg.start.y)]
-        if isinstance(seg, (se.Line, se.Close)):
-            cur.append((seg.end.x, seg.end.y))
+def _where(elem: Element, tag: str) -> str:
+    ident = elem.get("id")
+    return f"<{tag} id=\"{ident}\">" if ident else f"<{tag}>"
+
+
+def viewbox_transform(vb: list[float], x: float, y: float, w: float, h: float,
+                      par: str | None) -> Affine:
+    """The viewBox mapped into the viewport (x, y, w, h) as preserveAspectRatio says."""
+    vx, vy, vw, vh = vb
+    sx, sy = w / vw, h / vh
+    words = (par or "xMidYMid meet").split()
+    align = words[0] if words else "xMidYMid"
+    if align == "defer" and len(words) > 1:
+        words = words[1:]
+        align = words[0]
+    if align == "none":
+        return (sx, 0.0, 0.0, sy, x - vx * sx, y - vy * sy)
+    s = max(sx, sy) if len(words) > 1 and words[1] == "slice" else min(sx, sy)
+    tx, ty = x - vx * s, y - vy * s
+    if "xMid" in align:
+        tx += (w - vw * s) / 2
+    elif "xMax" in align:
+        tx += w - vw * s
+    if "YMid" in align:
+        ty += (h - vh * s) / 2
+    elif "YMax" in align:
+        ty += h - vh * s
+    return (s, 0.0, 0.0, s, tx, ty)
+
+
+class SvgReader:
+    def __init__(self, root: Element, options: ImportOptions, errors: ErrorLog) -> None:
+        self.root = root
+        self.options = options
+        self.errors = errors
+        self.sheet = Stylesheet(root)
+        self.ids: dict[str, Element] = {}
+        for el in root.iter():
+            ident = el.get("id")
+            if ident is not None and ident not in self.ids:
+                self.ids[ident] = el
+        self.tol_mm = max(min(options.tolerance, 0.05) / 2, 0.005)
+        self.layers: dict[str, Layer] = {}
+        self.found_names: set[str] = set()
+        self.invisible = 0
+        self.filled_only = 0
+        self.count = 0
+        self.substitutions: list[dict] = []
+        self.page: tuple[float, float] | None = None
+        self._clip_cache: dict[tuple, BaseGeometry] = {}
+        self._page_clip: list[tuple[Layer, int, list[np.ndarray]]] = []
+
+    # ---- entry ---------------------------------------------------------------------
+
+    def read(self) -> list[Layer]:
+        root = self.root
+        if local(root.tag) != "svg":
+            raise ImportFailed.one(422, f"not SVG: the root element is <{root.tag}>")
+        style, own = cascade(root, "svg", ROOT_STYLE, self.sheet)
+        vb = numbers(root.get("viewBox"))
+        if len(vb) != 4 or vb[2] <= 0 or vb[3] <= 0:
+            vb = []
+        try:
+            w = length(root.get("width"), vb[2] if vb else 0.0, default=-1.0)
+            h = length(root.get("height"), vb[3] if vb else 0.0, default=-1.0)
+        except ValueError as e:
+            raise ImportFailed.one(422, f"<svg>: width or height: {e}") from None
+        if w < 0:
+            w = vb[2] if vb else -1.0
+        if h < 0:
+            h = vb[3] if vb else -1.0
+        if w == 0 or h == 0:
+            raise ImportFailed.one(422, "<svg>: width or height is zero: nothing is shown")
+        m: Affine = (PX_MM, 0.0, 0.0, PX_MM, 0.0, 0.0)
+        vw, vh = (vb[2], vb[3]) if vb else (w if w > 0 else 100.0, h if h > 0 else 100.0)
+        if vb and w > 0 and h > 0:
+            m = compose(m, viewbox_transform(vb, 0.0, 0.0, w, h,
+                                             root.get("preserveAspectRatio")))
+        elif vb:
+            m = compose(m, (1.0, 0.0, 0.0, 1.0, -vb[0], -vb[1]))
+            w, h = vb[2], vb[3]
+        ctx = Ctx(m=m, style=style, vw=vw, vh=vh)
+        if w > 0 and h > 0:
+            self.page = (w * PX_MM, h * PX_MM)
+            if self.options.clip_to_page:
+                b = (0.0, 0.0, w * PX_MM, h * PX_MM)
+                ctx = replace(ctx, clip=fill.rect(*b), clip_box=b)
+        if root.get("transform"):
+            ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(root.get("transform"))))
+        ctx = replace(ctx, opacity=opacity(own.get("opacity")))
+        with np.errstate(all="ignore"):     # huge or degenerate geometry: skipped, not warned
+            self.children(root, ctx)
+            self._clip_to_page()
+        return self.result()
+
+    def result(self) -> list[Layer]:
+        layers = [lay for lay in self.layers.values() if lay.strokes]
+        if not layers:
+            return []
+        if self.page is not None:
+            top = self.page[1]
         else:
-            cur.extend(map(tuple, _flatten(seg, tol_px).tolist()))
-    if len(cur) > 1:
-        strokes.append(cur)
-    return strokes
+            top = max(y for lay in layers for s in lay.strokes for _, y in s)
+        for lay in layers:
+            lay.strokes = [[(x, top - y) for x, y in s] for s in lay.strokes]
+        return layers
 
+    # ---- walking -------------------------------------------------------------------
 
-def _selected(chain: list[str], element: se.Shape, layers: list[str]) -> bool:
-    if any(name in layers for name in chain):
+    def children(self, elem: Element, ctx: Ctx) -> None:
+        for child in elem:
+            self.element(child, ctx)
+
+    def element(self, elem: Element, ctx: Ctx) -> None:
+        tag = local(elem.tag)
+        if tag is None or tag in NOT_RENDERED:
+            return
+        if (elem.get(f"{INKSCAPE}groupmode") == "layer"
+                and elem.get("style", "").replace(" ", "").find("display:none") >= 0):
+            return
+        self.count += 1
+        if self.count > MAX_ELEMENTS:
+            raise ImportFailed.one(422, f"SVG refused: more than {MAX_ELEMENTS} elements to "
+                                        "draw (counting every <use> copy)")
+        if ctx.depth > MAX_DEPTH:
+            self.errors.warn(None, f"{_where(elem, tag)} skipped: nested more than "
+                                   f"{MAX_DEPTH} levels deep")
+            return
+        try:
+            self._element(elem, tag, ctx)
+        except ImportFailed:
+            raise
+        except RecursionError:
+            self.errors.warn(None, f"{_where(elem, tag)} skipped: nested too deeply")
+        except (ValueError, TypeError, ZeroDivisionError, IndexError, AttributeError,
+                KeyError, OverflowError, ArithmeticError) as e:
+            self.errors.warn(None, f"{_where(elem, tag)} skipped: {e}")
+        except Exception as e:   # a geometry library's own failure: named, not raised
+            self.errors.warn(None, f"{_where(elem, tag)} skipped: {type(e).__name__}: {e}")
+
+    def _element(self, elem: Element, tag: str, ctx: Ctx) -> None:
+        style, own = cascade(elem, tag, ctx.style, self.sheet)
+        if own.get("display", "").strip() == "none":
+            return
+        ctx = replace(ctx, style=style, opacity=ctx.opacity * opacity(own.get("opacity")),
+                      depth=ctx.depth + 1)
+        if ctx.opacity <= 0:
+            self.invisible += 1
+            return
+        if elem.get("transform"):
+            ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(elem.get("transform"))))
+        if own.get("mask") and url_id(own.get("mask")) not in self.ids:
+            self.errors.warn(None, f"{_where(elem, tag)}: mask not found; drawn unmasked")
+        clip_id = url_id(own.get("clip-path"))
+        if clip_id is not None:
+            ctx = self._clipped(ctx, clip_id, elem, tag)
+            if ctx.clip is not None and ctx.clip.is_empty:
+                return
+        if tag in ("g", "a"):
+            names = [n for n in (elem.get("id"), elem.get(f"{INKSCAPE}label")) if n]
+            self.found_names.update(names)
+            if elem.get(f"{INKSCAPE}groupmode") == "layer" and ctx.layer is None:
+                ctx = replace(ctx, layer=elem.get(f"{INKSCAPE}label") or elem.get("id")
+                              or f"layer {len(self.layers) + 1}")
+            self.children(elem, replace(ctx, chain=ctx.chain + tuple(names)))
+        elif tag == "switch":
+            for child in elem:
+                ctag = local(child.tag)
+                if ctag is not None and self._condition(child):
+                    self.element(child, ctx)
+                    break
+        elif tag == "svg":
+            self._viewport(elem, elem, ctx, None, None)
+        elif tag == "use":
+            self._use(elem, ctx)
+        elif tag in SHAPES:
+            self._shape(elem, tag, ctx)
+        elif tag == "text":
+            self._text(elem, ctx)
+
+    @staticmethod
+    def _condition(elem: Element) -> bool:
+        if elem.get("requiredExtensions") is not None:
+            return False
+        langs = elem.get("systemLanguage")
+        if langs is not None:
+            return any(lang.strip().lower().split("-")[0] in LANGUAGES
+                       for lang in langs.split(","))
         return True
-    stroke = element.stroke
-    if stroke is None or stroke.value is None:
-        return False
-    return any(colour == stroke for colour in _colours(layers))
 
-
-def _colours(layers: list[str]) -> list[se.Color]:
-    """The layer names that are colours (svgelements reads any unknown name as black)."""
-    out = []
-    for layer in layers:
-        colour = se.Color(layer)
-        if colour != se.Color("black") or layer.strip().lower() in ("black", "#000", "#000000"):
-            out.append(colour)
-    return out
-
-
-def read_svg(source: Path, options: ImportOptions, errors: ErrorLog) -> list[Stroke]:
-    data = source.read_bytes()
-    try:
-        SafeET.fromstring(data, forbid_dtd=True)
-    except DefusedXmlException as e:
-        raise ImportFailed.one(422, f"SVG refused: {e.__class__.__name__} "
-                                    "(DTDs and entities are not accepted)") from None
-    except SafeET.ParseError as e:
-        line = e.position[0] if getattr(e, "position", None) else None
-        raise ImportFailed.one(422, f"SVG is not well-formed XML: {e}", line) from None
-    try:
-        import io
-        doc = se.SVG.parse(io.BytesIO(data), reify=True, ppi=96.0)
-    except Exception as e:  # svgelements raises many kinds on odd documents
-        raise ImportFailed.one(422, f"SVG could not be read: {e}") from None
-    height_mm = float(doc.height or 0.0) * PX_MM
-    tol_px = max(min(options.tolerance, 0.02) / 4, 0.002) / PX_MM
-    layers = options.layers
-    out: list[Stroke] = []
-    found_layers: set[str] = set()
-
-    def walk(node, chain: list[str]) -> None:
-        for child in node:
-            if isinstance(child, se.Group):
-                names = [n for n in (child.id, child.values.get(INKSCAPE_LABEL)) if n]
-                found_layers.update(names)
-                walk(child, chain + names)
-            elif isinstance(child, se.Shape):
-                if child.values.get("visibility") in ("hidden", "collapse"):
-                    continue
-                if layers and not _selected(chain, child, layers):
-                    continue
-                for s in path_strokes(se.Path(child), tol_px):
-                    out.append([(x * PX_MM, height_mm - y * PX_MM) for x, y in s])
-
-    walk(doc, [])
-    if not out:
-        if layers:
-            errors.add(None, f"no shapes in layers {', '.join(layers)}; the document has "
-                             f"groups: {', '.join(sorted(found_layers)) or 'none'}")
+    def _viewport(self, elem: Element, sized: Element, ctx: Ctx, w_default: str | None,
+                  h_default: str | None) -> None:
+        """A nested <svg> or a <symbol> placed by a <use> (`sized` carries x, y,
+        width and height; the use for a symbol)."""
+        x = length(sized.get("x"), ctx.vw)
+        y = length(sized.get("y"), ctx.vh)
+        w = length(sized.get("width") or w_default or "100%", ctx.vw)
+        h = length(sized.get("height") or h_default or "100%", ctx.vh)
+        if w <= 0 or h <= 0:
+            return
+        vb = numbers(elem.get("viewBox"))
+        m = ctx.m
+        vw, vh = w, h
+        if len(vb) == 4 and vb[2] > 0 and vb[3] > 0:
+            m = compose(m, viewbox_transform(vb, x, y, w, h, elem.get("preserveAspectRatio")))
+            vw, vh = vb[2], vb[3]
         else:
-            errors.add(None, "the SVG has no visible shapes to draw")
-    return out
+            m = compose(m, (1.0, 0.0, 0.0, 1.0, x, y))
+        overflow = (elem.get("overflow") or "").strip()
+        if overflow not in ("visible", "auto"):
+            corners = curves.apply(ctx.m, np.array([[x, y], [x + w, y], [x + w, y + h],
+                                                    [x, y + h]]))
+            ctx = self._intersect(ctx, Polygon(corners))
+            if ctx.clip is not None and ctx.clip.is_empty:
+                return
+        self.children(elem, replace(ctx, m=m, vw=vw, vh=vh))
+
+    def _use(self, elem: Element, ctx: Ctx) -> None:
+        ident = href(elem)
+        target = self.ids.get(ident) if ident else None
+        if target is None:
+            self.errors.warn(None, f"{_where(elem, 'use')}: its target "
+                                   f"'#{ident or ''}' does not exist; skipped")
+            return
+        if ident in ctx.uses:
+            self.errors.warn(None, f"{_where(elem, 'use')}: refers to itself through "
+                                   f"'#{ident}'; skipped")
+            return
+        ctx = replace(ctx, uses=ctx.uses | {ident})
+        ttag = local(target.tag)
+        if ttag == "symbol":
+            style, own = cascade(target, "symbol", ctx.style, self.sheet)
+            if own.get("display", "").strip() == "none":
+                return
+            ctx = replace(ctx, style=style, opacity=ctx.opacity * opacity(own.get("opacity")))
+            if target.get("transform"):
+                ctx = replace(ctx, m=compose(ctx.m,
+                                             curves.parse_transform(target.get("transform"))))
+            self._viewport(target, elem, ctx, target.get("width"), target.get("height"))
+            return
+        x = length(elem.get("x"), ctx.vw)
+        y = length(elem.get("y"), ctx.vh)
+        if ttag == "svg":
+            self._viewport(target, target, replace(ctx, m=compose(ctx.m, (1, 0, 0, 1, x, y))),
+                           None, None)
+            return
+        self.element(target, replace(ctx, m=compose(ctx.m, (1.0, 0.0, 0.0, 1.0, x, y))))
+
+    # ---- clipping ------------------------------------------------------------------
+
+    def _intersect(self, ctx: Ctx, area: BaseGeometry) -> Ctx:
+        if ctx.clip is None:
+            return replace(ctx, clip=area, clip_box=None)
+        return replace(ctx, clip=ctx.clip.intersection(area), clip_box=None)
+
+    def _clipped(self, ctx: Ctx, clip_id: str, elem: Element, tag: str) -> Ctx:
+        cp = self.ids.get(clip_id)
+        if cp is None or local(cp.tag) != "clipPath":
+            self.errors.warn(None, f"{_where(elem, tag)}: clip-path '#{clip_id}' not found; "
+                                   "drawn unclipped")
+            return ctx
+        if cp.get("clipPathUnits") == "objectBoundingBox":
+            bbox = self._bbox(elem, tag, ctx)
+            if bbox is None:
+                return replace(ctx, clip=Polygon())
+            x0, y0, x1, y1 = bbox
+            m = compose(ctx.m, (x1 - x0, 0.0, 0.0, y1 - y0, x0, y0))
+        else:
+            m = ctx.m
+        if cp.get("transform"):
+            m = compose(m, curves.parse_transform(cp.get("transform")))
+        key = (clip_id, m)
+        area = self._clip_cache.get(key)
+        if area is None:
+            parts = []
+            sub = Ctx(m=m, style=ROOT_STYLE, vw=ctx.vw, vh=ctx.vh)
+            for child in cp:
+                ctag = local(child.tag)
+                if ctag == "use":
+                    target = self.ids.get(href(child) or "")
+                    if target is None:
+                        continue
+                    x = length(child.get("x"), ctx.vw)
+                    y = length(child.get("y"), ctx.vh)
+                    cm = compose(m, curves.parse_transform(child.get("transform") or ""))
+                    child, ctag = target, local(target.tag)
+                    cm = compose(cm, (1.0, 0.0, 0.0, 1.0, x, y))
+                else:
+                    cm = m
+                if ctag not in SHAPES:
+                    continue
+                cstyle, cown = cascade(child, ctag, ROOT_STYLE, self.sheet)
+                if cown.get("display", "").strip() == "none":
+                    continue
+                if child.get("transform"):
+                    cm = compose(cm, curves.parse_transform(child.get("transform")))
+                geo = self._geometry(child, ctag, replace(sub, m=cm))
+                rings = [curves.apply(cm, p) for p, _ in geo]
+                parts.append(fill.region(rings, cstyle.get("clip-rule", "nonzero")))
+            area = shapely.unary_union(parts) if parts else Polygon()
+            self._clip_cache[key] = area
+        return self._intersect(ctx, area)
+
+    def _bbox(self, elem: Element, tag: str, ctx: Ctx) -> tuple | None:
+        if tag not in SHAPES:
+            return None
+        pts = [p for p, _ in self._geometry(elem, tag, ctx)]
+        if not pts:
+            return None
+        allp = np.vstack(pts)
+        return (*allp.min(axis=0), *allp.max(axis=0))
+
+    # ---- shapes --------------------------------------------------------------------
+
+    def _geometry(self, elem: Element, tag: str, ctx: Ctx) -> list[tuple[np.ndarray, bool]]:
+        """(points, closed) in the element's user units."""
+        tol = self.tol_mm / max(curves.scale_of(ctx.m), 1e-12)
+        vw, vh = ctx.vw, ctx.vh
+        g = elem.get
+        if tag == "path":
+            d = g("d")
+            return curves.path_subpaths(d, tol) if d else []
+        if tag == "rect":
+            w, h = length(g("width"), vw), length(g("height"), vh)
+            if w <= 0 or h <= 0:
+                return []
+            rx_s, ry_s = g("rx"), g("ry")
+            rx = length(rx_s, vw) if rx_s not in (None, "auto") else None
+            ry = length(ry_s, vh) if ry_s not in (None, "auto") else None
+            rx = ry if rx is None else rx
+            ry = rx if ry is None else ry
+            rx, ry = min(max(rx or 0.0, 0.0), w / 2), min(max(ry or 0.0, 0.0), h / 2)
+            return [(curves.rounded_rect(length(g("x"), vw), length(g("y"), vh), w, h, rx, ry,
+                                         tol), True)]
+        if tag in ("circle", "ellipse"):
+            if tag == "circle":
+                r = length(g("r"), math.hypot(vw, vh) / math.sqrt(2))
+                rx = ry = r
+            else:
+                rx, ry = length(g("rx"), vw), length(g("ry"), vh)
+            if rx <= 0 or ry <= 0:
+                return []
+            return [(curves.ellipse(length(g("cx"), vw), length(g("cy"), vh), rx, ry, tol), True)]
+        if tag == "line":
+            return [(np.array([[length(g("x1"), vw), length(g("y1"), vh)],
+                               [length(g("x2"), vw), length(g("y2"), vh)]]), False)]
+        vals = numbers(g("points"))
+        if len(vals) < 4:
+            return []
+        pts = np.array(vals[: len(vals) // 2 * 2], dtype=float).reshape(-1, 2)
+        if tag == "polygon":
+            return [(np.vstack([pts, pts[:1]]), True)]
+        return [(pts, False)]
+
+    def _visible_stroke(self, ctx: Ctx) -> str | None:
+        style = ctx.style
+        p = paint(style, "stroke")
+        if p is None or p[1] <= 0:
+            return None
+        if opacity(style.get("stroke-opacity")) <= 0:
+            return None
+        if style.get("visibility", "visible").strip() in ("hidden", "collapse"):
+            return None
+        try:
+            if length(style.get("stroke-width"), math.hypot(ctx.vw, ctx.vh) / math.sqrt(2),
+                      default=1.0) <= 0:
+                return None
+        except ValueError:
+            pass
+        return p[0]
+
+    def _visible_fill(self, ctx: Ctx) -> str | None:
+        style = ctx.style
+        p = paint(style, "fill")
+        if p is None or p[1] <= 0 or opacity(style.get("fill-opacity")) <= 0:
+            return None
+        if style.get("visibility", "visible").strip() in ("hidden", "collapse"):
+            return None
+        return p[0]
+
+    def _shape(self, elem: Element, tag: str, ctx: Ctx) -> None:
+        stroke = self._visible_stroke(ctx)
+        fill_colour = self._visible_fill(ctx)
+        mode = self.options.fill
+        if stroke is None and (fill_colour is None or mode == "none"):
+            if fill_colour is not None:
+                self.filled_only += 1
+            else:
+                self.invisible += 1
+            return
+        if not self._selected(ctx, stroke or fill_colour):
+            return
+        geo = self._geometry(elem, tag, ctx)
+        if not geo:
+            return
+        page = [(curves.apply(ctx.m, p), closed) for p, closed in geo]
+        if stroke is not None:
+            self.emit(ctx, stroke, [p for p, _ in page if len(p) > 1])
+        if fill_colour is not None and mode != "none":
+            if mode == "outline" and stroke is None:
+                self.emit(ctx, fill_colour, [np.vstack([p, p[:1]]) if not c else p
+                                             for p, c in page if len(p) > 1])
+            elif mode == "hatch":
+                area = fill.region([p for p, _ in page], ctx.style.get("fill-rule", "nonzero"))
+                spacing = self.options.hatch_spacing
+                self.emit(ctx, fill_colour, fill.hatch(area, spacing, self.options.hatch_angle,
+                                                       self.options.hatch_cross))
+
+    def _selected(self, ctx: Ctx, colour: str | None) -> bool:
+        layers = self.options.layers
+        if not layers:
+            return True
+        if any(name in layers for name in ctx.chain):
+            return True
+        if colour is None:
+            return False
+        from .svgstyle import _colour
+        for name in layers:
+            c = _colour(name)
+            # svgelements reads any unknown name as black: only a black spelling is black
+            black = name.strip().lower() in ("black", "#000", "#000000")
+            if c is not None and c[0] == colour and (c[0] != "#000000" or black):
+                return True
+        return False
+
+    def emit(self, ctx: Ctx, colour: str, lines: list[np.ndarray]) -> None:
+        lines = [ln for ln in lines if len(ln) > 1 and np.isfinite(ln).all()]
+        if not lines:
+            return
+        deferred = False
+        if ctx.clip is not None:
+            if ctx.clip_box is not None:
+                # Clipped to the page only: done for all such shapes at once at the end.
+                deferred = not fill.inside_rect(lines, ctx.clip_box)
+            else:
+                lines = fill.clip_lines(lines, ctx.clip)
+            if not lines:
+                return
+        key = ctx.layer if ctx.layer is not None else colour
+        layer = self.layers.get(key)
+        if layer is None:
+            layer = self.layers[key] = Layer(name=key, colour=colour)
+        if deferred:
+            self._page_clip.append((layer, len(layer.strokes), lines))
+            layer.strokes.append(None)      # the clipped lines go here, in drawing order
+        else:
+            layer.strokes.extend(list(map(tuple, ln.tolist())) for ln in lines)
+
+    def _clip_to_page(self) -> None:
+        """Clips the lines that cross the page's edge, all in one shapely call."""
+        if not self._page_clip:
+            return
+        flat = [ln for _, _, lines in self._page_clip for ln in lines]
+        owner = [k for k, (_, _, lines) in enumerate(self._page_clip) for _ in lines]
+        index = np.repeat(np.arange(len(flat)), [len(ln) for ln in flat])
+        lines = shapely.linestrings(np.vstack(flat), indices=index)
+        clipped = shapely.clip_by_rect(lines, 0.0, 0.0, *self.page)
+        pieces: list[list] = [[] for _ in self._page_clip]
+        for k, geom in zip(owner, clipped, strict=True):
+            for part in shapely.get_parts(shapely.line_merge(geom)):
+                coords = shapely.get_coordinates(part)
+                if len(coords) > 1:
+                    pieces[k].append(list(map(tuple, coords.tolist())))
+        slots: dict[int, dict[int, list]] = {}
+        for (layer, index, _), found in zip(self._page_clip, pieces, strict=True):
+            slots.setdefault(id(layer), {})[index] = found
+        for layer in self.layers.values():
+            filled = slots.get(id(layer))
+            if filled:
+                layer.strokes = [p for k, s in enumerate(layer.strokes)
+                                 for p in (filled[k] if s is None else (s,))]
+
+    # ---- text ----------------------------------------------------------------------
+
+    def _text(self, elem: Element, ctx: Ctx) -> None:
+        font = self.options.font
+        runs: list[tuple[str, Ctx, dict]] = []   # (text, ctx, positioning attributes)
+        preserve = elem.get("{http://www.w3.org/XML/1998/namespace}space") == "preserve"
+
+        def collect(node: Element, nctx: Ctx, first: bool) -> None:
+            pos = {k: node.get(k) for k in ("x", "y", "dx", "dy") if node.get(k)}
+            if node.text:
+                runs.append((svgtext.collapse(node.text, preserve), nctx, pos))
+                pos = {}
+            elif pos:
+                runs.append(("", nctx, pos))
+            for child in node:
+                ctag = local(child.tag)
+                if ctag == "tspan":
+                    cstyle, cown = cascade(child, ctag, nctx.style, self.sheet)
+                    if cown.get("display", "").strip() != "none":
+                        collect(child, replace(nctx, style=cstyle), False)
+                elif ctag == "textPath":
+                    self._text_path(child, nctx, font, preserve)
+                if child.tail:
+                    runs.append((svgtext.collapse(child.tail, preserve), nctx, {}))
+
+        collect(elem, ctx, True)
+        if runs and not preserve:   # leading and trailing white space of the element
+            t, c, p = runs[0]
+            runs[0] = (t.lstrip(), c, p)
+            t, c, p = runs[-1]
+            runs[-1] = (t.rstrip(), c, p)
+        self._set_runs(elem, runs, ctx, font)
+
+    def _metrics(self, ctx: Ctx) -> tuple[float, float, float]:
+        size = length(ctx.style.get("font-size"), 16.0, default=16.0)
+        def spacing(key: str) -> float:
+            v = ctx.style.get(key, "normal").strip()
+            return 0.0 if v == "normal" else length(v, size, font=size)
+        return size, spacing("letter-spacing"), spacing("word-spacing")
+
+    def _set_runs(self, elem: Element, runs: list[tuple[str, Ctx, dict]], ctx: Ctx,
+                  font: str) -> None:
+        x = y = 0.0
+        chunks: list[list] = []     # [anchor, start x, [(text, ctx, x, y)]]
+        for text, rctx, pos in runs:
+            size, letter, word = self._metrics(rctx)
+            if "x" in pos or "y" in pos or not chunks:
+                xs, ys = numbers(pos.get("x")), numbers(pos.get("y"))
+                x = length(str(xs[0]), ctx.vw) if xs else x
+                y = length(str(ys[0]), ctx.vh) if ys else y
+                chunks.append([rctx.style.get("text-anchor", "start").strip(), x, []])
+            dxs, dys = numbers(pos.get("dx")), numbers(pos.get("dy"))
+            x += dxs[0] if dxs else 0.0
+            y += dys[0] if dys else 0.0
+            if text:
+                chunks[-1][2].append((text, rctx, x, y))
+                x += svgtext.advance(font, text, size, letter, word)
+        for anchor, _, pieces in chunks:
+            if not pieces:
+                continue
+            first = pieces[0][2]
+            last_text, lctx, lx, _ = pieces[-1]
+            end = lx + svgtext.advance(font, last_text, *self._metrics(lctx))
+            shift = {"middle": -(end - first) / 2, "end": -(end - first)}.get(anchor, 0.0)
+            for text, rctx, px, py in pieces:
+                size, letter, word = self._metrics(rctx)
+                strokes, _ = svgtext.place(font, text, px + shift, py, size, letter, word)
+                self._emit_text(elem, rctx, text, strokes)
+
+    def _emit_text(self, elem: Element, ctx: Ctx, text: str,
+                   strokes: list[np.ndarray]) -> None:
+        colour = self._visible_fill(ctx) or self._visible_stroke(ctx)
+        if colour is None:
+            self.invisible += 1
+            return
+        if not self._selected(ctx, colour):
+            return
+        family = ctx.style.get("font-family", "").strip()
+        if not svgtext.HERSHEY_NAMES.search(family):
+            note = {"element": _where(elem, "text"), "text": text[:60], "font": family,
+                    "substitute": self.options.font}
+            if note not in self.substitutions and len(self.substitutions) < 100:
+                self.substitutions.append(note)
+        self.emit(ctx, colour, [curves.apply(ctx.m, s) for s in strokes if len(s) > 1])
+
+    def _text_path(self, node: Element, ctx: Ctx, font: str, preserve: bool) -> None:
+        style, _ = cascade(node, "textPath", ctx.style, self.sheet)
+        ctx = replace(ctx, style=style)
+        target = self.ids.get(href(node) or "")
+        if target is None or local(target.tag) != "path":
+            self.errors.warn(None, f"{_where(node, 'textPath')}: its path "
+                                   f"'#{href(node) or ''}' does not exist; skipped")
+            return
+        text = svgtext.collapse("".join(node.itertext()), preserve).strip()
+        pm = curves.parse_transform(target.get("transform") or "")
+        tol = self.tol_mm / max(curves.scale_of(ctx.m), 1e-12)
+        subs = curves.path_subpaths(target.get("d") or "", tol)
+        if not subs or not text:
+            return
+        path = curves.apply(pm, subs[0][0])
+        seg = np.diff(path, axis=0)
+        total = float(np.hypot(seg[:, 0], seg[:, 1]).sum())
+        size, letter, word = self._metrics(ctx)
+        offset = length(node.get("startOffset"), total, font=size)
+        width = svgtext.advance(font, text, size, letter, word)
+        anchor = style.get("text-anchor", "start").strip()
+        offset += {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
+        strokes = svgtext.along(font, text, path, offset, size, letter, word)
+        self._emit_text(node, ctx, text, strokes)
+
+
+def read_svg(source: Path, options: ImportOptions, errors: ErrorLog) -> list[Layer]:
+    """The visible drawing of an SVG file as layers of pen-down polylines in mm."""
+    root = parse_svg_xml(source.read_bytes())
+    if options.font not in svgtext.FONTS:
+        raise ImportFailed.one(422, f"font must be one of {', '.join(svgtext.FONTS)}")
+    reader = SvgReader(root, options, errors)
+    layers = reader.read()
+    for note in reader.substitutions:
+        errors.warn(None, f"text '{note['text']}' in {note['element']}: font "
+                          f"'{note['font'] or 'unspecified'}' set in the single-stroke font "
+                          f"'{note['substitute']}'")
+    errors.substitutions = reader.substitutions
+    if not layers:
+        if options.layers:
+            errors.add(None, f"no shapes in layers {', '.join(options.layers)}; the document "
+                             f"has groups: {', '.join(sorted(reader.found_names)) or 'none'}")
+        elif reader.filled_only:
+            errors.add(None, f"nothing visible to draw: {reader.filled_only} shapes are filled "
+                             "but have no stroke; import with fill=outline or fill=hatch to "
+                             "draw them")
+        else:
+            errors.add(None, "nothing visible to draw: the SVG has no visible shapes "
+                             f"({reader.invisible} invisible ones skipped)")
+    return layers

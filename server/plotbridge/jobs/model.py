@@ -44,6 +44,9 @@ class Imported(BaseModel):
     bounds: Bounds
     stats: dict[str, float] = {}
     timeline: list[tuple[int, float]] = []
+    layers: list[dict[str, Any]] = []          # docs/INTERNALS.md, "Layers"
+    warnings: list[dict[str, Any]] = []        # what the importer dropped or changed
+    substitutions: list[dict[str, Any]] = []   # SVG text set in a substitute font
 
     @classmethod
     def of(cls, result: Any) -> Imported:
@@ -55,6 +58,9 @@ class Imported(BaseModel):
             bounds={key: float(value) for key, value in result.bounds.items()},
             stats={key: float(value) for key, value in result.stats.items()},
             timeline=[(int(line), float(seconds)) for line, seconds in result.timeline],
+            layers=list(getattr(result, "layers", [])),
+            warnings=list(getattr(result, "warnings", [])),
+            substitutions=list(getattr(result, "substitutions", [])),
         )
 
 
@@ -78,6 +84,9 @@ class Job(BaseModel):
     resume_line: int | None = None
     started_at: float | None = None
     finished_at: float | None = None
+    layers: list[dict[str, Any]] = []
+    warnings: list[dict[str, Any]] = []
+    substitutions: list[dict[str, Any]] = []
     plotter: str | None = None
     """The plotter that runs (or ran) the job, or will run it once it waits for it."""
     target: str | None = None
@@ -107,6 +116,9 @@ class Job(BaseModel):
         self.bounds = result.bounds
         self.stats = result.stats
         self.timeline = result.timeline
+        self.layers = result.layers
+        self.warnings = result.warnings
+        self.substitutions = result.substitutions
 
     @property
     def active(self) -> bool:

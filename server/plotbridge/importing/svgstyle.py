@@ -1,0 +1,164 @@
+"""SVG styling: lengths, colours, the CSS cascade (simple selectors) and inheritance."""
+
+from __future__ import annotations
+
+import functools
+import re
+from xml.etree.ElementTree import Element
+
+import svgelements as se
+
+SVG_NS = "{http://www.w3.org/2000/svg}"
+INHERITED = ("stroke", "stroke-width", "stroke-opacity", "fill", "fill-opacity", "fill-rule",
+             "clip-rule", "visibility", "color", "font-family", "font-size", "text-anchor",
+             "letter-spacing", "word-spacing")
+OWN = ("display", "opacity", "clip-path", "mask", "overflow")
+PROPERTIES = frozenset(INHERITED + OWN)
+ROOT_STYLE = {"stroke": "none", "stroke-width": "1", "stroke-opacity": "1", "fill": "black",
+              "fill-opacity": "1", "fill-rule": "nonzero", "clip-rule": "nonzero",
+              "visibility": "visible", "color": "black", "font-family": "sans-serif",
+              "font-size": "16", "text-anchor": "start", "letter-spacing": "normal",
+              "word-spacing": "normal"}
+UNITS = {"": 1.0, "px": 1.0, "mm": 96 / 25.4, "cm": 96 / 2.54, "in": 96.0, "pt": 96 / 72,
+         "pc": 16.0, "q": 96 / 25.4 / 4}
+_LENGTH = re.compile(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([a-zA-Z%]*)\s*")
+_URL = re.compile(r"url\(\s*['\"]?#([^'\")]+)['\"]?\s*\)")
+
+
+def local(tag: object) -> str | None:
+    """The SVG element name of a tag, None for other namespaces and comments."""
+    if not isinstance(tag, str):
+        return None
+    if tag.startswith(SVG_NS):
+        return tag[len(SVG_NS):]
+    return None if tag.startswith("{") else tag
+
+
+def length(value: str | None, ref: float = 0.0, font: float = 16.0,
+           default: float = 0.0) -> float:
+    """A length in user units (px); % of `ref`; ValueError for what is not a length."""
+    if value is None or not value.strip():
+        return default
+    m = _LENGTH.fullmatch(value)
+    if m is None:
+        raise ValueError(f"'{value[:40]}' is not a length")
+    n, unit = float(m.group(1)), m.group(2).lower()
+    if unit == "%":
+        return n * ref / 100
+    if unit == "em":
+        return n * font
+    if unit == "ex":
+        return n * font / 2
+    if unit not in UNITS:
+        raise ValueError(f"unknown unit '{unit}' in '{value[:40]}'")
+    return n * UNITS[unit]
+
+
+def numbers(value: str | None) -> list[float]:
+    if not value:
+        return []
+    return [float(v) for v in re.split(r"[\s,]+", value.strip()) if v]
+
+
+def url_id(value: str | None) -> str | None:
+    if not value:
+        return None
+    m = _URL.search(value)
+    return m.group(1) if m else None
+
+
+def href(elem: Element) -> str | None:
+    v = elem.get("href") or elem.get("{http://www.w3.org/1999/xlink}href")
+    return v[1:] if v and v.startswith("#") else None
+
+
+@functools.lru_cache(maxsize=1024)
+def _colour(value: str) -> tuple[str, float] | None:
+    v = value.strip().lower()
+    if v in ("none", "transparent", ""):
+        return None
+    if v.startswith("url("):      # a gradient or pattern paints: visible, colour unknown
+        return "#000000", 1.0
+    c = se.Color(v)
+    if c.value is None:
+        return None
+    return c.hex[:7], (c.alpha / 255.0 if c.alpha is not None else 1.0)
+
+
+def paint(style: dict[str, str], key: str) -> tuple[str, float] | None:
+    """(#rrggbb, alpha) of the stroke or fill paint, None when it paints nothing."""
+    v = style.get(key, "none")
+    if v.strip().lower() == "currentcolor":
+        v = style.get("color", "black")
+    return _colour(v)
+
+
+def opacity(value: str | None) -> float:
+    if value is None:
+        return 1.0
+    v = value.strip()
+    try:
+        x = float(v[:-1]) / 100 if v.endswith("%") else float(v)
+    except ValueError:
+        return 1.0
+    return min(max(x, 0.0), 1.0)
+
+
+class Stylesheet:
+    """The rules of the document's <style> elements for the simple selectors SVG editors
+    write: `*`, `tag`, `.class`, `#id`, `tag.class` (others are ignored)."""
+
+    def __init__(self, root: Element) -> None:
+        self.rules: dict[str, list[tuple[int, dict[str, str]]]] = {}
+        for el in root.iter():
+            if local(el.tag) == "style" and el.text:
+                self._add(el.text)
+
+    def _add(self, text: str) -> None:
+        text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+        for sel, body in re.findall(r"([^{}]+)\{([^}]*)\}", text):
+            decls = declarations(body)
+            for one in sel.split(","):
+                one = one.strip()
+                if not one or not re.fullmatch(r"[\w\-]*(?:[.#][\w\-]+)?|\*", one):
+                    continue
+                spec = 2 if "#" in one else 1 if "." in one else 0
+                self.rules.setdefault(one, []).append((spec, decls))
+
+    def matching(self, tag: str, elem: Element) -> dict[str, str]:
+        if not self.rules:
+            return {}
+        keys = ["*", tag]
+        for cls in (elem.get("class") or "").split():
+            keys += [f".{cls}", f"{tag}.{cls}"]
+        if elem.get("id"):
+            keys.append(f"#{elem.get('id')}")
+        found = sorted((spec, n, decls) for n, k in enumerate(keys)
+                       for spec, decls in self.rules.get(k, ()))
+        out: dict[str, str] = {}
+        for _, _, decls in found:
+            out.update(decls)
+        return out
+
+
+def declarations(text: str) -> dict[str, str]:
+    out = {}
+    for part in text.split(";"):
+        key, sep, value = part.partition(":")
+        if sep:
+            out[key.strip().lower()] = value.replace("!important", "").strip()
+    return out
+
+
+def cascade(elem: Element, tag: str, parent: dict[str, str],
+            sheet: Stylesheet) -> tuple[dict[str, str], dict[str, str]]:
+    """(inherited style for the element and its children, the element's own properties)."""
+    own = {k: v for k, v in elem.attrib.items() if k in PROPERTIES}
+    own.update(sheet.matching(tag, elem))
+    if "style" in elem.attrib:
+        own.update(declarations(elem.attrib["style"]))
+    style = parent
+    changed = {k: v for k, v in own.items() if k in INHERITED and v.strip() != "inherit"}
+    if changed:
+        style = {**parent, **changed}
+    return style, own

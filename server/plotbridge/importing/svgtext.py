@@ -1,0 +1,109 @@
+"""SVG text in a single-stroke (Hershey) font from the Hershey-Fonts package.
+
+A pen draws each glyph stroke once, where an outline font would draw every stroke
+twice. The Hershey glyphs are laid out at the text's position, size, anchor, letter
+and word spacing, on a `textPath` when there is one; the caller applies transforms.
+Glyph units: y down, baseline at 9, 32 units to the em.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .fields import FONTS
+
+EM_UNITS = 32.0
+BASELINE = 9.0
+DEFAULT_FONT = "futural"
+# font-family names that the Hershey fonts stand for without substitution
+HERSHEY_NAMES = re.compile(r"hershey|futura|rowman|scripts|timesr|gothic", re.I)
+
+
+@dataclass
+class Glyph:
+    left: float
+    width: float
+    strokes: list[np.ndarray]
+
+
+@functools.lru_cache(maxsize=len(FONTS))
+def _font(name: str) -> dict[str, Glyph]:
+    from HersheyFonts import HersheyFonts
+
+    font = HersheyFonts()
+    font.load_default_font(name)
+    table: dict[str, Glyph] = {}
+    for code in range(32, 127):
+        ch = chr(code)
+        (g,) = font.glyphs_for_text(ch)
+        strokes = [np.asarray(s, dtype=float) for s in g.strokes if len(s) > 0]
+        table[ch] = Glyph(float(g.left_offset), float(g.char_width), strokes)
+    return table
+
+
+def glyph(font: str, ch: str) -> Glyph:
+    table = _font(font)
+    return table.get(ch) or table["?"]
+
+
+def advance(font: str, text: str, size: float, letter: float, word: float) -> float:
+    k = size / EM_UNITS
+    return sum(glyph(font, ch).width * k + letter + (word if ch == " " else 0.0) for ch in text)
+
+
+def place(font: str, text: str, x: float, y: float, size: float, letter: float,
+          word: float) -> tuple[list[np.ndarray], float]:
+    """Glyph strokes of `text` with its baseline starting at (x, y) in user units (y down);
+    and the x after it."""
+    k = size / EM_UNITS
+    out = []
+    for ch in text:
+        g = glyph(font, ch)
+        for s in g.strokes:
+            pts = np.empty_like(s)
+            pts[:, 0] = x + (s[:, 0] - g.left) * k
+            pts[:, 1] = y + (s[:, 1] - BASELINE) * k
+            out.append(pts)
+        x += g.width * k + letter + (word if ch == " " else 0.0)
+    return out, x
+
+
+def along(font: str, text: str, path: np.ndarray, offset: float, size: float,
+          letter: float, word: float) -> list[np.ndarray]:
+    """Glyphs placed along a polyline from `offset`: each glyph's middle sits on the path,
+    turned to the path's direction there; glyphs past the path's end are not drawn."""
+    seg = np.diff(path, axis=0)
+    lengths = np.hypot(seg[:, 0], seg[:, 1])
+    cum = np.concatenate([[0.0], np.cumsum(lengths)])
+    total = cum[-1]
+    k = size / EM_UNITS
+    out = []
+    s = offset
+    for ch in text:
+        g = glyph(font, ch)
+        w = g.width * k
+        mid = s + w / 2
+        if 0 <= mid <= total and total > 0:
+            i = min(int(np.searchsorted(cum, mid, side="right")) - 1, len(seg) - 1)
+            t = (mid - cum[i]) / lengths[i] if lengths[i] > 0 else 0.0
+            px, py = path[i] + t * seg[i]
+            ang = math.atan2(seg[i][1], seg[i][0])
+            ca, sa = math.cos(ang), math.sin(ang)
+            for st in g.strokes:
+                lx = (st[:, 0] - g.left) * k - w / 2
+                ly = (st[:, 1] - BASELINE) * k
+                out.append(np.column_stack([px + ca * lx - sa * ly, py + sa * lx + ca * ly]))
+        s += w + letter + (word if ch == " " else 0.0)
+    return out
+
+
+def collapse(text: str, preserve: bool) -> str:
+    """SVG 1.1 white space handling of character data."""
+    if preserve:
+        return text.replace("\n", " ").replace("\t", " ").replace("\r", "")
+    return re.sub(r" +", " ", text.replace("\r", "").replace("\n", "").replace("\t", " "))

@@ -1,0 +1,295 @@
+"""GRBL 1.1 conformance of the real firmware in the virtual plotter.
+
+The conformance table in firmware/README.md is executable: every row names a
+probe (lines and realtime bytes) and the answer GRBL 1.1h would give (or ours,
+where the row says why it differs). GRBL's own code tables are read from the
+shared folder beside the repository, never copied into it.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from tests.fixtures.grbl import Grbl, clean, mpos
+
+pytestmark = pytest.mark.e2e
+
+REPO = Path(__file__).resolve().parents[2]
+README = REPO / "firmware" / "README.md"
+BANNER = r"^Grbl 1\.1h \['\$' for help\]$"
+
+
+def shared_grbl() -> Path:
+    for base in (REPO.parent / "shared" / "grbl", Path("/work/shared/grbl")):
+        if base.is_dir():
+            return base
+    raise AssertionError("GRBL's code tables not found beside the repository (../shared/grbl)")
+
+
+def grbl_codes(name: str) -> list[int]:
+    with open(shared_grbl() / name, newline="") as f:
+        rows = list(csv.reader(f))
+    return [int(r[0]) for r in rows[1:] if r and r[0].strip().isdigit()]
+
+
+@dataclass
+class Row:
+    section: str
+    item: str
+    ours: str
+    probe: list[str]
+    answer: str
+
+
+def table_rows() -> list[Row]:
+    rows: list[Row] = []
+    section = ""
+    text = README.read_text()
+    body = text[text.index("## GRBL 1.1 conformance"):]
+    for line in body.splitlines():
+        if line.startswith("### "):
+            section = line[4:].strip()
+            continue
+        if not line.startswith("| ") or line.startswith("| ---"):
+            continue
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
+        if len(cells) != 4 or cells[2] == "probe":
+            continue
+        probe = [p.replace("\\|", "|") for p in re.findall(r"`([^`]+)`", cells[2])]
+        answers = re.findall(r"`([^`]+)`", cells[3])
+        assert probe and len(answers) == 1, f"row without probe or answer: {line}"
+        rows.append(Row(section, cells[0], cells[1], probe, answers[0].replace("\\|", "|")))
+    return rows
+
+
+def fresh(g: Grbl) -> None:
+    """Soft reset, forget what came before, unlock."""
+    g.ser.write(b"\x18")
+    g.wait_for(BANNER, 20)
+    g.read_lines(0.05)
+    g.queue.clear()
+    g.ok("$X")
+
+
+def run_probe(g: Grbl, probe: list[str]) -> list[str]:
+    """Sends the probe's items; returns what the last one brought back."""
+    out: list[str] = []
+    for item in probe:
+        raw = re.fullmatch(r"<0x([0-9A-Fa-f]{2})>", item)
+        if raw is None:
+            out = g.send(item)
+            continue
+        byte = int(raw.group(1), 16)
+        g.ser.write(bytes([byte]))
+        if byte == ord("?"):
+            out = g.wait_for(r"^<.*>$", 10)
+        elif byte == 0x18:
+            out = g.wait_for(BANNER, 20)
+        else:
+            out = []
+    return out
+
+
+def test_every_table_row_answers_as_documented(plotter) -> None:
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        defaults = dict(line[1:].split("=") for line in g.ok("$$")[:-1])
+        failures = []
+        for row in table_rows():
+            fresh(g)
+            out = run_probe(g, row.probe)
+            deadline = time.monotonic() + 20
+            while row.answer not in "\n".join(out) and time.monotonic() < deadline:
+                out += g.read_lines(0.2)
+                g.queue.clear()
+            if row.answer not in "\n".join(out):
+                failures.append(
+                    f"{row.section} {row.item}: {row.probe} -> {out}, want {row.answer!r}")
+            # settings a probe changed go back to their defaults (they live in EEPROM)
+            changed = [m.group(1) for p in row.probe if (m := re.fullmatch(r"\$(\d+)=.*", p))]
+            if changed:
+                fresh(g)
+                for sid in changed:
+                    if sid in defaults:
+                        g.ok(f"${sid}={defaults[sid]}")
+        assert not failures, "\n".join(failures)
+    finally:
+        g.close()
+
+
+def test_every_grbl_code_is_in_the_table() -> None:
+    rows = table_rows()
+
+    def listed(section: str) -> dict[int, Row]:
+        got: dict[int, Row] = {}
+        for r in rows:
+            if r.section == section:
+                for n in re.findall(r"\d+", r.item.replace("$", "")):
+                    got[int(n)] = r
+                span = re.fullmatch(r"(\d+), (\d+)", r.item)
+                if span:
+                    for n in range(int(span.group(1)), int(span.group(2)) + 1):
+                        got[n] = r
+        return got
+
+    for name, section in [("error_codes_en_US.csv", "Error codes"),
+                          ("alarm_codes_en_US.csv", "Alarm codes"),
+                          ("setting_codes_en_US.csv", "Settings")]:
+        table = listed(section)
+        for code in grbl_codes(name):
+            assert code in table, f"{section}: GRBL's {code} is missing from firmware/README.md"
+            row = table[code]
+            if row.ours.startswith("n.a."):
+                assert len(row.ours) > len("n.a.: "), f"{section} {code}: n.a. without a reason"
+    # every error a probe expects is either GRBL's own number for that code or the n.a. answer
+    for r in rows:
+        if r.section == "Error codes" and r.ours == "same":
+            assert r.answer == f"error:{r.item}", r
+
+
+def pen_moves(trace: dict) -> tuple[int, int]:
+    return trace["pen_lifts"], len(trace["strokes"])
+
+
+def test_offsets_never_move_the_pen(plotter) -> None:
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        g.ok("G0 X40 Y40 Z5")
+        g.wait_state("Idle")
+        before = pen_moves(plotter.trace())
+        # CNCjs's "zero out temporary offsets" and "go to machine zero", then a rapid
+        for line in ["G92 X0 Y0 Z0", "G0 X5 Y5", "G0 Z0", "G53 G0 X30 Y30 Z0", "G92.1",
+                     "G0 X60 Y40", "G28"]:
+            g.ok(line)
+        g.wait_state("Idle")
+        status = g.status()
+        assert "|A:S" not in status, status
+        trace = plotter.trace()
+        clean(trace)
+        assert trace["pen"] == "up" and pen_moves(trace) == before, trace["strokes"]
+        # WCO shown after G92, and the work position it implies is where G0 went
+        g.ok("G0 X40 Y40")
+        g.ok("G92 X0 Y0")
+        status = g.status()  # the first report after a change carries WCO
+        assert "|WCO:40.000,40.000,0.000" in status, status
+        g.ok("G0 X20 Y0")
+        g.wait_state("Idle")
+        assert mpos(g.status()) == (60.0, 40.0)
+        assert "[G92:40.000,40.000" in "\n".join(g.ok("$#"))
+    finally:
+        g.close()
+
+
+def trigger_alarm(plotter, g: Grbl, how: str) -> str:
+    if how == "estop":
+        plotter.press("estop")
+        return "ALARM:10"
+    if how == "reset":
+        g.ser.write(b"\x18")
+        return "ALARM:3"
+    raise AssertionError(how)
+
+
+@pytest.mark.parametrize("how", ["estop", "hard_limit", "soft_limit", "reset"])
+def test_every_alarm_lifts_the_pen_and_it_stays_up_after_unlock(plotter, how: str) -> None:
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        g.ok("G0 X20 Y20")
+        g.ok("M3")
+        if how == "hard_limit":
+            g.ok("$20=0")
+            g.ok("G1 X-5 F1500")
+            alarm = "ALARM:1"
+        elif how == "soft_limit":
+            g.ok("G1 X60 F1500")
+            g.ser.write(b"G1 X-5\n")
+            alarm = "ALARM:2"
+        else:
+            g.ok("G1 X200 F1500")
+            plotter.wait_trace(lambda t: t["position"]["x"] > 25, 20)
+            alarm = trigger_alarm(plotter, g, how)
+        g.wait_for("^" + alarm + "$", 30)
+        if how == "reset":
+            g.wait_for(BANNER, 10)
+        trace = plotter.wait_trace(lambda t: t["pen"] == "up", 5)
+        if how == "estop":
+            plotter.release("estop")
+        status = g.status()
+        assert status.startswith("<Alarm") and "|A:S" not in status, status
+        strokes = len(trace["strokes"])
+        g.ok("$X")
+        if how == "hard_limit":
+            g.ok("$20=1")
+            g.ok("G53 G0 X5")  # off the switch
+        g.ok("G0 X80 Y60")
+        g.ok("G1 X90 F2000")
+        g.wait_state("Idle")
+        trace = plotter.trace()
+        assert trace["pen"] == "up" and len(trace["strokes"]) == strokes, trace["strokes"]
+        assert "|A:S" not in g.status()
+    finally:
+        g.close()
+
+
+def test_check_mode_never_resets_the_board(plotter) -> None:
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        since = len(g.lines)
+        g.ok("$C")
+        # a 100,000 mm radius full circle: far more chords than the watchdog would allow
+        g.ok("G91 F100")
+        g.ok("G2 X0 Y0 I100000", timeout=30)
+        g.ok("G90 G1 F3000")
+        # a 10,000-line program (short lines, as CAM output often is), character-counted
+        lines = [f"X{10 + (i % 200) * 0.5:g}Y{10 + (i // 200) * 0.5:g}" for i in range(10_000)]
+        acks = g.stream(lines)
+        assert acks == ["ok"] * len(lines)
+        assert not any(re.match(BANNER, line) for line in g.lines[since:])
+        assert g.status().startswith("<Check")
+        assert plotter.trace()["steps"] == {"x": 0, "y": 0}
+    finally:
+        g.close()
+
+
+def speed_between(plotter, t0: float, t1: float) -> float:
+    """Carriage speed (mm/s, simulated time) measured from two trace samples."""
+    a = plotter.trace()
+    while plotter.trace()["sim_time"] < a["sim_time"] + (t1 - t0):
+        time.sleep(0.01)
+    b = plotter.trace()
+    pa, pb = a["position"], b["position"]
+    return math.dist((pa["x"], pa["y"]), (pb["x"], pb["y"])) / (b["sim_time"] - a["sim_time"])
+
+
+def test_feed_override_changes_the_plotted_speed(plotter) -> None:
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        g.ok("G0 X10 Y10")
+        g.ok("G1 X290 F1200")  # 20 mm/s
+        plotter.wait_trace(lambda t: t["position"]["x"] > 20, 20)
+        full = speed_between(plotter, 0, 0.5)
+        for _ in range(5):
+            g.ser.write(b"\x92")  # -10% each: 50%
+        plotter.wait_trace(lambda t: t["position"]["x"] > 40, 30)
+        half = speed_between(plotter, 0, 0.5)
+        status = g.status()
+        assert "|Ov:50,100,100" in status, status
+        assert full == pytest.approx(20.0, rel=0.05)
+        assert half == pytest.approx(10.0, rel=0.05)
+        g.ser.write(b"\x90")
+        g.ser.write(b"\x18")
+        g.wait_for(BANNER, 20)
+    finally:
+        g.close()
