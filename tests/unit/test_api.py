@@ -451,11 +451,11 @@ async def test_board_error_fails_job_with_line(api):
     assert api.link.realtime_bytes == [b"!"] and api.link.estop_calls == 1
 
 
-async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
+async def interrupted_after_12_lines(api) -> str:
+    """A job started, 12 lines acknowledged, then the link lost: its id."""
     from plotbridge.plotter.link import StreamAborted
 
-    job = (await upload(api.client)).json()
-    jid = job["id"]
+    jid = (await upload(api.client)).json()["id"]
     await api.client.post(f"/api/jobs/{jid}/start")
     for _ in range(12):
         api.link.step()
@@ -463,6 +463,11 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
     await settle(lambda: api.queue.jobs[jid].state == "interrupted")
+    return jid
+
+
+async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
+    jid = await interrupted_after_12_lines(api)
     interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
     assert interrupted["resume_line"] == 5  # the last SEGMENT_BLOCKS moves are not known done
     def preamble(program, line):
@@ -781,16 +786,7 @@ def test_leftovers_of_a_crash_are_removed_at_start(tmp_path):
 
 
 async def test_restart_runs_an_interrupted_job_from_its_first_line(api):
-    from plotbridge.plotter.link import StreamAborted
-
-    job = (await upload(api.client)).json()
-    jid = job["id"]
-    await api.client.post(f"/api/jobs/{jid}/start")
-    for _ in range(12):
-        api.link.step()
-        await asyncio.sleep(0.01)
-    api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
-    await settle(lambda: api.queue.jobs[jid].state == "interrupted")
+    jid = await interrupted_after_12_lines(api)
     kept = api.queue.jobs[jid].resume_line
     api.link.set_state("Alarm", planner_free=15)
     refused = await api.client.post(f"/api/jobs/{jid}/restart")  # the plotter is not ready
