@@ -262,6 +262,13 @@ def manual_control_settings_console(page, server) -> None:
     page.fill("#command-line", "$$")
     page.press("#command-line", "Enter")
     page.locator("#log li.rx", has_text="$110=5000").wait_for()  # read back from the board
+    # ?, ! and ~ are accepted as GRBL's realtime bytes; Esc in the line never stops
+    page.fill("#command-line", "?")
+    page.press("#command-line", "Enter")
+    page.locator("#log li", has_text="status report: sent as a realtime byte").wait_for()
+    page.fill("#command-line", "!")
+    page.press("#command-line", "Escape")
+    assert page.locator("#estop-panel").is_hidden()
     screenshot(page, "desktop-console")
 
 

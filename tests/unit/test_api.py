@@ -504,6 +504,12 @@ async def test_machine_endpoints_send_commands(api):
     assert bad.status_code == 422
     ok = await api.client.post("/api/machine/command", json={"line": "G0 X1"})
     assert ok.json() == {"responses": ["ok"]}
+    # ?, ! and ~ alone are sent as realtime bytes, not refused and not as a line
+    for line in ("?", " ! ", "~"):
+        sent = await api.client.post("/api/machine/command", json={"line": line})
+        assert sent.status_code == 200 and "realtime byte" in sent.json()["responses"][0]
+    assert api.link.realtime_bytes == [b"?", b"!", b"~"]
+    assert api.link.commands[-1] == "G0 X1"
 
 
 async def test_settings_have_metadata(api):
