@@ -19,6 +19,8 @@ against the same interval (the issue's "against today's many strokes").
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import shutil
 import signal
 import sys
@@ -108,7 +110,11 @@ def run(kind: str, gcode: str, speed: float, work: Path) -> float:
             drawn_before = before["draw_mm"]
             plotter.restart(start=(before["position"]["x"], before["position"]["y"]))
         else:
+            killed = server.proc.pid if server.proc else None
             server.kill()
+            if killed is not None:  # its import workers (own process group) go too
+                with contextlib.suppress(ProcessLookupError, PermissionError):
+                    os.killpg(killed, signal.SIGKILL)
             wait(lambda: settled(plotter), 60, "the board to run out of moves")
             server.start()
             server.wait_job(job, "interrupted", 10)
