@@ -184,6 +184,20 @@ class JobQueue:
             log.info("job %s waits: %s", job.id, reason)
         return job
 
+    def restart(self, job_id: str, target: str | None = None) -> Job:
+        """Start a finished job (stopped, interrupted, failed...) again from its first line,
+        without a new upload; refused, it keeps its resume line."""
+        job = self.get(job_id)
+        if job.active or job.state in ("queued", "waiting"):
+            raise Refused(409, f"job {job_id} is {job.state}: start it instead")
+        kept = job.resume_line
+        job.resume_line = None
+        try:
+            return self.start(job_id, target)
+        except Refused:
+            job.resume_line = kept
+            raise
+
     def dispatch(self) -> None:
         """Start what waits (and, with auto-start, what is queued) on free plotters, in order."""
         for job in list(self.jobs.values()):
@@ -228,8 +242,8 @@ class JobQueue:
         return previous is None or previous is plotter or previous.work_area == plotter.work_area
 
     def _begin(self, job: Job, plotter: Plotter) -> None:
-        line = (job.resume_line or 1) if job.state in RESUMABLE else 1
-        plotter.runner.begin(job, line)
+        resume = job.state in RESUMABLE and job.resume_line is not None
+        plotter.runner.begin(job, (job.resume_line or 1) if resume else 1, resume)
 
     # ---- control -------------------------------------------------------------------------
 

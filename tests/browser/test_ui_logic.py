@@ -139,6 +139,10 @@ def test_job_buttons_follow_the_state(modules):
           verbs(m.jobButtons({state: 'done', bounds: {}}, -1, 0, false)),
           m.jobButtons({state: 'queued'}, 0, 1, true)[0].label,
           verbs(m.jobButtons({state: 'pen_change', bounds: {}}, -1, 0, true)),
+
+
+          verbs(m.jobButtons({state: 'interrupted'}, -1, 0, false)),
+          verbs(m.jobButtons({state: 'failed'}, -1, 0, true)),
         ];
     """)
     assert got == [
@@ -146,12 +150,16 @@ def test_job_buttons_follow_the_state(modules):
         ["start", "up", "down-", "delete"],
         ["pause", "cancel"],
         ["resume", "cancel"],
-        ["resume", "delete"],
+        ["resume", "restart", "delete"],
         ["start", "delete"],
         ["cancel", "frame-", "up-", "down-"],
         ["start", "frame", "delete"],
         "Start next",
         ["resume", "cancel"],
+
+
+        ["resume", "restart", "cancel", "delete"],
+        ["restart-", "delete"],
     ]
 
 

@@ -5,6 +5,7 @@ on a 360 x 740 phone; refused uploads; the 200,000-point preview's frame time.""
 from __future__ import annotations
 
 import math
+import os
 import time
 
 import pytest
@@ -261,6 +262,13 @@ def manual_control_settings_console(page, server) -> None:
     page.fill("#command-line", "$$")
     page.press("#command-line", "Enter")
     page.locator("#log li.rx", has_text="$110=5000").wait_for()  # read back from the board
+    # ?, ! and ~ are accepted as GRBL's realtime bytes; Esc in the line never stops
+    page.fill("#command-line", "?")
+    page.press("#command-line", "Enter")
+    page.locator("#log li", has_text="status report: sent as a realtime byte").wait_for()
+    page.fill("#command-line", "!")
+    page.press("#command-line", "Escape")
+    assert page.locator("#estop-panel").is_hidden()
     screenshot(page, "desktop-console")
 
 
@@ -415,6 +423,27 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     b = page.evaluate("window.plotbridge.preview.geom.bounds")
     assert 9 < b["minX"] and b["maxX"] < 139 and 9 < b["minY"] and b["maxY"] < 201, b
     screenshot(page, "desktop-placement")
+    # a 180° turn keeps the bounds: the preview drawn must still be the new one, not the
+    # browser's cached copy of the old (the endpoint is no-cache with a changing ETag)
+    evil_id = job_id(page, evil)
+    preview_file = server.data_dir / "jobs" / evil_id / "preview.json"
+    hour_ago = time.time() - 3600
+    os.utime(preview_file, (hour_ago, hour_ago))  # an hour old: heuristically fresh for long
+    page.evaluate(
+        "async (id) => { const {api} = await import('/js/api.js');"
+        " await api.get(`/api/jobs/${id}/preview`); }", evil_id
+    )  # the browser caches that copy, as the preview of an old job would be
+    first = page.evaluate(
+        "() => Array.from(window.plotbridge.preview.geom.strokes.coords.slice(0, 2))"
+    )
+    page.select_option("#placement select[name=rotate]", "180")
+    page.wait_for_function(
+        """(p) => {
+            const c = window.plotbridge.preview.geom?.strokes.coords;
+            return !!c && (Math.abs(c[0] - p[0]) > 1 || Math.abs(c[1] - p[1]) > 1);
+        }""",
+        arg=first,
+    )
     # a paper larger than the work area is refused with the reason, the job is kept as it was
     page.select_option("#placement select[name=paper]", "A3")
     page.wait_for_function("() => document.querySelector('#place-error').textContent !== ''")
@@ -445,6 +474,25 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
         elapsed = page.evaluate("window.__stopped")[0]
         assert fallback_ms <= elapsed < fallback_ms + 700, elapsed
         page.evaluate("() => { WebSocket.prototype.send = window.__send; }")
+
+    # Esc in a text field leaves the field and never stops; outside it, it stops
+    page.click("#estop-close")
+    page.evaluate("""() => {
+        window.__estops = 0;
+        const send = WebSocket.prototype.send;
+        WebSocket.prototype.send = function (data) {
+            if (String(data).includes('"estop"')) window.__estops += 1;
+            return send.call(this, data);
+        };
+    }""")
+    page.focus("#placement input[name=margin]")
+    page.keyboard.press("Escape")
+    assert page.evaluate("document.activeElement.name") != "margin"  # left the field
+    page.keyboard.press("Escape")  # now the stop key: events come in order
+    page.wait_for_function("() => window.__estops >= 1")
+    assert page.evaluate("window.__estops") == 1
+    page.wait_for_selector("#estop-panel:not([hidden])")
+    page.evaluate("() => { WebSocket.prototype.send = window.__send; }")
 
     # the live connection drops with the server and comes back by itself
     page.click("#estop-close")

@@ -36,6 +36,7 @@ class FakeLink:
 
     def __init__(self, device: str = "/dev/fake") -> None:
         self.device = device
+        self.poll_hz = 8.0
         self.facts = BoardFacts()
         self.status = MachineStatus(
             connected=True, state="Idle", x=0.0, y=0.0, pen="up", firmware="1.1h", alarm=None,
@@ -507,11 +508,11 @@ async def test_board_error_fails_job_with_line(api):
     assert api.link.realtime_bytes == [b"!"] and api.link.estop_calls == 1
 
 
-async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
+async def interrupted_after_12_lines(api) -> str:
+    """A job started, 12 lines acknowledged, then the link lost: its id."""
     from plotbridge.plotter.link import StreamAborted
 
-    job = (await upload(api.client)).json()
-    jid = job["id"]
+    jid = (await upload(api.client)).json()["id"]
     await api.client.post(f"/api/jobs/{jid}/start")
     for _ in range(12):
         api.link.step()
@@ -519,6 +520,11 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
     await settle(lambda: api.queue.jobs[jid].state == "interrupted")
+    return jid
+
+
+async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
+    jid = await interrupted_after_12_lines(api)
     interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
     assert interrupted["resume_line"] == 5  # the last SEGMENT_BLOCKS moves are not known done
     def preamble(program, line):
@@ -555,6 +561,12 @@ async def test_machine_endpoints_send_commands(api):
     assert bad.status_code == 422
     ok = await api.client.post("/api/machine/command", json={"line": "G0 X1"})
     assert ok.json() == {"responses": ["ok"]}
+    # ?, ! and ~ alone are sent as realtime bytes, not refused and not as a line
+    for line in ("?", " ! ", "~"):
+        sent = await api.client.post("/api/machine/command", json={"line": line})
+        assert sent.status_code == 200 and "realtime byte" in sent.json()["responses"][0]
+    assert api.link.realtime_bytes == [b"?", b"!", b"~"]
+    assert api.link.commands[-1] == "G0 X1"
 
 
 async def test_settings_have_metadata(api):
@@ -728,10 +740,16 @@ async def test_settings_and_jog_refuse_non_finite_numbers(api):
 
 async def test_patch_renames_and_reimports_queued_job(api):
     job = (await upload(api.client)).json()
+    first = await api.client.get(f"/api/jobs/{job['id']}/preview")
+    assert first.headers["cache-control"] == "no-cache" and first.headers["etag"]
     response = await api.client.patch(
         f"/api/jobs/{job['id']}", json={"name": "renamed", "placement": {"rotate": 90}}
     )
     assert response.status_code == 200
+    # the preview is never served stale: the re-import gives it a new validator
+    second = await api.client.get(f"/api/jobs/{job['id']}/preview",
+                                  headers={"If-None-Match": first.headers["etag"]})  # fmt: skip
+    assert second.status_code == 200 and second.headers["etag"] != first.headers["etag"]
     assert response.json()["name"] == "renamed" and response.json()["placement"]["rotate"] == 90
     bad = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"rotate": 45}})
     assert bad.status_code == 422
@@ -872,3 +890,23 @@ async def test_hold_and_continue_of_the_running_job(api):
     assert (await api.client.post("/api/plotters/plotter1/machine/continue")).status_code == 200
     assert api.queue.jobs[job["id"]].state == "running"
     assert api.link.realtime_bytes == [b"!", b"~"]
+
+
+async def test_restart_runs_an_interrupted_job_from_its_first_line(api):
+    jid = await interrupted_after_12_lines(api)
+    kept = api.queue.jobs[jid].resume_line
+    api.link.set_state("Alarm", planner_free=15)
+    refused = await api.client.post(f"/api/jobs/{jid}/restart")  # the plotter is not ready
+    assert refused.status_code == 409
+    assert kept and api.queue.jobs[jid].resume_line == kept, "a refused restart keeps it"
+    api.link.set_state("Idle", planner_free=15)
+    api.link.auto_ack = True
+    sent = len(api.link.streamed)
+    response = await api.client.post(f"/api/jobs/{jid}/restart")
+    assert response.status_code == 200, response.text
+    await settle(lambda: api.queue.jobs[jid].state == "done")
+    again = api.link.streamed[sent:]
+    assert again[0][0] == 1 and all(n != 0 for n, _ in again), "no resume preamble"
+    assert [n for n, _ in again] == list(range(1, len(again) + 1))
+    # a running job cannot be restarted; an unknown one is 404
+    assert (await api.client.post("/api/jobs/nope/restart")).status_code == 404

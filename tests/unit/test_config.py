@@ -23,7 +23,8 @@ def test_serial_repeats_and_virtual_counts(tmp_path, monkeypatch):
     assert [p.name for p in plotters_from_args(parse("--virtual", "3"), tmp_path)] == [
         "plotter1", "plotter2", "plotter3"]
     assert plotters_from_args(parse(), tmp_path) == [PlotterConfig("plotter1", board="uno-cnc-shield")]
-    assert plotters_from_args(parse("--board", "mega-ramps14"), tmp_path)[0].board == "mega-ramps14"
+    ramps = plotters_from_args(parse("--board", "mega-ramps14"), tmp_path)
+    assert ramps[0].board == "mega-ramps14"
     with pytest.raises(ConfigError, match="between 1 and 16"):
         plotters_from_args(parse("--virtual", "0"), tmp_path)
 

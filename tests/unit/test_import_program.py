@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from plotbridge.importing.preview import PreviewBuilder
 from plotbridge.importing.simplify import simplify
-from plotbridge.resume import resume_preamble
+from plotbridge.resume import Mark, ResumePoint, locate, resume_preamble
 
 from .import_helpers import program_lines, run_import
 
@@ -57,15 +57,39 @@ def test_resume_preamble_restores_position_and_pen(tmp_path):
     r = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nG1 Y20\nM5\nG0 X50 Y50\n")
     lines = program_lines(r)
     assert lines[6] == "G1 X20.000 Y20.000 F600"      # program line 7
-    assert resume_preamble(r.program_path, 7) == [
-        "M5", "G21", "G90", "G0 X20.000 Y10.000", "M3"]
-    assert resume_preamble(r.program_path, 9) == ["M5", "G21", "G90", "G0 X20.000 Y20.000"]
-    assert resume_preamble(r.program_path, 1) == ["M5", "G21", "G90", "G0 X0.000 Y0.000"]
+    assert resume_preamble(r.program_path, ResumePoint(7)) == [
+        "M5", "G21", "G90", "G0 X20.0000 Y10.0000", "M3"]
+    assert resume_preamble(r.program_path, ResumePoint(9)) == [
+        "M5", "G21", "G90", "G0 X20.0000 Y20.0000"]
+    assert resume_preamble(r.program_path, ResumePoint(1)) == [
+        "M5", "G21", "G90", "G0 X0.0000 Y0.0000"]
+    # where the pen stopped on line 7: the pen goes down there, line 7 draws the rest
+    assert resume_preamble(r.program_path, ResumePoint(7, (20.0, 13.25))) == [
+        "M5", "G21", "G90", "G0 X20.0000 Y13.2500", "M3"]
+
+
+def test_locate_finds_the_executing_line_and_point(tmp_path):
+    r = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nG1 Y20\nG1 X10\nM5\n")
+    lines = program_lines(r)
+    assert lines[5:8] == ["G1 X20.000 Y10.000 F600", "G1 X20.000 Y20.000 F600",
+                          "G1 X10.000 Y20.000 F600"]  # program lines 6, 7, 8
+    path = r.program_path
+    # the reported point lies on line 7 (the window is lines 3..8)
+    assert locate(path, Mark(3, 8, 20.0, 13.25)) == ResumePoint(7, (20.0, 13.25))
+    assert locate(path, Mark(3, 8, 15.0, 20.0)) == ResumePoint(8, (15.0, 20.0))
+    # on a pen-up move: the travel goes on from there, the pen stays up
+    assert locate(path, Mark(1, 8, 5.0, 5.0)) == ResumePoint(4, (5.0, 5.0))
+    # nowhere on the window's moves: the conservative first line
+    assert locate(path, Mark(6, 8, 50.0, 50.0)) == ResumePoint(6)
+    # a corner shared by two lines: the earlier (a zero-length rest, nothing skipped)
+    assert locate(path, Mark(3, 8, 20.0, 20.0)) == ResumePoint(7, (20.0, 20.0))
 
 
 def test_resume_after_an_arc(tmp_path):
     r = run_import(tmp_path, "G0 X10 Y10\nM3\nG2 X30 Y10 I10 J0 F600\nG1 X40 F600\n")
-    assert resume_preamble(r.program_path, 7)[-2:] == ["G0 X30.000 Y10.000", "M3"]
+    assert resume_preamble(r.program_path, ResumePoint(7))[-2:] == ["G0 X30.0000 Y10.0000", "M3"]
+    # a stop on the arc resumes from the arc's start: redrawn, never skipped
+    assert locate(r.program_path, Mark(5, 8, 20.0, 20.0)) == ResumePoint(6)
 
 
 def test_normalized_program_is_plain(tmp_path):

@@ -457,7 +457,7 @@ export function createActions(store, socket, estop) {
         }
         const updated = await api.post(`${path}/${verb}`);
         if (updated && updated.id !== undefined) upsertJob(updated);
-        if (verb === "start") {
+        if (verb === "start" || verb === "restart") {
           store.update((st) => {
             st.selectedJobId = job.id;
             st.estop = null;

@@ -134,6 +134,11 @@ function bind() {
     if (performance.now() - pointerAt > 1000) estop.trigger();
   });
   document.addEventListener("keydown", (e) => {
+    // Esc in a text field only leaves the field: typing must never stop the machine
+    if (e.key === "Escape" && typingIn(e.target)) {
+      e.target.blur();
+      return;
+    }
     if (e.key === "Escape" && store.state.view === "app") {
       e.preventDefault();
       estop.trigger();
@@ -194,3 +199,11 @@ async function start() {
 }
 
 start();
+
+/** A field that takes typed text (where Esc is an editing key, not the stop key). */
+function typingIn(target) {
+  if (!(target instanceof HTMLElement)) return false;
+  if (target.isContentEditable || target.tagName === "TEXTAREA") return true;
+  const NOT_TEXT = ["button", "checkbox", "radio", "range", "color", "file", "submit", "reset"];
+  return target.tagName === "INPUT" && !NOT_TEXT.includes(target.type);
+}

@@ -93,6 +93,12 @@ async def start_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, 
     return c.queue.start(job_id, plotter).public()
 
 
+@router.post("/jobs/{job_id}/restart", response_model=Job)
+async def restart_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
+    """A stopped, interrupted, failed (or done) job again from its first line."""
+    return c.queue.restart(job_id, plotter).public()
+
+
 @router.post("/jobs/{job_id}/pause", response_model=Job)
 async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
     c.queue.pause(job_id)
@@ -127,7 +133,10 @@ async def preview(job_id: str, c: Parts) -> Response:
     path = c.queue.preview_path(job_id)
     if not path.exists():
         raise Refused(404, f"job {job_id} has no preview")
-    return FileResponse(path, media_type="application/json")
+    # A placement change rewrites the file, so its ETag (mtime, size) changes; no-cache
+    # makes the browser ask every time instead of drawing a stale preview from its cache.
+    return FileResponse(path, media_type="application/json",
+                        headers={"Cache-Control": "no-cache"})  # fmt: skip
 
 
 @router.get("/patterns")

@@ -672,8 +672,8 @@ class Link:
 
     async def _poll_until_lost(self) -> str:
         assert self._lost is not None
-        interval = 1.0 / self.poll_hz
         while not self._lost.done():
+            interval = 1.0 / self.poll_hz  # the runner raises it while a job runs
             with contextlib.suppress(LinkDown):
                 self._write(STATUS_QUERY, urgent=True)
                 self._unanswered_polls += 1

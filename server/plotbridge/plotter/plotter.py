@@ -29,7 +29,8 @@ log = logging.getLogger("plotbridge.plotter")
 
 MACHINE_INTERVAL = 0.1  # s between machine reports while moving (the contract asks >= 5 Hz)
 HOMING_S = 120.0  # s a homing cycle may take on the largest work area
-CONSOLE_FORBIDDEN = "?!~\x18\r\n"  # realtime bytes and line ends: not a console line
+CONSOLE_FORBIDDEN = "?!~\x18\r\n"  # realtime bytes and line ends: not in a console line
+CONSOLE_REALTIME = {"?": "status report", "!": "feed hold", "~": "cycle start"}
 
 
 @dataclass(frozen=True)
@@ -225,7 +226,19 @@ class Plotter:
         return await self.send("jog", f"$J=G91 G21 X{dx:.3f} Y{dy:.3f} F{feed:.0f}")
 
     async def console(self, line: str) -> list[str]:
-        """A console line; its answer ends with the `ok` the link keeps to itself."""
+        """A console line; its answer ends with the `ok` the link keeps to itself.
+        `?`, `!` and `~` alone are GRBL's realtime bytes: written at once (also while a job
+        runs: `!` and `~` then act as the machine's own hold and start buttons)."""
+        byte = line.strip()
+        if byte in CONSOLE_REALTIME:
+            try:
+                self.link.realtime(byte.encode())
+            except LinkDown as exc:
+                raise Refused(409, "the plotter is not connected") from exc
+            said = f"{byte} ({CONSOLE_REALTIME[byte]}: sent as a realtime byte)"
+            self.events.publish({"type": "log", "plotter": self.name, "direction": "tx",
+                                 "line": said})  # fmt: skip
+            return [said]
         if self.job is not None:
             raise Refused(409, f"cannot send commands while job {self.job.id} is running")
         line = line.strip()

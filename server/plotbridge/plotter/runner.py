@@ -23,7 +23,7 @@ from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the impo
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
 from plotbridge.program.reader import ProgramReader
-from plotbridge.resume import first_unexecuted_line, resume_preamble
+from plotbridge.resume import Mark, ResumePoint, first_unexecuted_line, locate, resume_preamble
 
 log = logging.getLogger("plotbridge.runner")
 
@@ -31,6 +31,8 @@ PROGRESS_INTERVAL = 0.2  # s between job progress messages (5 Hz)
 SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
 AFTER_JOB_S = 120.0  # s a park move or a homing cycle after a job may take
+JOB_POLL_HZ = 15.0  # status reports while a job runs: a lost link redraws at most 1/15 s
+MARK_FILE = "resume.mark"  # in the job folder: the last report's line range and position
 
 Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
@@ -72,12 +74,18 @@ class Runner:
         self._last_save = 0.0
         self._control_at = 0.0
         self._pen_done = asyncio.Event()
+        self._mark: Mark | None = None        # the last report's, for the job streaming
+        self._unsaved_mark: Mark | None = None
+        self._mark_writer: asyncio.Task[None] | None = None
+        self._stopped_job: Job | None = None  # waits for the exact position after a reset
+        self._stopped_at = 0.0
+        self._idle_poll_hz = link.poll_hz
 
     # ---- starting and stopping -----------------------------------------------
 
-    def begin(self, job: Job, line: int) -> None:
-        """Start streaming `job` from `line` (1: from the start; more: a resume)."""
-        resumed = line > 1
+    def begin(self, job: Job, line: int, resumed: bool = False) -> None:
+        """Start streaming `job` from its start, or resume it (from where the last run's
+        mark shows the pen stopped, else from `line`)."""
         self.job = job
         job.state, job.error, job.waiting = "running", None, None
         job.plotter = self.plotter
@@ -86,10 +94,14 @@ class Runner:
             job.lines_done, job.progress, job.resume_line = 0, 0.0, None
         self._floor = line
         self._motion = bytearray()
+        self._mark = None
+        self._stopped_job = None
+        self.link.poll_hz = JOB_POLL_HZ
         self.report(job, True)
         log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
                  "resumed" if resumed else "started", self.plotter, line)  # fmt: skip
-        self._task = asyncio.create_task(self._run(job, line), name=f"run-{self.plotter}")
+        self._task = asyncio.create_task(self._run(job, line, resumed),
+                                         name=f"run-{self.plotter}")  # fmt: skip
 
     async def close(self) -> None:
         if self._task:
@@ -123,8 +135,7 @@ class Runner:
         """After an emergency stop: the job (if any) is `stopped`, resumable."""
         job = self.job
         if job is not None and job.active:
-            job.resume_line = self._resume_line(job)
-            self._finish(job, "stopped", "emergency stop")
+            self._estopped(job)
 
     def lost(self) -> None:
         """The plotter dropped out: its job is `interrupted`, resumable."""
@@ -148,6 +159,7 @@ class Runner:
     def on_status(self, status: MachineStatus) -> None:
         job = self.job
         if job is None or not job.active:
+            self._exact_stop(status)
             return
         if job.state == "pen_change":  # the board's resume button (Pn:S) ends the change
             if "S" in (status.pins or ""):
@@ -157,7 +169,36 @@ class Runner:
         if queued is not None:
             job.safe_line = first_unexecuted_line(self._motion, job.lines_done, queued,
                                                   self._floor)  # fmt: skip
+            if status.x is not None and status.y is not None:
+                self._keep_mark(job, Mark(job.safe_line, job.lines_done, status.x, status.y))
         self._follow_buttons(job, status.state)
+
+    def _exact_stop(self, status: MachineStatus) -> None:
+        """The first report after an emergency stop's reset: where the steps stopped."""
+        job = self._stopped_job
+        if (job is None or job.state != "stopped" or status.updated_at <= self._stopped_at
+                or status.state not in ("Alarm", "Idle") or status.x is None
+                or status.y is None or self._mark is None):
+            return
+        self._stopped_job = None
+        self._keep_mark(job, Mark(self._mark.first, job.lines_done, status.x, status.y))
+
+    def _keep_mark(self, job: Job, mark: Mark) -> None:
+        """Remember the mark and write it to the job folder, one write at a time (the
+        latest wins: a report that comes while a write is under way waits for it)."""
+        self._mark = mark
+        self._unsaved_mark = mark
+        if self._mark_writer is None or self._mark_writer.done():
+            path = self.jobs_dir / job.id / MARK_FILE
+            self._mark_writer = asyncio.get_running_loop().create_task(self._write_marks(path))
+
+    async def _write_marks(self, path: Path) -> None:
+        while self._unsaved_mark is not None:
+            mark, self._unsaved_mark = self._unsaved_mark, None
+            try:
+                await asyncio.to_thread(mark.save, path)
+            except OSError as exc:
+                log.warning("could not keep the resume mark in %s: %s", path, exc)
 
     def _follow_buttons(self, job: Job, state: str) -> None:
         """The board's pause and resume buttons change the job state too."""
@@ -173,10 +214,11 @@ class Runner:
 
     # ---- streaming -------------------------------------------------------------------
 
-    async def _run(self, job: Job, line: int) -> None:
+    async def _run(self, job: Job, line: int, resumed: bool) -> None:
         program = self.jobs_dir / job.id / "program.gcode"
         try:
-            preamble = await asyncio.to_thread(resume_preamble, program, line) if line > 1 else []
+            line, preamble = await asyncio.to_thread(self._preamble, job, program, line,
+                                                     resumed)  # fmt: skip
             pauses = layer_pauses(job)
             while True:  # one layer (from `line` to the next layer's M0) at a time
                 pause = next((m0 for m0 in pauses if m0 >= line), None)
@@ -224,6 +266,7 @@ class Runner:
                 with contextlib.suppress(Exception):
                     await self.halt()
         finally:
+            self.link.poll_hz = self._idle_poll_hz
             if self.job is job:
                 self.job = None
             self.busy = None
@@ -273,6 +316,24 @@ class Runner:
                 log.warning("after job %s: %s failed: %s", job.id, line, exc)
                 return
 
+    def _preamble(self, job: Job, program: Path, line: int,
+                  resumed: bool) -> tuple[int, list[str]]:  # fmt: skip
+        """What goes before program line `line` (blocking): nothing from the start (the
+        last run's mark goes); on a resume, the way to the point where the pen stopped
+        when the last run's mark tells it, else to the start of `line`."""
+        path = self.jobs_dir / job.id / MARK_FILE
+        mark = Mark.load(path)
+        if not resumed:
+            path.unlink(missing_ok=True)
+            return 1, []
+        point = locate(program, mark) if mark is not None else ResumePoint(line)
+        if point.at is None:  # two safe bounds: the later wins
+            point = ResumePoint(max(point.line, line))
+        if point.line != line:
+            log.info("job %s resumes at line %d, at %s (conservative line %d)",
+                     job.id, point.line, point.at, line)  # fmt: skip
+        return point.line, resume_preamble(program, point)
+
     async def _wait_done(self, since: float) -> str:
         """After the last ok: wait until the board is Idle (or fails)."""
         while True:
@@ -310,13 +371,17 @@ class Runner:
         if exc.reason == "disconnected":
             self._interrupt(job)
         elif exc.reason == "estop":
-            job.resume_line = self._resume_line(job)
-            self._finish(job, "stopped", "emergency stop")
+            self._estopped(job)
         elif exc.reason == "cancelled":
             self._finish(job, "cancelled", None)
         else:  # error or alarm from the board
             line = exc.error_line or job.lines_done + 1
             self._finish(job, "failed", f"line {line}: {exc.message or exc}")
+
+    def _estopped(self, job: Job) -> None:
+        job.resume_line = self._resume_line(job)
+        self._stopped_job, self._stopped_at = job, time.time()
+        self._finish(job, "stopped", "emergency stop")
 
     def _interrupt(self, job: Job) -> None:
         if not job.active:

@@ -7,9 +7,11 @@ import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
 // The server resumes stopped and interrupted jobs from their resume line.
 const RESUMABLE = new Set(["paused", "interrupted", "stopped"]);
 const DELETABLE = new Set(["queued", "done", "failed", "cancelled", "stopped", "interrupted"]);
-const STARTABLE = new Set(["queued", "done", "failed", "cancelled"]);
+const STARTABLE = new Set(["queued", "done", "cancelled"]);
 // A job started while another runs (or the machine is not ready) waits for its turn.
 const CANCELLABLE = new Set(["running", "paused", "pen_change", "interrupted", "waiting"]);
+// Started again from the first line, without a new upload.
+const RESTARTABLE = new Set(["stopped", "interrupted", "failed"]);
 
 /** Which buttons a job row offers, in the order shown. Pure. */
 export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
@@ -18,6 +20,7 @@ export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
   if (job.state === "running") b.push({ verb: "pause", label: "Pause" });
   if (job.state === "pen_change") b.push({ verb: "resume", label: "Continue", aria: "Pen loaded: continue" });
   if (RESUMABLE.has(job.state)) b.push({ verb: "resume", label: "Resume", disabled: anyActive && job.state !== "paused" });
+  if (RESTARTABLE.has(job.state)) b.push({ verb: "restart", label: "Restart from the beginning", disabled: anyActive });
   if (CANCELLABLE.has(job.state)) b.push({ verb: "cancel", label: "Cancel" });
   if (job.bounds && !ACTIVE_JOB_STATES.has(job.state)) b.push({ verb: "frame", label: "Frame", aria: "Trace the frame (pen up)", disabled: anyActive });
   if (waitingIndex >= 0) {
