@@ -22,7 +22,8 @@ def test_serial_repeats_and_virtual_counts(tmp_path, monkeypatch):
     assert [(p.name, p.device) for p in two] == [("plotter1", "/dev/a"), ("plotter2", "/dev/b")]
     assert [p.name for p in plotters_from_args(parse("--virtual", "3"), tmp_path)] == [
         "plotter1", "plotter2", "plotter3"]
-    assert plotters_from_args(parse(), tmp_path) == [PlotterConfig("plotter1", board="uno-cnc-shield")]
+    default = PlotterConfig("plotter1", board="uno-cnc-shield")
+    assert plotters_from_args(parse(), tmp_path) == [default]
     ramps = plotters_from_args(parse("--board", "mega-ramps14"), tmp_path)
     assert ramps[0].board == "mega-ramps14"
     with pytest.raises(ConfigError, match="between 1 and 16"):
