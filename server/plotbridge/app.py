@@ -82,7 +82,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
     )  # fmt: skip
     mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
-    auth = Auth(token, config.token_file)
+    auth = Auth(token, config.token_file, config.data_dir / "sessions.json")
     app.add_middleware(
         Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
     )

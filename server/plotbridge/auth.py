@@ -3,16 +3,22 @@
 A session is a random id handed out at each login, valid for SESSION_TTL,
 ended by logout, and ended for everyone when the token changes
 (`plotbridge token --rotate` rewrites the token file; the server notices within
-a second).
+a second). Sessions outlive a server restart: their ids' SHA-256 digests and
+expiry times are kept in the data directory (0600), never the ids themselves.
 """
 
 from __future__ import annotations
 
+import hashlib
 import hmac
+import json
+import logging
 import os
 import secrets
 import time
 from pathlib import Path
+
+log = logging.getLogger("plotbridge.auth")
 
 COOKIE = "plotbridge_session"
 MIN_TOKEN_LENGTH = 16
@@ -60,12 +66,14 @@ def new_token() -> str:
 
 
 class Auth:
-    def __init__(self, token: str, token_file: Path | None = None) -> None:
+    def __init__(self, token: str, token_file: Path | None = None,
+                 sessions_file: Path | None = None) -> None:  # fmt: skip
         self.token = check_token_rules(token)
         self.token_file = token_file
         self._file_stamp = self._stamp()
         self._next_look = 0.0
-        self.sessions: dict[str, float] = {}  # session id -> expiry (monotonic)
+        self.sessions_file = sessions_file
+        self.sessions: dict[str, float] = self._load_sessions()  # id digest -> expiry (wall)
 
     # ---- token ---------------------------------------------------------------
 
@@ -95,6 +103,7 @@ class Auth:
         if token != self.token:
             self.token = token
             self.sessions.clear()
+            self._save_sessions()
 
     def check_token(self, candidate: str | None) -> bool:
         self._reload()
@@ -110,27 +119,54 @@ class Auth:
 
     # ---- sessions ------------------------------------------------------------
 
+    def _load_sessions(self) -> dict[str, float]:
+        if self.sessions_file is None:
+            return {}
+        try:
+            kept = json.loads(self.sessions_file.read_text())
+        except (OSError, ValueError):
+            return {}  # none yet, or unreadable: everyone logs in again
+        now = time.time()
+        if not isinstance(kept, dict):
+            return {}
+        return {k: float(v) for k, v in kept.items()
+                if isinstance(k, str) and isinstance(v, (int, float)) and v > now}  # fmt: skip
+
+    def _save_sessions(self) -> None:
+        if self.sessions_file is None:
+            return
+        try:  # a few hundred bytes, only at login and logout
+            write_private(self.sessions_file, json.dumps(self.sessions))
+        except OSError as exc:  # sessions still work; they end with the server
+            log.warning("sessions not kept across restarts: %s", exc)
+
+    @staticmethod
+    def _digest(session: str) -> str:
+        return hashlib.sha256(session.encode()).hexdigest()
+
     def new_session(self) -> str:
-        now = time.monotonic()
+        now = time.time()
         self.sessions = {k: v for k, v in self.sessions.items() if v > now}
         while len(self.sessions) >= MAX_SESSIONS:
             del self.sessions[next(iter(self.sessions))]
         session = secrets.token_urlsafe(32)
-        self.sessions[session] = now + SESSION_TTL
+        self.sessions[self._digest(session)] = now + SESSION_TTL
+        self._save_sessions()
         return session
 
     def check_session(self, candidate: str | None) -> bool:
         self._reload()
         if not candidate:
             return False
-        expiry = self.sessions.get(candidate)
+        key = self._digest(candidate)
+        expiry = self.sessions.get(key)
         if expiry is None:
             return False
-        if expiry <= time.monotonic():
-            del self.sessions[candidate]
+        if expiry <= time.time():
+            del self.sessions[key]
             return False
         return True
 
     def end_session(self, candidate: str | None) -> None:
-        if candidate:
-            self.sessions.pop(candidate, None)
+        if candidate and self.sessions.pop(self._digest(candidate), None) is not None:
+            self._save_sessions()

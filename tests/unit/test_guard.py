@@ -180,6 +180,21 @@ def test_a_rotated_token_file_ends_every_session(tmp_path, monkeypatch):
     assert auth.check_token("b" * 24) and not auth.check_token("a" * 20)
 
 
+def test_sessions_outlive_a_restart_and_logout_ends_them(tmp_path):
+    kept = tmp_path / "sessions.json"
+    first = Auth("a" * 20, sessions_file=kept)
+    session, other = first.new_session(), first.new_session()
+    assert session not in kept.read_text()  # only digests are stored
+    assert os.stat(kept).st_mode & 0o777 == 0o600
+    again = Auth("a" * 20, sessions_file=kept)  # the server restarted
+    assert again.check_session(session) and again.check_session(other)
+    again.end_session(session)
+    third = Auth("a" * 20, sessions_file=kept)
+    assert not third.check_session(session) and third.check_session(other)
+    kept.write_text("not json")
+    assert not Auth("a" * 20, sessions_file=kept).check_session(other)
+
+
 def test_log_lines_escape_user_text_and_repeats_are_limited():
     assert logs.escape("a\nb\x00c") == "a\\nb\\x00c"
     assert logs.escape("plain text é") == "plain text é"
