@@ -75,12 +75,13 @@ def test_the_csp_blocks_an_inline_script(desktop, server_virtual):
 
 
 def test_a_refused_websocket_shows_the_login_and_stops_retrying(desktop, server_virtual):
-    """A restart ends the sessions (they live in memory): the page's reconnect is
-    refused with 4401, it shows the login and tries no more."""
+    """A restart that finds no kept sessions (their file gone) ends the page's
+    session: its reconnect is refused with 4401, it shows the login and tries no more."""
     page, _ = desktop
     login(page, server_virtual.url, server_virtual.token)
     sockets: list[str] = []
     page.on("websocket", lambda ws: sockets.append(ws.url))
+    (server_virtual.data_dir / "sessions.json").unlink()
     server_virtual.restart()
     page.wait_for_selector("#login-view:not([hidden])", timeout=60000)
     tried = len(sockets)
