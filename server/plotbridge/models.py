@@ -94,9 +94,15 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         401: "missing or wrong token",
         404: "no such job, or not available in this mode",
         409: "not allowed in the current machine or job state",
-        413: "upload too large",
+        400: "Host header not one of this server's names",
+        403: "cross-site request (no matching Origin or X-Plotbridge header)",
+        408: "request body arrived too slowly",
+        413: "request body or upload too large, or an import limit reached",
         415: "file format not accepted",
         422: "invalid request or invalid drawing (errors with line numbers)",
+        429: "too many failed logins from this client; try again later",
+        503: "too many connections from this client",
+        507: "disk quota for jobs reached",
     }.items()
 }
 
