@@ -184,7 +184,9 @@ class Guard:
                 if login and message["status"] == 401:
                     self.logins.failed(client)
                     log.warning("failed login from %s", client)
-                message = {**message, "headers": [*message.get("headers", ()), *extra]}
+                own = message.get("headers", ())
+                named = {name.lower() for name, _ in own}  # a page's own policy wins
+                message = {**message, "headers": [*own, *(h for h in extra if h[0] not in named)]}
             await send(message)
 
         try:
