@@ -184,15 +184,9 @@ class Plotbridge:
             "POST", f"{self._board(plotter)}/machine/estop", "emergency stop", timeout=10
         )
 
-    def home(self, plotter: str | None = None, settle: float = 10.0) -> dict[str, Any]:
-        """Run homing; `{"responses", "machine"}` once the machine reports it is done."""
-        answer = self.request("POST", f"{self._board(plotter)}/machine/home", "homing", timeout=180)
-        deadline = time.monotonic() + settle  # the board's status lags its "ok" a little
-        machine = self.machine(plotter)
-        while machine.get("state") == "Home" and time.monotonic() < deadline:
-            time.sleep(0.05)
-            machine = self.machine(plotter)
-        return {**answer, "machine": machine}
+    def home(self, plotter: str | None = None) -> dict[str, Any]:
+        """Run homing; `{"responses", "machine"}`, the machine as homing left it."""
+        return self.request("POST", f"{self._board(plotter)}/machine/home", "homing", timeout=180)
 
     def unlock(self, plotter: str | None = None) -> dict[str, Any]:
         return self.request("POST", f"{self._board(plotter)}/machine/unlock", "unlock")

@@ -277,6 +277,24 @@ async def test_command_collects_responses():
         assert "G0 X10" in tx
 
 
+async def test_homing_answer_carries_the_state_homing_left():
+    board = FakeBoard()
+    board.state = "Alarm"
+    async with running(board) as link:
+        await until(lambda: link.status.state == "Alarm")
+        link.poll_hz = 0.01     # no routine poll may refresh the state by chance
+
+        def home(line: str) -> list[str] | None:
+            if line == "$H":
+                board.state = "Idle"
+                return ["ok"]
+            return None
+
+        board.on_line = home
+        await link.command("$H")
+        assert link.status.state == "Idle"
+
+
 async def test_command_error_raises_with_code_and_message():
     board = FakeBoard()
     board.script["G5"] = ["error:20"]

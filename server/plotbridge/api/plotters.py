@@ -70,12 +70,14 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
     @routes.post("/machine/unlock")
     async def unlock(plotter: Board) -> dict[str, Any]:
         log.info("%s: unlock ($X) requested", plotter.name)
-        return {"responses": await plotter.send("unlock", "$X")}
+        responses = await plotter.send("unlock", "$X")  # answered with the state it left
+        return {"responses": responses, "machine": plotter.machine()}
 
     @routes.post("/machine/home")
     async def home(plotter: Board) -> dict[str, Any]:
         log.info("%s: homing ($H) requested", plotter.name)
-        return {"responses": await plotter.send("home", "$H", wait=120)}
+        responses = await plotter.send("home", "$H", wait=120)
+        return {"responses": responses, "machine": plotter.machine()}
 
     @routes.post("/machine/pen")
     async def pen(body: PenBody, plotter: Board) -> dict[str, Any]:

@@ -46,6 +46,8 @@ from plotbridge.plotter.board import BoardFacts
 log = logging.getLogger("plotbridge.plotter.link")
 
 REALTIME_BYTES = frozenset(b"?!~\x18") | frozenset(range(0x80, 0x100))
+STATE_CHANGING = frozenset({"$H", "$X"})  # their answer waits for the state they leave
+STATUS_AFTER_S = 2.0
 
 
 Lines = Iterable[tuple[int, str]] | AsyncIterable[tuple[int, str]]
@@ -200,6 +202,7 @@ class Link:
         self._real_port = False     # a real serial device (not a pty): may reset on open
         self._backlog = bytearray()  # bytes the OS did not take yet
         self._backlog_timer: asyncio.TimerHandle | None = None
+        self._status_waiters: list[asyncio.Future[None]] = []
 
     # --- public API -------------------------------------------------------
 
@@ -280,7 +283,24 @@ class Link:
             await self._wait_settled()
             if not self._ready:
                 raise LinkDown("not connected")
-            return await self._exchange(line, timeout)
+            responses = await self._exchange(line, timeout)
+            if line.upper() in STATE_CHANGING:
+                await self._next_status(STATUS_AFTER_S)
+            return responses
+
+    async def _next_status(self, limit_s: float) -> None:
+        """Ask for a report and wait for it: a report that arrives after an `ok` was
+        made after it, so the caller sees the state the command left, not a stale one."""
+        waiter: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        self._status_waiters.append(waiter)
+        try:
+            self._write(STATUS_QUERY, urgent=True)
+            await asyncio.wait_for(waiter, limit_s)
+        except (TimeoutError, LinkDown):
+            log.warning("no status report within %.1f s of a state change", limit_s)
+        finally:
+            if waiter in self._status_waiters:
+                self._status_waiters.remove(waiter)
 
     async def stream(self, lines: Lines, on_ack: Callable[[int], None]) -> None:
         """Stream (line number, text) pairs with character counting.
@@ -584,6 +604,10 @@ class Link:
         if (not self._settled.is_set() and not self._await_banner
                 and report.rx_free == RX_BUFFER_SIZE and not self._counter.outstanding):
             self._settled.set()     # every line from before the alarm has been answered
+        waiters, self._status_waiters = self._status_waiters, []
+        for waiter in waiters:
+            if not waiter.done():
+                waiter.set_result(None)
         self._emit_status()
 
     # --- the session ------------------------------------------------------
