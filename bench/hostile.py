@@ -67,12 +67,16 @@ class Peak:
         return self.peak
 
 
-def streaming_rate(server: ServerProcess, program: str, seconds: float) -> float:
+def upload_moves(server: ServerProcess) -> dict:
+    """Uploaded before an attack starts: the killed-worker attack kills every import."""
+    return server.client.post(
+        "/api/jobs", files={"file": ("moves.gcode", short_moves(4000))}, timeout=300
+    ).json()
+
+
+def streaming_rate(server: ServerProcess, job: dict, seconds: float) -> float:
     server.client.post("/api/machine/unlock")
     server.wait_machine(lambda m: m["state"] == "Idle", 30)
-    job = server.client.post(
-        "/api/jobs", files={"file": ("moves.gcode", program)}, timeout=300
-    ).json()
     assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
     deadline = time.monotonic() + 60
     while server.job(job["id"])["lines_done"] < 100 and time.monotonic() < deadline:
@@ -121,11 +125,12 @@ def verdict(ok: bool) -> str:
 
 def measure(server: ServerProcess, name: str, attack, args, idle: dict | None) -> dict:
     peak = Peak(server.proc.pid)
+    job = upload_moves(server)
     if attack is not None:
         attack.start()
         time.sleep(args.warmup)
     try:
-        rate = streaming_rate(server, short_moves(4000), args.stream_seconds)
+        rate = streaming_rate(server, job, args.stream_seconds)
         rest, ws_times = stop_latencies(server, args.samples)
     finally:
         if attack is not None:
