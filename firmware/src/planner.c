@@ -7,13 +7,17 @@
 #define REVERSAL_COS 0.999999f
 #define MIN_STEP_RATE 32.0f /* steps/s the 2 MHz 16-bit step timer can time */
 
-static plan_block_t ring[PLAN_SIZE];
+/* PLAN_SIZE - 1 usable blocks (the count tells full from empty, so no
+ * slot is kept free) */
+#define RING_SLOTS (PLAN_SIZE - 1)
+static plan_block_t ring[RING_SLOTS];
 static uint8_t head, tail, count;
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
+static uint8_t override_serial;
 static float last_feed;        /* the last block's feed, and as stored in blocks */
 static uint16_t last_feed_u16;
 
@@ -43,8 +47,8 @@ static void refresh_axis(void)
     }
 }
 
-static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == PLAN_SIZE ? 0 : i + 1); }
-static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? PLAN_SIZE - 1 : i - 1); }
+static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == RING_SLOTS ? 0 : i + 1); }
+static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 : i - 1); }
 
 void plan_reset(void)
 {
@@ -144,7 +148,7 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
 static void recalculate(uint8_t full)
 {
     /* pointers rather than ring indices: no index multiply per block */
-    plan_block_t *const last = &ring[PLAN_SIZE - 1];
+    plan_block_t *const last = &ring[RING_SLOTS - 1];
     plan_block_t *const oldest = &ring[tail];
     plan_block_t *b = &ring[prev_index(head)];
     plan_block_t *first = oldest;
@@ -209,46 +213,74 @@ static float axis_s_per_mm(const float *unit)
     return s_per_mm;
 }
 
+uint8_t plan_override_serial(void) { return override_serial; }
+
 void planner_set_overrides(uint8_t feed, uint8_t rapid)
 {
     if (feed == feed_pct && rapid == rapid_pct)
         return;
     feed_pct = feed;
     rapid_pct = rapid;
+    override_serial++;
     if (!count)
         return;
     refresh_axis();
-    plan_block_t *const last = &ring[PLAN_SIZE - 1];
+    plan_block_t *const last = &ring[RING_SLOTS - 1];
     plan_block_t *const end = &ring[head];
     plan_block_t *const oldest = &ring[tail];
     float prev_nominal = 0.0f;
-    for (plan_block_t *b = oldest; b != end; b = b == last ? ring : b + 1) {
-        if (!(b->flags & PB_JOG)) {
-            int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
-            float unit[N_AXIS], inv_mm = 1.0f / b->mm;
-            plan_cart_from_motor(motor, cart);
-            for (uint8_t a = 0; a < N_AXIS; a++)
-                unit[a] = (float)cart[a] * axis.mm_per_step[a] * inv_mm;
-            float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), b->events_per_mm);
-            b->nominal_sqr = speed * speed;
-        }
+    plan_block_t *b = oldest;
+    do { /* (a full ring has end == oldest) */
+        plan_motion_t m;
+        plan_block_motion(b, &m);
         /* a junction is never faster than the cruise speeds on either side */
         if (b != oldest) {
-            float cap = prev_nominal < b->nominal_sqr ? prev_nominal : b->nominal_sqr;
+            float cap = prev_nominal < m.nominal_sqr ? prev_nominal : m.nominal_sqr;
             plan_sqr_t c = plan_sqr_from_float(cap);
             if (b->max_entry_sqr > c)
                 b->max_entry_sqr = c;
         }
-        prev_nominal = b->nominal_sqr;
-    }
+        prev_nominal = m.nominal_sqr;
+        b = b == last ? ring : b + 1;
+    } while (b != end);
     prev_nominal_sqr = prev_nominal;
     recalculate(1);
+}
+
+void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
+{
+    int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
+    float d_mm[N_AXIS], mm2 = 0.0f;
+    plan_cart_from_motor(motor, cart);
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
+        mm2 += d_mm[a] * d_mm[a];
+    }
+    m->mm = sqrtf(mm2);
+    float inv_mm = 1.0f / m->mm;
+    m->events_per_mm = (float)plan_events(b) * inv_mm;
+    /* the axis limits along the move: speed <= max_rate / |u|, accel <= accel / |u|
+     * for every moving axis; the tightest has the largest |u| / limit, so
+     * one division each at most */
+    float inv_accel = 0.0f;
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        m->unit[a] = d_mm[a] * inv_mm;
+        float u = fabsf(m->unit[a]);
+        if (u > 1.0e-6f) {
+            float r = u * axis.inv_accel[a];
+            if (r > inv_accel)
+                inv_accel = r;
+        }
+    }
+    m->inv_accel = inv_accel;
+    m->accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
+    float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(m->unit), m->events_per_mm);
+    m->nominal_sqr = speed * speed;
 }
 
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
 {
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
-    float d_mm[N_AXIS], mm2 = 0.0f;
     refresh_axis();
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = target[a] * settings.steps_per_mm[a];
@@ -256,8 +288,6 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
             return 0;
         cart[a] = lroundf(t);
         delta[a] = cart[a] - position[a];
-        d_mm[a] = (float)delta[a] * axis.mm_per_step[a];
-        mm2 += d_mm[a] * d_mm[a];
     }
     plan_motor_steps(delta, motor);
     uint32_t events = 0;
@@ -275,39 +305,19 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->flags = flags;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    b->mm = sqrtf(mm2);
-    float inv_mm = 1.0f / b->mm;
-    b->events_per_mm = (float)events * inv_mm;
-    /* the axis limits along the move: speed <= max_rate / |u|, accel <= accel / |u|
-     * for every moving axis; the tightest has the largest |u| / limit, so
-     * one division each at most */
-    float unit[N_AXIS];
-    float inv_accel = 0.0f;
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        unit[a] = d_mm[a] * inv_mm;
-        float u = fabsf(unit[a]);
-        if (u > 1.0e-6f) {
-            float r = u * axis.inv_accel[a];
-            if (r > inv_accel)
-                inv_accel = r;
-        }
-    }
-    float speed = cruise_speed(feed, flags, axis_s_per_mm(unit), b->events_per_mm);
-    float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
-    if (feed != last_feed) { /* F is modal: converted once per change (overrides only: 1 mm/min is fine) */
+    if (feed != last_feed) { /* F is modal: converted once per change */
         last_feed = feed;
-        last_feed_u16 = feed < 65535.0f ? (uint16_t)feed : 65535u;
+        last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
     }
     b->feed = last_feed_u16;
-    b->nominal_sqr = speed * speed;
-    b->accel = accel;
-    b->inv_accel = inv_accel;
-    b->accel_dist2 = plan_sqr_from_float(2.0f * accel * b->mm);
+    plan_motion_t m;
+    plan_block_motion(b, &m);
+    b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
 
     float junction = 0.0f;
     if (count) {
-        float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
-        float cap = prev_nominal_sqr < b->nominal_sqr ? prev_nominal_sqr : b->nominal_sqr;
+        float cos_theta = -(prev_unit[0] * m.unit[0] + prev_unit[1] * m.unit[1]);
+        float cap = prev_nominal_sqr < m.nominal_sqr ? prev_nominal_sqr : m.nominal_sqr;
         if (cos_theta < STRAIGHT_COS) {
             junction = cap;
         } else if (cos_theta < REVERSAL_COS) {
@@ -316,7 +326,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
              * cap. With k = a * jd, k s / (1 - s) >= cap exactly when
              * s^2 (k + cap)^2 >= cap^2: gentle corners (most of a curve) need
              * neither the square root nor the division. */
-            float k = accel * settings.junction_deviation;
+            float k = m.accel * settings.junction_deviation;
             float s2 = 0.5f * (1.0f - cos_theta);
             float kc = k + cap;
             if (s2 * kc * kc >= cap * cap) {
@@ -330,8 +340,8 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->max_entry_sqr = plan_sqr_from_float(junction);
     b->entry_sqr = 0;
 
-    memcpy(prev_unit, unit, sizeof(unit));
-    prev_nominal_sqr = b->nominal_sqr;
+    memcpy(prev_unit, m.unit, sizeof(prev_unit));
+    prev_nominal_sqr = m.nominal_sqr;
     memcpy(position, cart, sizeof(cart));
     head = next_index(head);
     if (count++ == 0)

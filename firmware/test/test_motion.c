@@ -57,6 +57,15 @@ void test_arc_full_circle(void)
     }
 }
 
+static plan_motion_t block_motion(const plan_block_t *b)
+{
+    plan_motion_t m;
+    plan_block_motion(b, &m);
+    return m;
+}
+
+static double nominal_speed(const plan_block_t *b) { return sqrt(block_motion(b).nominal_sqr); }
+
 static void fresh_planner(void)
 {
     settings_defaults(&settings);
@@ -110,13 +119,13 @@ void test_planner_junctions(void)
     /* rapid uses the axis maximum */
     fresh_planner();
     plan_line(a, 0, PB_RAPID);
-    CHECK_NEAR(sqrt(plan_current()->nominal_sqr), 100, 0.01);
+    CHECK_NEAR(nominal_speed(plan_current()), 100, 0.01);
     /* diagonal: acceleration and speed limited per axis */
     fresh_planner();
     settings.max_rate[1] = 600;
     float diag[2] = {10, 10};
     plan_line(diag, 100000, 0);
-    CHECK_NEAR(sqrt(plan_current()->nominal_sqr), 10 * sqrt(2), 0.01);
+    CHECK_NEAR(nominal_speed(plan_current()), 10 * sqrt(2), 0.01);
     settings_defaults(&settings);
     /* the junction rule across all corner angles, on both sides of the
      * nominal cap (gentle corners take a shortcut to the cap) */
@@ -132,7 +141,7 @@ void test_planner_junctions(void)
         double u0 = sqrt(0.5);
         double c = -(u0 * ux + u0 * uy);
         double sh = sqrt(0.5 * (1 - c));
-        double accel = q[1].accel;
+        double accel = block_motion(&q[1]).accel;
         double expect = accel * 0.02 * sh / (1 - sh);
         if (expect > 100.0 * 100.0)
             expect = 100.0 * 100.0;
@@ -278,14 +287,14 @@ void test_planner_overrides(void)
     CHECK(plan_line(p1, 3000, 0) && plan_line(p2, 3000, 0) && plan_line(p3, 3000, 0));
     CHECK(plan_line(p4, 0, PB_RAPID) && plan_line(p5, 1200, PB_JOG));
     plan_block_t *q = plan_current();
-    CHECK_NEAR(sqrt(q[1].nominal_sqr), 50, 1e-3);
+    CHECK_NEAR(nominal_speed(&q[1]), 50, 1e-3);
     CHECK_NEAR(plan_sqr_to_float(q[1].max_entry_sqr), 2500, 1);
     /* feed 50 %, rapids 25 %: every queued block, the oldest too */
     planner_set_overrides(50, 25);
     for (int i = 0; i < 3; i++)
-        CHECK_NEAR(sqrt(q[i].nominal_sqr), 25, 1e-3);
-    CHECK_NEAR(sqrt(q[3].nominal_sqr), 100 * 0.25, 1e-3); /* $110 6000 mm/min */
-    CHECK_NEAR(sqrt(q[4].nominal_sqr), 20, 1e-3);         /* the jog keeps F1200 */
+        CHECK_NEAR(nominal_speed(&q[i]), 25, 1e-3);
+    CHECK_NEAR(nominal_speed(&q[3]), 100 * 0.25, 1e-3); /* $110 6000 mm/min */
+    CHECK_NEAR(nominal_speed(&q[4]), 20, 1e-3);         /* the jog keeps F1200 */
     /* junctions capped by the new speeds, and the queue replanned */
     CHECK(plan_sqr_to_float(q[1].max_entry_sqr) <= 625 + 1e-3);
     CHECK(plan_sqr_to_float(q[4].max_entry_sqr) <= 400 + 1e-3);
@@ -294,11 +303,11 @@ void test_planner_overrides(void)
     /* later blocks are planned with the overrides too */
     float p6[2] = {60, 0};
     CHECK(plan_line(p6, 3000, 0));
-    CHECK_NEAR(sqrt(q[5].nominal_sqr), 25, 1e-3);
+    CHECK_NEAR(nominal_speed(&q[5]), 25, 1e-3);
     /* back to 100 %: programmed speeds again */
     planner_set_overrides(100, 100);
-    CHECK_NEAR(sqrt(q[0].nominal_sqr), 50, 1e-3);
-    CHECK_NEAR(sqrt(q[3].nominal_sqr), 100, 1e-3);
+    CHECK_NEAR(nominal_speed(&q[0]), 50, 1e-3);
+    CHECK_NEAR(nominal_speed(&q[3]), 100, 1e-3);
     /* the segment preparer follows a lowered speed inside the executing block */
     fresh_planner();
     float far[2] = {100, 0};
