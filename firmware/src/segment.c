@@ -252,7 +252,7 @@ uint8_t seg_fill(void)
             segment_t *seg = &seg_ring[ring_slot(seg_head, SEG_SIZE)];
             seg->events = (uint16_t)n;
             seg->period = (uint16_t)(period - 1.0f); /* CTC: a period is OCR1A + 1 ticks */
-            seg->block = prep.block;
+            seg->block = &step_blocks[prep.block];
             seg->flags = prep.first ? SEG_FIRST : 0;
             prep.first = 0;
             prep.done = target;

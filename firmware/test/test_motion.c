@@ -156,16 +156,14 @@ typedef struct {
     int64_t steps[2];
 } run_t;
 
-static uint8_t last_block = 0xFF;
 static void drain(run_t *r, double mm_per_event)
 {
     while (seg_tail != seg_head) {
         segment_t *s = &seg_ring[seg_tail & (SEG_SIZE - 1)];
-        step_block_t *b = &step_blocks[s->block];
+        const step_block_t *b = s->block;
         if (s->flags & SEG_FIRST) {
             for (int a = 0; a < 2; a++)
                 r->steps[a] += (b->dir_negative & (1 << a)) ? -(int64_t)b->steps[a] : (int64_t)b->steps[a];
-            last_block = s->block;
         }
         double dt = (double)s->events * (s->period + 1) / STEP_TIMER_HZ;
         double v = s->events * mm_per_event / dt;
