@@ -10,14 +10,14 @@
 #define RX_SIZE 128          /* receive ring: GRBL's character-counting size */
 #define TX_SIZE 128          /* transmit ring (power of two) */
 #define LINE_SIZE 80         /* longest accepted line after stripping */
-/* Planner ring: PLAN_SIZE - 1 usable blocks of 19 bytes (planner.h). Per
+/* Planner ring: PLAN_SIZE - 1 usable blocks of 21 bytes (planner.h). Per
  * chip; the host library (make motion) takes the value of the board it is
  * built for from here. */
 #ifndef PLAN_SIZE
 #if defined(__AVR_ATmega2560__)
-#define PLAN_SIZE 128        /* 8 KiB of RAM: 127 blocks, 2.4 KiB */
+#define PLAN_SIZE 128        /* 8 KiB of RAM: 127 blocks, 2.6 KiB */
 #else
-#define PLAN_SIZE 36         /* 35 blocks, 665 B: 2 KiB less the stack's 512 B */
+#define PLAN_SIZE 34         /* 33 blocks, 693 B: 2 KiB less the stack's 512 B */
 #endif
 #endif
 #define SEG_SIZE 8           /* step segment ring (7 usable) */

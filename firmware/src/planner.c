@@ -17,7 +17,6 @@ static float prev_unit[N_AXIS];
 static float prev_nominal_sqr;
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
-static uint8_t override_serial;
 static float last_feed;        /* the last block's feed, and as stored in blocks */
 static uint16_t last_feed_u16;
 
@@ -84,6 +83,24 @@ plan_sqr_t plan_sqr_from_float(float v_sqr)
 }
 
 float plan_sqr_to_float(plan_sqr_t v) { return (float)v * (1.0f / PLAN_SQR_SCALE); }
+
+plan_f16_t plan_f16_from_float(float v)
+{
+    uint32_t bits;
+    if (!(v > 0.0f)) /* (and NaN) */
+        return 0;
+    memcpy(&bits, &v, sizeof(bits));
+    /* bits 31..16 shifted up by one, and bit 15: byte moves and a shift, not a 15-place shift loop */
+    return (plan_f16_t)((uint16_t)(bits >> 16) << 1 | (uint16_t)bits >> 15);
+}
+
+float plan_f16_to_float(plan_f16_t h)
+{
+    uint32_t bits = (uint32_t)(h >> 1) << 16 | (uint32_t)(h & 1) << 15;
+    float v;
+    memcpy(&v, &bits, sizeof(v));
+    return v;
+}
 
 float plan_next_entry_sqr(void)
 {
@@ -213,7 +230,42 @@ static float axis_s_per_mm(const float *unit)
     return s_per_mm;
 }
 
-uint8_t plan_override_serial(void) { return override_serial; }
+/* Length, events per mm, acceleration along the move and (when unit is
+ * given) the direction. The axis limits along the move: accel <= accel /
+ * |u| for every moving axis; the tightest has the largest |u| / limit, i.e.
+ * the largest |d_mm| / limit. */
+static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
+{
+    int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
+    float d_mm[N_AXIS], mm2 = 0.0f, x = 0.0f;
+    plan_cart_from_motor(motor, cart);
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
+        mm2 += d_mm[a] * d_mm[a];
+        float r = fabsf(d_mm[a]) * axis.inv_accel[a];
+        if (r > x)
+            x = r;
+    }
+    m->mm = sqrtf(mm2);
+    float inv_mm = 1.0f / m->mm;
+    m->events_per_mm = (float)plan_events(b) * inv_mm;
+    m->inv_accel = x * inv_mm;
+    m->accel = 1.0f / m->inv_accel; /* some axis moves: x > 0 */
+    if (unit)
+        for (uint8_t a = 0; a < N_AXIS; a++)
+            unit[a] = d_mm[a] * inv_mm;
+}
+
+void plan_block_motion(const plan_block_t *b, plan_motion_t *m) { geometry(b, m, 0); }
+
+/* The block's cruise speed squared as stored (16 bits, never above the
+ * float one), from its feed, flags and direction with the overrides. */
+static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+{
+    float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
+    b->nominal_sqr = plan_f16_from_float(speed * speed);
+    return plan_f16_to_float(b->nominal_sqr);
+}
 
 void planner_set_overrides(uint8_t feed, uint8_t rapid)
 {
@@ -221,7 +273,6 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
         return;
     feed_pct = feed;
     rapid_pct = rapid;
-    override_serial++;
     if (!count)
         return;
     refresh_axis();
@@ -232,50 +283,21 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
     plan_block_t *b = oldest;
     do { /* (a full ring has end == oldest) */
         plan_motion_t m;
-        plan_block_motion(b, &m);
+        float unit[N_AXIS];
+        geometry(b, &m, unit);
+        float nominal = set_nominal(b, &m, unit);
         /* a junction is never faster than the cruise speeds on either side */
         if (b != oldest) {
-            float cap = prev_nominal < m.nominal_sqr ? prev_nominal : m.nominal_sqr;
+            float cap = prev_nominal < nominal ? prev_nominal : nominal;
             plan_sqr_t c = plan_sqr_from_float(cap);
             if (b->max_entry_sqr > c)
                 b->max_entry_sqr = c;
         }
-        prev_nominal = m.nominal_sqr;
+        prev_nominal = nominal;
         b = b == last ? ring : b + 1;
     } while (b != end);
     prev_nominal_sqr = prev_nominal;
     recalculate(1);
-}
-
-void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
-{
-    int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
-    float d_mm[N_AXIS], mm2 = 0.0f;
-    plan_cart_from_motor(motor, cart);
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
-        mm2 += d_mm[a] * d_mm[a];
-    }
-    m->mm = sqrtf(mm2);
-    float inv_mm = 1.0f / m->mm;
-    m->events_per_mm = (float)plan_events(b) * inv_mm;
-    /* the axis limits along the move: speed <= max_rate / |u|, accel <= accel / |u|
-     * for every moving axis; the tightest has the largest |u| / limit, so
-     * one division each at most */
-    float inv_accel = 0.0f;
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        m->unit[a] = d_mm[a] * inv_mm;
-        float u = fabsf(m->unit[a]);
-        if (u > 1.0e-6f) {
-            float r = u * axis.inv_accel[a];
-            if (r > inv_accel)
-                inv_accel = r;
-        }
-    }
-    m->inv_accel = inv_accel;
-    m->accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
-    float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(m->unit), m->events_per_mm);
-    m->nominal_sqr = speed * speed;
 }
 
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
@@ -311,13 +333,15 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     }
     b->feed = last_feed_u16;
     plan_motion_t m;
-    plan_block_motion(b, &m);
+    float unit[N_AXIS];
+    geometry(b, &m, unit);
+    float nominal = set_nominal(b, &m, unit);
     b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
 
     float junction = 0.0f;
     if (count) {
-        float cos_theta = -(prev_unit[0] * m.unit[0] + prev_unit[1] * m.unit[1]);
-        float cap = prev_nominal_sqr < m.nominal_sqr ? prev_nominal_sqr : m.nominal_sqr;
+        float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
+        float cap = prev_nominal_sqr < nominal ? prev_nominal_sqr : nominal;
         if (cos_theta < STRAIGHT_COS) {
             junction = cap;
         } else if (cos_theta < REVERSAL_COS) {
@@ -340,8 +364,8 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->max_entry_sqr = plan_sqr_from_float(junction);
     b->entry_sqr = 0;
 
-    memcpy(prev_unit, m.unit, sizeof(prev_unit));
-    prev_nominal_sqr = m.nominal_sqr;
+    memcpy(prev_unit, unit, sizeof(prev_unit));
+    prev_nominal_sqr = nominal;
     memcpy(position, cart, sizeof(cart));
     head = next_index(head);
     if (count++ == 0)

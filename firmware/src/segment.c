@@ -12,13 +12,12 @@ static struct {
     uint8_t block;       /* its step_blocks index */
     uint8_t first;       /* next segment is the block's first */
     uint8_t hold, stopped;
-    uint8_t override_serial; /* plan_override_serial() when m was derived */
     uint32_t done;       /* events prepared */
     uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
     float mm_per_event;  /* 0 until a segment ends inside the block */
-    plan_motion_t m;     /* the block's length, acceleration and cruise speed */
+    plan_motion_t m;     /* the block's length and acceleration */
 } prep;
 
 void seg_reset(void)
@@ -51,7 +50,7 @@ void seg_drop_block(void)
  * speed, cruise, decelerate to the exit speed, so a planner that raised
  * the exit speed meanwhile is followed at once. Returns the time used
  * (less than dt when the block or a hold ends first). */
-static float advance(float dt)
+static float advance(const plan_block_t *b, float dt)
 {
     float remaining = prep.m.mm - prep.s;
     float a = prep.m.accel;
@@ -78,7 +77,7 @@ static float advance(float dt)
         return tt;
     }
     float ve2 = plan_next_entry_sqr();
-    float vn2 = prep.m.nominal_sqr;
+    float vn2 = plan_f16_to_float(b->nominal_sqr); /* read each time: overrides change it */
     float v2 = v * v;
     if (v2 > vn2 && v2 > vn2 * 1.0001f) { /* (the first test spares the multiply) */
         /* above the cruise speed (a feed override lowered it): slow down to
@@ -190,7 +189,6 @@ static void start_block(const plan_block_t *b)
     prep.done = 0;
     prep.mm_per_event = 0.0f; /* a division that short blocks never need */
     plan_block_motion(b, &prep.m);
-    prep.override_serial = plan_override_serial();
 }
 
 uint8_t seg_fill(void)
@@ -208,16 +206,12 @@ uint8_t seg_fill(void)
         }
         if (!prep.active)
             start_block(b);
-        else if (prep.override_serial != plan_override_serial()) {
-            plan_block_motion(b, &prep.m); /* an override changed its cruise speed */
-            prep.override_serial = plan_override_serial();
-        }
         float time = 0.0f;
         uint32_t target;
         uint8_t ended;
         uint8_t rounds = 0;
         do {
-            time += advance(SEGMENT_S);
+            time += advance(b, SEGMENT_S);
             ended = prep.s >= prep.m.mm;
             float e = prep.s * prep.m.events_per_mm;
             target = ended ? prep.events : (uint32_t)(e + 0.5f); /* a step is due half way */
