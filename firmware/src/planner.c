@@ -84,19 +84,22 @@ plan_sqr_t plan_sqr_from_float(float v_sqr)
 
 float plan_sqr_to_float(plan_sqr_t v) { return (float)v * (1.0f / PLAN_SQR_SCALE); }
 
+/* In 16-bit halves of the float's bits: the shifts are by one place, where
+ * 32-bit shifts by 15 would be loops here. */
 plan_f16_t plan_f16_from_float(float v)
 {
     uint32_t bits;
     if (!(v > 0.0f)) /* (and NaN) */
         return 0;
     memcpy(&bits, &v, sizeof(bits));
-    /* bits 31..16 shifted up by one, and bit 15: byte moves and a shift, not a 15-place shift loop */
-    return (plan_f16_t)((uint16_t)(bits >> 16) << 1 | (uint16_t)bits >> 15);
+    uint16_t hi = (uint16_t)(bits >> 16), lo = (uint16_t)bits;
+    return (plan_f16_t)((uint16_t)(hi << 1) | ((lo & 0x8000u) ? 1u : 0u));
 }
 
 float plan_f16_to_float(plan_f16_t h)
 {
-    uint32_t bits = (uint32_t)(h >> 1) << 16 | (uint32_t)(h & 1) << 15;
+    uint16_t hi = (uint16_t)(h >> 1), lo = (h & 1) ? 0x8000u : 0u;
+    uint32_t bits = (uint32_t)hi << 16 | lo;
     float v;
     memcpy(&v, &bits, sizeof(v));
     return v;

@@ -161,12 +161,16 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * step: a whole period before that step's edge, and after the edge of the
  * old block's last step made at the top of the tick (past its hold time).
  *
- * Cycle budget, measured by bench/firmware_bench.py on the 328P at 50 kHz
- * on both axes (a period of 320 cycles), entry and exit (86) included:
- * 229 cycles on average, 394 at worst on the tick that loads a segment
- * starting a block (the next edge then comes up to ~5 us late, the tick
- * after it early: the hardware period holds, so no step is lost or late
- * over a segment). The pulse-end interrupt below adds at most 50. */
+ * Cycle budget, measured by bench/firmware_bench.py at 50 kHz on both axes
+ * (a period of 320 cycles), entry and exit included: on the 328P 213 cycles
+ * on average (153 body + 60 entry/exit), 290 at worst on the tick that
+ * loads a segment starting a block; on the 2560 215 and 294 (its 3-byte
+ * return address: 68 entry/exit). The busiest period holds a worst tick
+ * alone: a tick that outlasts the pulse ends it itself, so the pulse-end
+ * interrupt below (50 cycles worst) runs only after short ticks. Nothing
+ * here calls a function (a call would make the compiler save every
+ * call-clobbered register on each tick: 86 cycles of entry/exit instead
+ * of 60) and nothing is 32-bit (the main loop folds the 16-bit counts). */
 ISR(TIMER1_COMPA_vect)
 {
 #ifdef BENCH_ISR_PIN

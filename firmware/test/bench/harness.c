@@ -120,18 +120,23 @@ static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
         window_steps[w][axis]++;
 }
 
+static void close_period(void)
+{
+    if (period_marks && period_isr + period_mark > worst_pair_isr + worst_pair_mark) {
+        worst_pair_isr = period_isr;
+        worst_pair_mark = period_mark;
+    } else if (!period_marks && period_isr > worst_alone) {
+        worst_alone = period_isr;
+    }
+    period_isr = period_mark = period_marks = 0;
+}
+
 static void on_isr_pin(struct avr_irq_t *irq, uint32_t value, void *param)
 {
     (void)irq;
     (void)param;
     if (value & 1) {
-        if (period_marks && period_isr + period_mark > worst_pair_isr + worst_pair_mark) {
-            worst_pair_isr = period_isr;
-            worst_pair_mark = period_mark;
-        } else if (!period_marks && period_isr > worst_alone) {
-            worst_alone = period_isr;
-        }
-        period_isr = period_mark = period_marks = 0;
+        close_period();
         isr_rise = avr->cycle;
         return;
     }
@@ -284,6 +289,7 @@ int main(int argc, char **argv)
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
            (unsigned long long)isr_count, (unsigned long long)isr_max,
            isr_count ? (double)isr_total / (double)isr_count : 0.0);
+    close_period(); /* the last one */
     printf(" \"period\": {\"worst_alone\": %llu, \"worst_pair_isr\": %llu, \"worst_pair_mark\": %llu},\n",
            (unsigned long long)worst_alone, (unsigned long long)worst_pair_isr,
            (unsigned long long)worst_pair_mark);
