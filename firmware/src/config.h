@@ -15,7 +15,10 @@
  * built for from here. */
 #ifndef PLAN_SIZE
 #if defined(__AVR_ATmega2560__)
-#define PLAN_SIZE 128        /* 8 KiB of RAM: 127 blocks, 2.6 KiB */
+#define PLAN_SIZE 64         /* 63 blocks, 1.3 KiB: not more, because an override
+                              * change re-derives every queued block's speed in
+                              * one go (~5,000 cycles each) while the 7 prepared
+                              * segments keep the steppers fed */
 #else
 #define PLAN_SIZE 34         /* 33 blocks, 693 B: 2 KiB less the stack's 512 B */
 #endif
