@@ -279,7 +279,7 @@ int motion_blocks(plan_block_t *out, int max)
     int n = 0;
     for (; b && ring_base && n < plan_count() && n < max; n++) {
         out[n] = *b;
-        b = b + 1 == ring_base + PLAN_SIZE ? ring_base : b + 1;
+        b = b + 1 == ring_base + (PLAN_SIZE - 1) ? ring_base : b + 1;
     }
     return n;
 }

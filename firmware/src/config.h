@@ -10,10 +10,18 @@
 #define RX_SIZE 128          /* receive ring: GRBL's character-counting size */
 #define TX_SIZE 128          /* transmit ring (power of two) */
 #define LINE_SIZE 80         /* longest accepted line after stripping */
+/* Planner ring: PLAN_SIZE - 1 usable blocks of 21 bytes (planner.h). Per
+ * chip; the host library (make motion) takes the value of the board it is
+ * built for from here. */
+#ifndef PLAN_SIZE
 #if defined(__AVR_ATmega2560__)
-#define PLAN_SIZE 34         /* 8 KiB of RAM: 33 usable blocks (>= 32 look-ahead) */
+#define PLAN_SIZE 64         /* 63 blocks, 1.3 KiB: not more, because an override
+                              * change re-derives every queued block's speed in
+                              * one go (~5,000 cycles each) while the 7 prepared
+                              * segments keep the steppers fed */
 #else
-#define PLAN_SIZE 18         /* planner ring: 17 usable blocks (>= 16 look-ahead) */
+#define PLAN_SIZE 34         /* 33 blocks, 693 B: 2 KiB less the stack's 512 B */
+#endif
 #endif
 #define SEG_SIZE 8           /* step segment ring (7 usable) */
 

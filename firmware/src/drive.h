@@ -13,7 +13,7 @@
  *                           (a four-wire drive keeps its phase either way)
  *   DRIVE_PULSED            1: drive_step_end must follow drive_step after $0 us
  *
- * The hot calls (step, step_end) are static inline in the drive kind's
+ * The hot calls (step, step_end, set_dir) are static inline in the drive kind's
  * header so the step interrupt pays no call. */
 #ifndef DRIVE_H
 #define DRIVE_H
@@ -22,7 +22,6 @@
 
 void drive_init(void);
 void drive_apply_settings(void);
-void drive_set_dir(uint8_t negative_mask);
 void drive_enable(uint8_t on);
 
 #if DRIVE_KIND == DRIVE_STEPDIR

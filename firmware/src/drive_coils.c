@@ -54,15 +54,8 @@ void drive_init(void)
 }
 
 /* $2 (step invert) and $4 (enable invert) have no meaning without step and
- * enable pins; $3 reverses the sequence per axis, as it reverses a motor. */
+ * enable pins; $3 is drive_set_dir's (drive_coils.h). */
 void drive_apply_settings(void) {}
-
-void drive_set_dir(uint8_t negative_mask)
-{
-    uint8_t neg = negative_mask ^ settings.dir_invert;
-    coil_delta[0] = (neg & 1) ? (uint8_t)(8 - COIL_STRIDE) : COIL_STRIDE;
-    coil_delta[1] = (neg & 2) ? (uint8_t)(8 - COIL_STRIDE) : COIL_STRIDE;
-}
 
 void drive_enable(uint8_t on)
 {

@@ -6,6 +6,7 @@
 #include <avr/io.h>
 #include <stdint.h>
 #include "config.h"
+#include "settings.h"
 
 #define DRIVE_PULSED 0
 
@@ -48,5 +49,14 @@ static inline void drive_step(uint8_t axes)
 }
 
 static inline void drive_step_end(void) {}
+
+/* $3 reverses the sequence per axis, as it reverses a motor. Inline: see
+ * drive_stepdir.h. */
+static inline __attribute__((always_inline)) void drive_set_dir(uint8_t negative_mask)
+{
+    uint8_t neg = negative_mask ^ settings.dir_invert;
+    coil_delta[0] = (neg & 1) ? (uint8_t)(8 - COIL_STRIDE) : COIL_STRIDE;
+    coil_delta[1] = (neg & 2) ? (uint8_t)(8 - COIL_STRIDE) : COIL_STRIDE;
+}
 
 #endif

@@ -37,18 +37,6 @@ void drive_apply_settings(void)
     drive_enable(enabled);
 }
 
-/* Called between pulses (the step pins are idle), so no pin is shared with
- * a pulse in flight; the driver's setup time is the rest of the period. */
-void drive_set_dir(uint8_t negative_mask)
-{
-    uint8_t level = negative_mask ^ settings.dir_invert; /* 1 = HIGH: negative at $3=0 */
-    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
-    {
-        IO_SET(X_DIR, level & 1);
-        IO_SET(Y_DIR, level & 2);
-    }
-}
-
 void drive_enable(uint8_t on)
 {
     enabled = on;

@@ -5,7 +5,9 @@
 #define DRIVE_STEPDIR_H
 #include <avr/io.h>
 #include <stdint.h>
+#include <util/atomic.h>
 #include "config.h"
+#include "settings.h"
 
 #define DRIVE_PULSED 1
 
@@ -34,6 +36,20 @@ static inline __attribute__((always_inline)) void drive_step_end(void)
 {
     drive_step(drive_pulsing);
     drive_pulsing = 0;
+}
+
+/* Called between pulses (the step pins are idle), so no pin is shared with
+ * a pulse in flight; the driver's setup time is the rest of the period.
+ * Inline: a call from the step interrupt would make it save every
+ * call-clobbered register on every tick. */
+static inline __attribute__((always_inline)) void drive_set_dir(uint8_t negative_mask)
+{
+    uint8_t level = negative_mask ^ settings.dir_invert; /* 1 = HIGH: negative at $3=0 */
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+    {
+        IO_SET(X_DIR, level & 1);
+        IO_SET(Y_DIR, level & 2);
+    }
 }
 
 #endif

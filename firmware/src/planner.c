@@ -7,7 +7,10 @@
 #define REVERSAL_COS 0.999999f
 #define MIN_STEP_RATE 32.0f /* steps/s the 2 MHz 16-bit step timer can time */
 
-static plan_block_t ring[PLAN_SIZE];
+/* PLAN_SIZE - 1 usable blocks (the count tells full from empty, so no
+ * slot is kept free) */
+#define RING_SLOTS (PLAN_SIZE - 1)
+static plan_block_t ring[RING_SLOTS];
 static uint8_t head, tail, count;
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
@@ -43,8 +46,8 @@ static void refresh_axis(void)
     }
 }
 
-static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == PLAN_SIZE ? 0 : i + 1); }
-static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? PLAN_SIZE - 1 : i - 1); }
+static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == RING_SLOTS ? 0 : i + 1); }
+static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 : i - 1); }
 
 void plan_reset(void)
 {
@@ -80,6 +83,27 @@ plan_sqr_t plan_sqr_from_float(float v_sqr)
 }
 
 float plan_sqr_to_float(plan_sqr_t v) { return (float)v * (1.0f / PLAN_SQR_SCALE); }
+
+/* In 16-bit halves of the float's bits: the shifts are by one place, where
+ * 32-bit shifts by 15 would be loops here. */
+plan_f16_t plan_f16_from_float(float v)
+{
+    uint32_t bits;
+    if (!(v > 0.0f)) /* (and NaN) */
+        return 0;
+    memcpy(&bits, &v, sizeof(bits));
+    uint16_t hi = (uint16_t)(bits >> 16), lo = (uint16_t)bits;
+    return (plan_f16_t)((uint16_t)(hi << 1) | ((lo & 0x8000u) ? 1u : 0u));
+}
+
+float plan_f16_to_float(plan_f16_t h)
+{
+    uint16_t hi = (uint16_t)(h >> 1), lo = (h & 1) ? 0x8000u : 0u;
+    uint32_t bits = (uint32_t)hi << 16 | lo;
+    float v;
+    memcpy(&v, &bits, sizeof(v));
+    return v;
+}
 
 float plan_next_entry_sqr(void)
 {
@@ -144,7 +168,7 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
 static void recalculate(uint8_t full)
 {
     /* pointers rather than ring indices: no index multiply per block */
-    plan_block_t *const last = &ring[PLAN_SIZE - 1];
+    plan_block_t *const last = &ring[RING_SLOTS - 1];
     plan_block_t *const oldest = &ring[tail];
     plan_block_t *b = &ring[prev_index(head)];
     plan_block_t *first = oldest;
@@ -209,6 +233,43 @@ static float axis_s_per_mm(const float *unit)
     return s_per_mm;
 }
 
+/* Length, events per mm, acceleration along the move and (when unit is
+ * given) the direction. The axis limits along the move: accel <= accel /
+ * |u| for every moving axis; the tightest has the largest |u| / limit, i.e.
+ * the largest |d_mm| / limit. */
+static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
+{
+    int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
+    float d_mm[N_AXIS], mm2 = 0.0f, x = 0.0f;
+    plan_cart_from_motor(motor, cart);
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
+        mm2 += d_mm[a] * d_mm[a];
+        float r = fabsf(d_mm[a]) * axis.inv_accel[a];
+        if (r > x)
+            x = r;
+    }
+    m->mm = sqrtf(mm2);
+    float inv_mm = 1.0f / m->mm;
+    m->events_per_mm = (float)plan_events(b) * inv_mm;
+    m->inv_accel = x * inv_mm;
+    m->accel = 1.0f / m->inv_accel; /* some axis moves: x > 0 */
+    if (unit)
+        for (uint8_t a = 0; a < N_AXIS; a++)
+            unit[a] = d_mm[a] * inv_mm;
+}
+
+void plan_block_motion(const plan_block_t *b, plan_motion_t *m) { geometry(b, m, 0); }
+
+/* The block's cruise speed squared as stored (16 bits, never above the
+ * float one), from its feed, flags and direction with the overrides. */
+static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+{
+    float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
+    b->nominal_sqr = plan_f16_from_float(speed * speed);
+    return plan_f16_to_float(b->nominal_sqr);
+}
+
 void planner_set_overrides(uint8_t feed, uint8_t rapid)
 {
     if (feed == feed_pct && rapid == rapid_pct)
@@ -218,29 +279,26 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
     if (!count)
         return;
     refresh_axis();
-    plan_block_t *const last = &ring[PLAN_SIZE - 1];
+    plan_block_t *const last = &ring[RING_SLOTS - 1];
     plan_block_t *const end = &ring[head];
     plan_block_t *const oldest = &ring[tail];
     float prev_nominal = 0.0f;
-    for (plan_block_t *b = oldest; b != end; b = b == last ? ring : b + 1) {
-        if (!(b->flags & PB_JOG)) {
-            int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
-            float unit[N_AXIS], inv_mm = 1.0f / b->mm;
-            plan_cart_from_motor(motor, cart);
-            for (uint8_t a = 0; a < N_AXIS; a++)
-                unit[a] = (float)cart[a] * axis.mm_per_step[a] * inv_mm;
-            float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), b->events_per_mm);
-            b->nominal_sqr = speed * speed;
-        }
+    plan_block_t *b = oldest;
+    do { /* (a full ring has end == oldest) */
+        plan_motion_t m;
+        float unit[N_AXIS];
+        geometry(b, &m, unit);
+        float nominal = set_nominal(b, &m, unit);
         /* a junction is never faster than the cruise speeds on either side */
         if (b != oldest) {
-            float cap = prev_nominal < b->nominal_sqr ? prev_nominal : b->nominal_sqr;
+            float cap = prev_nominal < nominal ? prev_nominal : nominal;
             plan_sqr_t c = plan_sqr_from_float(cap);
             if (b->max_entry_sqr > c)
                 b->max_entry_sqr = c;
         }
-        prev_nominal = b->nominal_sqr;
-    }
+        prev_nominal = nominal;
+        b = b == last ? ring : b + 1;
+    } while (b != end);
     prev_nominal_sqr = prev_nominal;
     recalculate(1);
 }
@@ -248,7 +306,6 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
 {
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
-    float d_mm[N_AXIS], mm2 = 0.0f;
     refresh_axis();
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = target[a] * settings.steps_per_mm[a];
@@ -256,8 +313,6 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
             return 0;
         cart[a] = lroundf(t);
         delta[a] = cart[a] - position[a];
-        d_mm[a] = (float)delta[a] * axis.mm_per_step[a];
-        mm2 += d_mm[a] * d_mm[a];
     }
     plan_motor_steps(delta, motor);
     uint32_t events = 0;
@@ -275,39 +330,21 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->flags = flags;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    b->mm = sqrtf(mm2);
-    float inv_mm = 1.0f / b->mm;
-    b->events_per_mm = (float)events * inv_mm;
-    /* the axis limits along the move: speed <= max_rate / |u|, accel <= accel / |u|
-     * for every moving axis; the tightest has the largest |u| / limit, so
-     * one division each at most */
-    float unit[N_AXIS];
-    float inv_accel = 0.0f;
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        unit[a] = d_mm[a] * inv_mm;
-        float u = fabsf(unit[a]);
-        if (u > 1.0e-6f) {
-            float r = u * axis.inv_accel[a];
-            if (r > inv_accel)
-                inv_accel = r;
-        }
-    }
-    float speed = cruise_speed(feed, flags, axis_s_per_mm(unit), b->events_per_mm);
-    float accel = 1.0f / inv_accel; /* some axis moves: inv_accel > 0 */
-    if (feed != last_feed) { /* F is modal: converted once per change (overrides only: 1 mm/min is fine) */
+    if (feed != last_feed) { /* F is modal: converted once per change */
         last_feed = feed;
-        last_feed_u16 = feed < 65535.0f ? (uint16_t)feed : 65535u;
+        last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
     }
     b->feed = last_feed_u16;
-    b->nominal_sqr = speed * speed;
-    b->accel = accel;
-    b->inv_accel = inv_accel;
-    b->accel_dist2 = plan_sqr_from_float(2.0f * accel * b->mm);
+    plan_motion_t m;
+    float unit[N_AXIS];
+    geometry(b, &m, unit);
+    float nominal = set_nominal(b, &m, unit);
+    b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
 
     float junction = 0.0f;
     if (count) {
         float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
-        float cap = prev_nominal_sqr < b->nominal_sqr ? prev_nominal_sqr : b->nominal_sqr;
+        float cap = prev_nominal_sqr < nominal ? prev_nominal_sqr : nominal;
         if (cos_theta < STRAIGHT_COS) {
             junction = cap;
         } else if (cos_theta < REVERSAL_COS) {
@@ -316,7 +353,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
              * cap. With k = a * jd, k s / (1 - s) >= cap exactly when
              * s^2 (k + cap)^2 >= cap^2: gentle corners (most of a curve) need
              * neither the square root nor the division. */
-            float k = accel * settings.junction_deviation;
+            float k = m.accel * settings.junction_deviation;
             float s2 = 0.5f * (1.0f - cos_theta);
             float kc = k + cap;
             if (s2 * kc * kc >= cap * cap) {
@@ -330,8 +367,8 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->max_entry_sqr = plan_sqr_from_float(junction);
     b->entry_sqr = 0;
 
-    memcpy(prev_unit, unit, sizeof(unit));
-    prev_nominal_sqr = b->nominal_sqr;
+    memcpy(prev_unit, unit, sizeof(prev_unit));
+    prev_nominal_sqr = nominal;
     memcpy(position, cart, sizeof(cart));
     head = next_index(head);
     if (count++ == 0)

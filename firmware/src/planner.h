@@ -19,23 +19,41 @@ float plan_sqr_to_float(plan_sqr_t v);
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
+/* A non-negative float in 16 bits: its IEEE single bits 30..15 (exponent and
+ * the top 7 mantissa bits; the sign is always 0), cut toward zero, so never
+ * above the value and within 2^-7 of it (a speed from its square: 2^-8).
+ * Decoding is byte moves, no arithmetic. */
+typedef uint16_t plan_f16_t;
+plan_f16_t plan_f16_from_float(float v);
+float plan_f16_to_float(plan_f16_t h);
+
+/* A queued move, 21 bytes: only what the queue and the segment preparer
+ * need. The planner passes run on every queued block for every new one, so
+ * they work on squared speeds in fixed point (plan_sqr_t: integer adds and
+ * compares); the length and acceleration are not stored but derived from
+ * the steps when needed (plan_block_motion: once when the block is queued,
+ * once when its segments are prepared), so the same RAM holds about twice
+ * the blocks of a float block. */
 typedef struct {
-    int16_t steps[N_AXIS];  /* signed motor steps, |steps| <= PLAN_MAX_EVENTS;
-                             * step events: the largest |steps| (plan_events) */
-    float mm;               /* length in mm */
-    float events_per_mm;
-    float nominal_sqr;      /* cruise speed squared, (mm/s)^2, overrides applied */
-    float accel;            /* mm/s^2 along the move */
-    float inv_accel;        /* 1 / accel, so the segment preparer multiplies */
-    /* The planner passes run on every queued block for every new one, so
-     * they work on squared speeds in fixed point (plan_sqr_t): integer adds
-     * and compares instead of float ones. */
+    int16_t steps[N_AXIS];    /* signed motor steps, |steps| <= PLAN_MAX_EVENTS;
+                               * step events: the largest |steps| (plan_events) */
     plan_sqr_t accel_dist2;   /* 2 * accel * mm: speed^2 gained over the block */
     plan_sqr_t entry_sqr;     /* planned entry speed squared */
     plan_sqr_t max_entry_sqr; /* junction limit squared */
-    uint16_t feed;            /* programmed feed, mm/min (for overrides; unused by rapids) */
+    plan_f16_t nominal_sqr;   /* cruise speed squared, (mm/s)^2, overrides applied */
+    uint16_t feed;            /* programmed feed, mm/min rounded (unused by rapids) */
     uint8_t flags;
 } plan_block_t;
+
+/* The float view of a block's geometry (main loop only), from its steps
+ * with the present axis settings. */
+typedef struct {
+    float mm;                 /* length in mm */
+    float events_per_mm;
+    float accel;              /* mm/s^2 along the move */
+    float inv_accel;          /* 1 / accel, so the segment preparer multiplies */
+} plan_motion_t;
+void plan_block_motion(const plan_block_t *b, plan_motion_t *m);
 
 void plan_reset(void);
 /* Planner position in cartesian steps, e.g. after homing or an abort. */

@@ -16,9 +16,8 @@ static struct {
     uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
-    float events_per_mm;
     float mm_per_event;  /* 0 until a segment ends inside the block */
-    float inv_accel;     /* 1 / block acceleration: multiplications are cheaper */
+    plan_motion_t m;     /* the block's length and acceleration */
 } prep;
 
 void seg_reset(void)
@@ -53,21 +52,21 @@ void seg_drop_block(void)
  * (less than dt when the block or a hold ends first). */
 static float advance(const plan_block_t *b, float dt)
 {
-    float remaining = b->mm - prep.s;
-    float a = b->accel;
+    float remaining = prep.m.mm - prep.s;
+    float a = prep.m.accel;
     float v = prep.v;
     float t = 0.0f;
     if (prep.hold) {
-        float t_stop = v * prep.inv_accel;
+        float t_stop = v * prep.m.inv_accel;
         float d_stop = 0.5f * v * t_stop;
         float tt = dt < t_stop ? dt : t_stop;
         float ds = v * tt - 0.5f * a * tt * tt;
         if (ds >= remaining) { /* block ends before the stop: time to cover the rest */
             float vend2 = v * v - 2.0f * a * remaining;
             float vend = vend2 > 0.0f ? sqrtf(vend2) : 0.0f;
-            prep.s = b->mm;
+            prep.s = prep.m.mm;
             prep.v = vend;
-            return (v - vend) * prep.inv_accel;
+            return (v - vend) * prep.m.inv_accel;
         }
         prep.s += ds;
         prep.v = v - a * tt;
@@ -78,13 +77,13 @@ static float advance(const plan_block_t *b, float dt)
         return tt;
     }
     float ve2 = plan_next_entry_sqr();
-    float vn2 = b->nominal_sqr;
+    float vn2 = plan_f16_to_float(b->nominal_sqr); /* read each time: overrides change it */
     float v2 = v * v;
     if (v2 > vn2 && v2 > vn2 * 1.0001f) { /* (the first test spares the multiply) */
         /* above the cruise speed (a feed override lowered it): slow down to
          * it first, where the block leaves room; otherwise the profile below
          * decelerates to the exit */
-        float tn = (v - sqrtf(vn2)) * prep.inv_accel;
+        float tn = (v - sqrtf(vn2)) * prep.m.inv_accel;
         float tt = dt < tn ? dt : tn;
         float ds = v * tt - 0.5f * a * tt * tt;
         if (ds < remaining) {
@@ -101,7 +100,7 @@ static float advance(const plan_block_t *b, float dt)
             prep.s += v * dt;
             return dt;
         }
-        prep.s = b->mm;
+        prep.s = prep.m.mm;
         return tc;
     }
     float peak2 = 0.5f * (v2 + ve2) + a * remaining;
@@ -113,7 +112,7 @@ static float advance(const plan_block_t *b, float dt)
         vp = sqrtf(peak2);
     else
         peak2 = v2;
-    float half_inv_a = 0.5f * prep.inv_accel;
+    float half_inv_a = 0.5f * prep.m.inv_accel;
     float d_acc = (peak2 - v2) * half_inv_a;
     float d_dec = (peak2 - ve2) * half_inv_a;
     if (d_dec < 0.0f)
@@ -124,7 +123,7 @@ static float advance(const plan_block_t *b, float dt)
     float s = 0.0f;
     /* acceleration */
     if (d_acc > 0.0f) {
-        float ta = (vp - v) * prep.inv_accel;
+        float ta = (vp - v) * prep.m.inv_accel;
         if (ta >= dt) {
             prep.s += v * dt + 0.5f * a * dt * dt;
             prep.v = v + a * dt;
@@ -151,7 +150,7 @@ static float advance(const plan_block_t *b, float dt)
     if (vend2 < ve2)
         vend2 = ve2;
     float vend = vend2 < v * v ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
-    float td = (v - vend) * prep.inv_accel;
+    float td = (v - vend) * prep.m.inv_accel;
     if (td > 0.0f && t + td > dt) {
         float tt = dt - t;
         prep.s += s + v * tt - 0.5f * a * tt * tt;
@@ -166,7 +165,7 @@ static float advance(const plan_block_t *b, float dt)
         }
         td = tc;
     }
-    prep.s = b->mm;
+    prep.s = prep.m.mm;
     prep.v = vend;
     return t + (td > 0.0f ? td : 0.0f);
 }
@@ -188,9 +187,8 @@ static void start_block(const plan_block_t *b)
     prep.first = 1;
     prep.s = 0.0f;
     prep.done = 0;
-    prep.events_per_mm = b->events_per_mm;
     prep.mm_per_event = 0.0f; /* a division that short blocks never need */
-    prep.inv_accel = b->inv_accel;
+    plan_block_motion(b, &prep.m);
 }
 
 uint8_t seg_fill(void)
@@ -214,8 +212,8 @@ uint8_t seg_fill(void)
         uint8_t rounds = 0;
         do {
             time += advance(b, SEGMENT_S);
-            ended = prep.s >= b->mm;
-            float e = prep.s * prep.events_per_mm;
+            ended = prep.s >= prep.m.mm;
+            float e = prep.s * prep.m.events_per_mm;
             target = ended ? prep.events : (uint32_t)(e + 0.5f); /* a step is due half way */
             if (target > prep.events)
                 target = prep.events;
@@ -226,7 +224,7 @@ uint8_t seg_fill(void)
             /* end the segment exactly on its last step, so its rate is exact;
              * the distance to that step is moved over to the next segment */
             if (prep.mm_per_event == 0.0f)
-                prep.mm_per_event = b->mm / (float)prep.events;
+                prep.mm_per_event = prep.m.mm / (float)prep.events;
             float extra = prep.s - (float)target * prep.mm_per_event;
             float back = extra / prep.v;
             if (fabsf(back) < 0.25f * time) { /* when slow, v is too rough an estimate */
@@ -248,7 +246,7 @@ uint8_t seg_fill(void)
             segment_t *seg = &seg_ring[ring_slot(seg_head, SEG_SIZE)];
             seg->events = (uint16_t)n;
             seg->period = (uint16_t)(period - 1.0f); /* CTC: a period is OCR1A + 1 ticks */
-            seg->block = prep.block;
+            seg->block = &step_blocks[prep.block];
             seg->flags = prep.first ? SEG_FIRST : 0;
             prep.first = 0;
             prep.done = target;
@@ -259,7 +257,7 @@ uint8_t seg_fill(void)
             plan_discard_current();
             prep.active = 0;
         } else {
-            plan_set_exec_exit_limit(prep.v * prep.v + 2.0f * b->accel * (b->mm - prep.s));
+            plan_set_exec_exit_limit(prep.v * prep.v + 2.0f * prep.m.accel * (prep.m.mm - prep.s));
         }
     }
     return added;

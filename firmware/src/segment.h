@@ -17,7 +17,7 @@ typedef struct {
 typedef struct {
     uint16_t events;        /* step events in this segment */
     uint16_t period;        /* step timer ticks per event, minus 1 (the OCR1A value) */
-    uint8_t block;          /* index into step_blocks */
+    step_block_t *block;    /* its block in step_blocks (a pointer: no index multiply in the ISR) */
     uint8_t flags;
 } segment_t;
 

@@ -9,11 +9,13 @@
 #include "stepper.h"
 
 static volatile uint8_t running;
-/* Motor position: where the current block started, plus the steps made in
- * it (16-bit counts in the interrupt instead of 32-bit read-modify-writes;
- * folded into the base when the next block starts). */
+/* Motor position: a 32-bit base plus signed 16-bit step counts that the
+ * interrupt keeps (no 32-bit read-modify-write per step) and the main loop
+ * folds into the base whenever it polls (stepper_start). Between two polls
+ * the steppers run at most the segment ring: 7 segments of at most 64 ms
+ * at 50 kHz, 22,400 steps, inside int16. */
 static volatile int32_t position[N_AXIS];
-static volatile uint16_t done[N_AXIS];
+static volatile int16_t done[N_AXIS];
 static uint8_t pulse_ticks;                 /* Timer0 ticks (0.5 us) */
 static uint8_t enabled;
 
@@ -58,8 +60,20 @@ void stepper_enable(uint8_t on)
 uint8_t stepper_enabled(void) { return enabled; }
 uint8_t stepper_busy(void) { return running; }
 
+/* The step counts into the base position (interrupts off). */
+static inline __attribute__((always_inline)) void fold_counts(void)
+{
+    position[0] += done[0];
+    position[1] += done[1];
+    done[0] = done[1] = 0;
+}
+
 void stepper_start(void)
 {
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+    {
+        fold_counts();
+    }
     if (running || seg_head == seg_tail)
         return;
     if (!enabled)
@@ -78,24 +92,6 @@ void stepper_start(void)
     }
 }
 
-/* The current block's steps into the base position (interrupts off);
- * unrolled: a shift by the axis number would be a loop on the AVR. */
-static inline __attribute__((always_inline)) void fold_block(void)
-{
-    int32_t x = position[0], y = position[1];
-    if (dir_negative & 1)
-        x -= done[0];
-    else
-        x += done[0];
-    if (dir_negative & 2)
-        y -= done[1];
-    else
-        y += done[1];
-    position[0] = x;
-    position[1] = y;
-    done[0] = done[1] = 0;
-}
-
 uint8_t stepper_halt(void)
 {
     uint8_t was;
@@ -110,8 +106,8 @@ uint8_t stepper_halt(void)
         /* steps counted but never pulsed: take them back so the position stays true */
         for (uint8_t a = 0; a < N_AXIS; a++)
             if (pending_steps & (1 << a))
-                done[a]--;
-        fold_block();
+                done[a] += (dir_negative & (1 << a)) ? 1 : -1;
+        fold_counts();
         pending_steps = 0;
     }
     return was;
@@ -122,7 +118,7 @@ void stepper_get_position(int32_t *motor)
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
         for (uint8_t a = 0; a < N_AXIS; a++)
-            motor[a] = (dir_negative & (1 << a)) ? position[a] - done[a] : position[a] + done[a];
+            motor[a] = position[a] + done[a];
     }
 }
 
@@ -165,12 +161,16 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * step: a whole period before that step's edge, and after the edge of the
  * old block's last step made at the top of the tick (past its hold time).
  *
- * Cycle budget, measured by bench/firmware_bench.py on the 328P at 50 kHz
- * on both axes (a period of 320 cycles), entry and exit (86) included:
- * 229 cycles on average, 394 at worst on the tick that loads a segment
- * starting a block (the next edge then comes up to ~5 us late, the tick
- * after it early: the hardware period holds, so no step is lost or late
- * over a segment). The pulse-end interrupt below adds at most 50. */
+ * Cycle budget, measured by bench/firmware_bench.py at 50 kHz on both axes
+ * (a period of 320 cycles), entry and exit included: on the 328P 213 cycles
+ * on average (153 body + 60 entry/exit), 290 at worst on the tick that
+ * loads a segment starting a block; on the 2560 215 and 294 (its 3-byte
+ * return address: 68 entry/exit). The busiest period holds a worst tick
+ * alone: a tick that outlasts the pulse ends it itself, so the pulse-end
+ * interrupt below (50 cycles worst) runs only after short ticks. Nothing
+ * here calls a function (a call would make the compiler save every
+ * call-clobbered register on each tick: 86 cycles of entry/exit instead
+ * of 60) and nothing is 32-bit (the main loop folds the 16-bit counts). */
 ISR(TIMER1_COMPA_vect)
 {
 #ifdef BENCH_ISR_PIN
@@ -201,10 +201,10 @@ ISR(TIMER1_COMPA_vect)
         OCR1A = seg->period;
         seg_left = seg->events;
         if (seg->flags & SEG_FIRST) {
-            blk = &step_blocks[seg->block];
-            counter[0] = counter[1] = (int16_t)(blk->events >> 1);
-            fold_block();
-            dir_negative = blk->dir_negative;
+            step_block_t *b = seg->block;
+            blk = b;
+            counter[0] = counter[1] = (int16_t)(b->events >> 1);
+            dir_negative = b->dir_negative;
             drive_set_dir(dir_negative);
         }
     }
@@ -213,13 +213,19 @@ ISR(TIMER1_COMPA_vect)
     if (counter[0] < 0) {
         counter[0] += blk->events;
         steps |= 1;
-        done[0]++;
+        if (dir_negative & 1)
+            done[0]--;
+        else
+            done[0]++;
     }
     counter[1] -= blk->steps[1];
     if (counter[1] < 0) {
         counter[1] += blk->events;
         steps |= 2;
-        done[1]++;
+        if (dir_negative & 2)
+            done[1]--;
+        else
+            done[1]++;
     }
     pending_steps = steps;
     if (--seg_left == 0)

@@ -21,6 +21,7 @@ static const test_case cases[] = {
     {"arc_segments", test_arc_segments},
     {"arc_full_circle", test_arc_full_circle},
     {"planner_junctions", test_planner_junctions},
+    {"planner_block_math", test_planner_block_math},
     {"planner_exact_steps", test_planner_exact_steps},
     {"segments_profile", test_segments_profile},
     {"segments_hold", test_segments_hold},

@@ -13,6 +13,7 @@ import random
 import time
 
 import pytest
+from plotbridge.motion import library
 
 from tests.fixtures.grbl import Grbl, clean, mpos, no_false_acks, unlocked
 
@@ -50,7 +51,8 @@ def dist_to_segment(p, a, b) -> float:
 
 def test_boot_banner_status_and_defaults(grbl: Grbl) -> None:
     status = grbl.status()
-    assert status.startswith("<Alarm|MPos:0.000,0.000,0.000|Bf:17,128|FS:0,0"), status
+    depth = library.planner_depth()  # the planner ring the build holds (config.h PLAN_SIZE - 1)
+    assert status.startswith(f"<Alarm|MPos:0.000,0.000,0.000|Bf:{depth},128|FS:0,0"), status
     lines = grbl.ok("$$")
     settings = dict(line[1:].split("=") for line in lines[:-1])
     assert settings["100"] == "80.000" and settings["110"] == "6000.000"

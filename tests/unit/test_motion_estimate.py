@@ -41,6 +41,17 @@ def test_the_library_is_the_firmware_build():
     assert library.load().motion_plan_size() >= 16
 
 
+def test_each_board_build_has_that_boards_planner_depth():
+    # the compact blocks: at least 30 on the 328P (was 17), more on the 2560 (was 33)
+    uno, mega = library.planner_depth(), library.planner_depth("mega-ramps14")
+    assert uno >= 30
+    assert mega >= 60
+    # a run configured deeper than the build holds gets the build's depth
+    segs = [(0.1 * k, 0, 6000) for k in range(1, 1001)]
+    assert run(segs, MachineProfile(planner_blocks=uno, baud=0, plan_block_s=0)) == \
+        run(segs, MachineProfile(planner_blocks=10 * mega, baud=0, plan_block_s=0))
+
+
 def test_one_trapezoid():
     assert run([(100, 0, 3000)]) == pytest.approx(trapezoid(0, 0, 50, 1000, 100), rel=0.005)
 

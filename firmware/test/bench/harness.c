@@ -36,6 +36,12 @@ static uint64_t steps[2], last_step_cycle, last_rise[2], min_interval[2] = {~0UL
 static uint32_t window_steps[MAX_WINDOWS][2];
 static int alarm_seen;
 static uint64_t mark_rise, mark_total, mark_count, mark_max; /* PC4: the pulse-end interrupt */
+/* Per step period (from one step interrupt to the next): its body, and the
+ * pulse-end bodies that ran in it. The worst period with and without a
+ * pulse-end interrupt: a tick long enough to outlast the pulse ends it
+ * itself, so the longest ticks are not followed by the other interrupt. */
+static uint64_t period_isr, period_mark, period_marks;
+static uint64_t worst_alone, worst_pair_isr, worst_pair_mark;
 /* HARNESS_PROFILE=FILE: sample the program counter every PROFILE_EVERY
  * cycles (odd, so no loop aliases with it) and write "byte_address count"
  * lines; bench/firmware_bench.py --profile maps them to functions. */
@@ -62,6 +68,8 @@ static void on_mark_pin(struct avr_irq_t *irq, uint32_t value, void *param)
         uint64_t d = avr->cycle - mark_rise;
         mark_total += d;
         mark_count++;
+        period_mark += d;
+        period_marks++;
         if (d > mark_max)
             mark_max = d;
     }
@@ -112,17 +120,30 @@ static void on_step(struct avr_irq_t *irq, uint32_t value, void *param)
         window_steps[w][axis]++;
 }
 
+static void close_period(void)
+{
+    if (period_marks && period_isr + period_mark > worst_pair_isr + worst_pair_mark) {
+        worst_pair_isr = period_isr;
+        worst_pair_mark = period_mark;
+    } else if (!period_marks && period_isr > worst_alone) {
+        worst_alone = period_isr;
+    }
+    period_isr = period_mark = period_marks = 0;
+}
+
 static void on_isr_pin(struct avr_irq_t *irq, uint32_t value, void *param)
 {
     (void)irq;
     (void)param;
     if (value & 1) {
+        close_period();
         isr_rise = avr->cycle;
         return;
     }
     if (!isr_rise)
         return; /* the pin settling at start-up, not an interrupt */
     uint64_t d = avr->cycle - isr_rise;
+    period_isr = d;
     isr_count++;
     isr_total += d;
     if (d > isr_max)
@@ -158,6 +179,17 @@ static avr_cycle_count_t feed(avr_t *a, avr_cycle_count_t when, void *param)
     return when + byte_cycles;
 }
 
+/* A pin from the environment as PORT LETTER and bit ("D2"), or the default. */
+static avr_irq_t *pin_irq(const char *env, char port, int bit)
+{
+    const char *v = getenv(env);
+    if (v && v[0] >= 'A' && v[0] <= 'L' && v[1] >= '0' && v[1] <= '7') {
+        port = v[0];
+        bit = v[1] - '0';
+    }
+    return avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ(port), bit);
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 3) {
@@ -179,7 +211,12 @@ int main(int argc, char **argv)
     memset(&fw, 0, sizeof(fw));
     if (elf_read_firmware(argv[1], &fw))
         return 2;
-    avr = avr_make_mcu_by_name("atmega328p");
+    /* HARNESS_MCU, HARNESS_STEP_X/_Y, HARNESS_ISR_PIN, HARNESS_MARK_PIN: another
+     * board profile (the defaults are the Uno CNC shield's) */
+    const char *mcu = getenv("HARNESS_MCU");
+    avr = avr_make_mcu_by_name(mcu ? mcu : "atmega328p");
+    if (!avr)
+        return 2;
     avr_init(avr);
     avr->frequency = F_CPU;
     avr->log = 0;
@@ -193,10 +230,10 @@ int main(int argc, char **argv)
     flags &= ~AVR_UART_FLAG_STDIO;
     avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT), on_uart_out, 0);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 2), on_step, (void *)0);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), 3), on_step, (void *)1);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), 5), on_isr_pin, 0);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('C'), 4), on_mark_pin, 0);
+    avr_irq_register_notify(pin_irq("HARNESS_STEP_X", 'D', 2), on_step, (void *)0);
+    avr_irq_register_notify(pin_irq("HARNESS_STEP_Y", 'D', 3), on_step, (void *)1);
+    avr_irq_register_notify(pin_irq("HARNESS_ISR_PIN", 'C', 5), on_isr_pin, 0);
+    avr_irq_register_notify(pin_irq("HARNESS_MARK_PIN", 'C', 4), on_mark_pin, 0);
 
     /* the firmware runs U2X with UBRR 16: 117647 baud. simavr's UART takes
      * input bytes a little slower than 10 bits each and drops what overflows
@@ -252,6 +289,10 @@ int main(int argc, char **argv)
     printf(" \"isr\": {\"count\": %llu, \"max_cycles\": %llu, \"mean_cycles\": %.1f},\n",
            (unsigned long long)isr_count, (unsigned long long)isr_max,
            isr_count ? (double)isr_total / (double)isr_count : 0.0);
+    close_period(); /* the last one */
+    printf(" \"period\": {\"worst_alone\": %llu, \"worst_pair_isr\": %llu, \"worst_pair_mark\": %llu},\n",
+           (unsigned long long)worst_alone, (unsigned long long)worst_pair_isr,
+           (unsigned long long)worst_pair_mark);
     printf(" \"mark\": {\"count\": %llu, \"total_cycles\": %llu, \"max_cycles\": %llu},\n",
            (unsigned long long)mark_count, (unsigned long long)mark_total, (unsigned long long)mark_max);
     printf(" \"steps\": [%llu, %llu], \"min_interval_cycles\": [%llu, %llu],\n",

@@ -17,7 +17,17 @@ from pathlib import Path
 
 FIRMWARE_DIR = Path(os.environ.get("PLOTBRIDGE_FIRMWARE_DIR",
                                    Path(__file__).resolve().parents[3] / "firmware"))
+DEFAULT_BOARD = "uno-cnc-shield"
 LIBRARY = FIRMWARE_DIR / "build" / "host" / "libmotion.so"
+
+
+def library_file(board: str = DEFAULT_BOARD) -> Path:
+    """Where make puts the board's build of the library (the firmware Makefile's BUILD):
+    each board's build has that board's planner depth."""
+    if board == DEFAULT_BOARD:
+        return LIBRARY
+    return FIRMWARE_DIR / "build" / board / "host" / LIBRARY.name
+
 
 # Line kinds (firmware/host/motion.c OP_*).
 RAPID, LINE, ARC_CW, ARC_CCW, PEN_DOWN, PEN_UP, DWELL, OTHER = range(8)
@@ -44,24 +54,24 @@ class MotionLibraryMissing(RuntimeError):
     pass
 
 
-_lib: ctypes.CDLL | None = None
+_libs: dict[str, ctypes.CDLL] = {}
 _load_lock = threading.Lock()
 # The firmware code keeps its state in globals: one program at a time per process.
 run_lock = threading.Lock()
 
 
-def load() -> ctypes.CDLL:
-    """The library, built first with make when it is missing."""
-    global _lib
+def load(board: str = DEFAULT_BOARD) -> ctypes.CDLL:
+    """The board's build of the library, made first with make when it is missing."""
     with _load_lock:
-        if _lib is None:
-            if not LIBRARY.exists():
-                r = subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), "motion"],
-                                   capture_output=True, text=True)
-                if r.returncode or not LIBRARY.exists():
+        if board not in _libs:
+            path = library_file(board)
+            if not path.exists():
+                r = subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={board}",
+                                    "motion"], capture_output=True, text=True)
+                if r.returncode or not path.exists():
                     raise MotionLibraryMissing(
-                        f"cannot build {LIBRARY}: {r.stderr.strip() or r.stdout.strip()}")
-            lib = ctypes.CDLL(str(LIBRARY))
+                        f"cannot build {path}: {r.stderr.strip() or r.stdout.strip()}")
+            lib = ctypes.CDLL(str(path))
             lib.motion_configure.argtypes = [ctypes.POINTER(Config)]
             lib.motion_configure.restype = None
             lib.motion_plan_size.restype = ctypes.c_int
@@ -75,5 +85,11 @@ def load() -> ctypes.CDLL:
             lib.motion_blocks.argtypes = [ctypes.c_char_p, ctypes.c_int]
             lib.motion_blocks.restype = ctypes.c_int
             lib.motion_block_size.restype = ctypes.c_int
-            _lib = lib
-        return _lib
+            _libs[board] = lib
+        return _libs[board]
+
+
+def planner_depth(board: str = DEFAULT_BOARD) -> int:
+    """How many blocks the board's planner holds (its PLAN_SIZE - 1): the depth to
+    configure the library with for that board."""
+    return int(load(board).motion_plan_size())
