@@ -73,7 +73,9 @@ void machine_report_status(void)
 {
     uint8_t in = inputs_read();
     RPT("<");
-    if (mach.alarm)
+    if (mach.sleep)
+        RPT("Sleep");
+    else if (mach.alarm)
         RPT("Alarm");
     else if (mach.homing)
         RPT("Home");
@@ -92,13 +94,11 @@ void machine_report_status(void)
     int32_t motor[N_AXIS], cart[N_AXIS];
     stepper_get_position(motor);
     plan_cart_from_motor(motor, cart);
-    float div = settings.report_inches ? 25.4f : 1.0f;
     RPT("|MPos:");
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        report_fixed((float)cart[a] / settings.steps_per_mm[a] / div, 3);
-        RPT(",");
-    }
-    RPT("0.000");
+    float mpos[GC_AXES] = {0};
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        mpos[a] = (float)cart[a] / settings.steps_per_mm[a];
+    report_xyz(mpos);
     if (settings.report_mask & 2) {
         RPT("|Bf:");
         report_uint(plan_free());
@@ -124,11 +124,10 @@ void machine_report_status(void)
     } else {
         mach.wco_countdown = machine_moving() ? 29 : 9;
         RPT("|WCO:");
-        for (uint8_t a = 0; a < N_AXIS; a++) {
-            report_fixed(gc.offset[a] / div, 3);
-            RPT(",");
-        }
-        report_fixed(gc.z_offset / div, 3);
+        float wco[GC_AXES];
+        for (uint8_t a = 0; a < GC_AXES; a++)
+            wco[a] = gc_wco(&gc, a);
+        report_xyz(wco);
     }
     /* Ov likewise: after a change, then every 20th report while busy, every 10th idle */
     if (mach.ov_countdown) {
@@ -383,15 +382,21 @@ uint8_t machine_execute(const gc_block_t *blk)
     uint8_t e = STATUS_OK;
     switch (blk->action) {
     case ACT_RAPID: e = line_to(blk->target, 0.0f, PB_RAPID); break;
-    case ACT_LINE: e = line_to(blk->target, blk->feed, 0); break;
+    case ACT_LINE:
+        /* G93: F is how many times a minute this move could be done */
+        e = line_to(blk->target, blk->inverse_time ? blk->feed * hypotf(blk->target[0] - blk->start[0],
+                                                                         blk->target[1] - blk->start[1])
+                                                   : blk->feed, 0);
+        break;
     case ACT_ARC: {
         arc_t arc;
         e = arc_init(&arc, blk->start, blk->target, blk->center, blk->clockwise, settings.arc_tolerance);
+        float feed = blk->inverse_time ? blk->feed * fabsf(arc.sweep) * 0.5f * (arc.r0 + arc.r1) : blk->feed;
         /* check mode queues nothing: the chords would only starve the watchdog */
         for (uint16_t k = 1; !e && !mach.check && k <= arc.segments; k++) {
             float p[N_AXIS];
             arc_point(&arc, k, p);
-            e = line_to(p, blk->feed, 0);
+            e = line_to(p, feed, 0);
         }
         break;
     }
@@ -418,6 +423,11 @@ uint8_t machine_execute(const gc_block_t *blk)
     }
     if (blk->wco_changed)
         mach.wco_countdown = 0;
+#if GRBL_WCS
+    /* EEPROM writes stall the CPU: after the queued motion, as GRBL does */
+    if (!e && blk->store_slot && machine_sync())
+        coord_save((uint8_t)(blk->store_slot - 1), blk->store);
+#endif
     if (!e && blk->motors == MOTORS_OFF && !mach.check && machine_sync())
         stepper_enable(0);
     if (mach.abort)

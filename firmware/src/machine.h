@@ -22,6 +22,7 @@ typedef struct {
     uint8_t pen_down;
     uint8_t dwelling;
     uint8_t homed;
+    uint8_t sleep;         /* $SLP: 1 after its ok, 2 asleep until a reset */
     uint8_t pen_lifted;    /* a hold lifted the pen (pen_down stays set) */
     uint8_t resuming;      /* pen lowered again after a hold: waiting out the settle */
     uint8_t wco_countdown; /* status reports until WCO is shown again (0: next one) */

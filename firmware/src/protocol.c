@@ -18,7 +18,7 @@
 
 static linebuf_t lb;
 
-static uint8_t execute_gcode(const char *line)
+uint8_t protocol_gcode(const char *line)
 {
     if (mach.alarm)
         return ERR_LOCKED;
@@ -43,7 +43,24 @@ static uint8_t execute_line(const char *line)
         return STATUS_OK;
     if (line[0] == '$')
         return dollar_execute(line);
-    return execute_gcode(line);
+    return protocol_gcode(line);
+}
+
+void protocol_startup_lines(void)
+{
+#if GRBL_LINES
+    /* the line buffer is free here (after a reset, or $H's line is done) */
+    for (uint8_t n = 0; n < EELINE_STARTUP_COUNT; n++) {
+        uint8_t ok = eeline_load(n, lb.text);
+        if (ok && !lb.text[0])
+            continue;
+        RPT(">");
+        report_str(lb.text);
+        RPT(":");
+        report_status_code(ok ? protocol_gcode(lb.text) : ERR_EEPROM_READ);
+    }
+    lb.text[0] = 0;
+#endif
 }
 
 /* Soft reset: motion is already stopped (in the interrupt that saw 0x18);
@@ -56,6 +73,9 @@ static void soft_reset(void)
     uint8_t alarm = mach.alarm;
     uint8_t homed = mach.homed;
     machine_init();
+    if (mach.sleep && !alarm)
+        alarm = ALARM_LOCKED; /* GRBL wakes from sleep locked */
+    mach.sleep = 0;
     mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
     mach.dwelling = 0;
     seg_hold(0);
@@ -69,6 +89,8 @@ static void soft_reset(void)
     report_banner();
     if (mach.alarm)
         report_unlock_hint();
+    else
+        protocol_startup_lines();
 }
 
 static void idle_sleep(void)
@@ -87,10 +109,23 @@ static void idle_sleep(void)
 void protocol_run(void)
 {
     linebuf_reset(&lb);
+    if (!mach.alarm)
+        protocol_startup_lines();
     for (;;) {
         machine_poll();
         if (mach.reset) {
             soft_reset();
+            continue;
+        }
+        if (mach.sleep) {
+            /* $SLP: lines wait in the receive ring until a reset flushes them */
+            if (mach.sleep == 1) {
+                mach.sleep = 2;
+                machine_pen_up_now();
+                stepper_enable(0);
+                report_msg(PSTR("Sleeping"));
+            }
+            idle_sleep();
             continue;
         }
         if (mach.abort && !machine_moving())

@@ -51,7 +51,21 @@ uint8_t settings_get(const settings_t *s, uint8_t id, float *value);
 uint8_t settings_is_integer(uint8_t id);
 uint8_t settings_checksum(const uint8_t *data, uint16_t len);
 
-/* EEPROM side (settings_store.c, AVR only): 1 if the stored copy was valid. */
+/* EEPROM side (settings_store.c, AVR only): 1 if the stored copy was valid
+ * (a bad one restores everything to defaults, as GRBL does). */
 uint8_t settings_load(void);
 void settings_save(void);
+/* $RST=$ settings, $RST=# stored positions, $RST=* everything (bits). */
+#define RESTORE_SETTINGS 1
+#define RESTORE_COORDS 2
+#define RESTORE_LINES 4
+#define RESTORE_ALL 7
+void settings_restore(uint8_t what);
+/* $N0, $N1 (slots 0, 1) and the $I= string (EELINE_BUILD_INFO), GRBL_LINES:
+ * line holds LINE_SIZE + 1 chars; 0 (and an empty line) when the copy was bad. */
+#define EELINE_STARTUP_COUNT 2
+#define EELINE_BUILD_INFO 2
+#define EELINE_COUNT 3
+uint8_t eeline_load(uint8_t slot, char *line);
+void eeline_save(uint8_t slot, const char *line);
 #endif
