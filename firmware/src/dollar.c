@@ -13,7 +13,7 @@
 static void print_settings(void)
 {
     for (uint8_t i = 0; i < settings_count; i++) {
-        uint8_t id = settings_ids[i];
+        uint8_t id = settings_id(i);
         float v = 0.0f;
         settings_get(&settings, id, &v);
         RPT("$");

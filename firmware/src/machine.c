@@ -150,6 +150,15 @@ void machine_pen_up_now(void)
     mach.pen_down = mach.pen_lifted = mach.resuming = 0;
 }
 
+/* The servo toward the pen's new place at $64 (lower) / $65 (raise):
+ * returns the milliseconds that takes. */
+static uint16_t pen_servo(uint8_t down)
+{
+    uint16_t ms = down ? settings.pen_lower_ms : settings.pen_raise_ms;
+    servo_move(down ? settings.pen_down_us : settings.pen_up_us, ms);
+    return ms;
+}
+
 static void start_hold(void)
 {
     if (!machine_moving() || mach.hold)
@@ -191,12 +200,14 @@ void machine_poll(void)
             start_hold();
     }
     if ((f & RT_RESUME) && mach.hold && !mach.jog_cancel && !mach.alarm && !mach.resuming) {
-        /* the pen goes back down where it was lifted; motion waits out the settle */
+        /* the pen goes back down where it was lifted; motion waits out the
+         * lowering and the settle */
+        uint16_t ms = settings.pen_settle_ms;
         if (mach.pen_lifted)
-            servo_set_us(settings.pen_down_us);
+            ms += pen_servo(1);
         mach.pen_lifted = 0;
         mach.resuming = 1;
-        mach.resume_at = machine_ms() + settings.pen_settle_ms;
+        mach.resume_at = machine_ms() + ms;
     }
     if (mach.resuming && (int32_t)(machine_ms() - mach.resume_at) >= 0) {
         mach.resuming = 0;
@@ -208,7 +219,7 @@ void machine_poll(void)
     /* a pen-safe hold: once stopped on the path, the pen leaves the paper */
     if (mach.hold && mach.pen_down && !mach.pen_lifted && !mach.resuming && !mach.jog &&
         hold_stopped()) {
-        servo_set_us(settings.pen_up_us);
+        pen_servo(0);
         mach.pen_lifted = 1;
     }
     seg_fill();
@@ -234,11 +245,11 @@ void machine_poll(void)
 
 /* Let the main loop sleep until the next interrupt (UART, a step, the 1 ms
  * servo tick) when there is nothing to prepare: simavr then skips time. */
-static void idle_wait(void)
+void machine_idle_wait(void)
 {
     set_sleep_mode(SLEEP_MODE_IDLE);
     cli();
-    if (!rt_flags) {
+    if (!rt_flags && serial_tx_idle()) {
         sleep_enable();
         sei();
         sleep_cpu();
@@ -253,7 +264,7 @@ uint8_t machine_sync(void)
         machine_poll();
         if (mach.abort)
             return 0;
-        idle_wait();
+        machine_idle_wait();
     }
     return !mach.abort;
 }
@@ -268,7 +279,7 @@ uint8_t machine_dwell_ms(uint32_t ms)
         machine_poll();
         if (mach.abort)
             break;
-        idle_wait();
+        machine_idle_wait();
     }
     mach.dwelling = 0;
     return !mach.abort;
@@ -283,8 +294,7 @@ void machine_pen(uint8_t down)
     if (down == mach.pen_down)
         return;
     mach.pen_down = down;
-    servo_set_us(down ? settings.pen_down_us : settings.pen_up_us);
-    machine_dwell_ms(settings.pen_settle_ms);
+    machine_dwell_ms((uint32_t)pen_servo(down) + settings.pen_settle_ms);
 }
 
 static uint8_t outside_work_area(const float *t)
@@ -301,7 +311,7 @@ static uint8_t wait_for_planner_room(void)
         machine_poll();
         if (mach.abort)
             return 0;
-        idle_wait();
+        machine_idle_wait();
     }
     return 1;
 }
@@ -382,16 +392,26 @@ uint8_t machine_execute(const gc_block_t *blk)
     uint8_t e = STATUS_OK;
     switch (blk->action) {
     case ACT_RAPID: e = line_to(blk->target, 0.0f, PB_RAPID); break;
-    case ACT_LINE:
+    case ACT_LINE: {
+        float feed = blk->feed;
+#if GRBL_G93
         /* G93: F is how many times a minute this move could be done */
-        e = line_to(blk->target, blk->inverse_time ? blk->feed * hypotf(blk->target[0] - blk->start[0],
-                                                                         blk->target[1] - blk->start[1])
-                                                   : blk->feed, 0);
+        if (blk->inverse_time) {
+            float dx = blk->target[0] - blk->start[0], dy = blk->target[1] - blk->start[1];
+            feed *= sqrtf(dx * dx + dy * dy);
+        }
+#endif
+        e = line_to(blk->target, feed, 0);
         break;
+    }
     case ACT_ARC: {
         arc_t arc;
         e = arc_init(&arc, blk->start, blk->target, blk->center, blk->clockwise, settings.arc_tolerance);
-        float feed = blk->inverse_time ? blk->feed * fabsf(arc.sweep) * 0.5f * (arc.r0 + arc.r1) : blk->feed;
+        float feed = blk->feed;
+#if GRBL_G93
+        if (blk->inverse_time)
+            feed *= fabsf(arc.sweep) * 0.5f * (arc.r0 + arc.r1);
+#endif
         /* check mode queues nothing: the chords would only starve the watchdog */
         for (uint16_t k = 1; !e && !mach.check && k <= arc.segments; k++) {
             float p[N_AXIS];

@@ -1,5 +1,3 @@
-#include <avr/interrupt.h>
-#include <avr/sleep.h>
 #include "dollar.h"
 #include "gcode.h"
 #include "inputs.h"
@@ -93,19 +91,6 @@ static void soft_reset(void)
         protocol_startup_lines();
 }
 
-static void idle_sleep(void)
-{
-    set_sleep_mode(SLEEP_MODE_IDLE);
-    cli();
-    if (!rt_flags && serial_tx_idle()) {
-        sleep_enable();
-        sei();
-        sleep_cpu();
-        sleep_disable();
-    }
-    sei();
-}
-
 void protocol_run(void)
 {
     linebuf_reset(&lb);
@@ -125,7 +110,7 @@ void protocol_run(void)
                 stepper_enable(0);
                 report_msg(PSTR("Sleeping"));
             }
-            idle_sleep();
+            machine_idle_wait();
             continue;
         }
         if (mach.abort && !machine_moving())
@@ -137,7 +122,7 @@ void protocol_run(void)
             r = linebuf_feed(&lb, (uint8_t)c);
         if (r == LB_NONE) {
             if (!machine_moving())
-                idle_sleep();
+                machine_idle_wait();
             continue;
         }
         uint8_t e;

@@ -5,7 +5,7 @@
 #include <stdint.h>
 #include "config.h"
 
-#define SETTINGS_VERSION 3
+#define SETTINGS_VERSION 4
 
 typedef struct {
     float steps_per_mm[N_AXIS];   /* $100 $101 */
@@ -21,6 +21,8 @@ typedef struct {
     uint16_t pen_up_us;           /* $60 */
     uint16_t pen_down_us;         /* $61 */
     uint16_t pen_settle_ms;       /* $62 */
+    uint16_t pen_lower_ms;        /* $64: time the servo takes to lower the pen (0: at once) */
+    uint16_t pen_raise_ms;        /* $65: time to raise it */
     uint8_t pulse_us;             /* $0 */
     uint8_t idle_delay_ms;        /* $1 (255: keep enabled) */
     uint8_t step_invert;          /* $2 */
@@ -38,9 +40,9 @@ typedef struct {
 
 extern settings_t settings;
 
-/* The $ numbers in the order $$ lists them. */
-extern const uint8_t settings_ids[];
+/* How many $ rows $$ lists; settings_id(i) is the i-th one's number. */
 extern const uint8_t settings_count;
+uint8_t settings_id(uint8_t i);
 
 void settings_defaults(settings_t *s);
 /* Store value under $id; returns STATUS_OK or an error code. */
