@@ -154,6 +154,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                         uint8_t c = (uint8_t)(code10 / 10 - 54);
                         if (c != st.coord) {
                             st.coord = c;
+                            blk->wco_changed = 1;
                             if (!coord_load(c, st.wcs))
                                 return ERR_EEPROM_READ;
                         }

@@ -116,16 +116,20 @@ void servo_move(uint16_t us, uint16_t ms)
         us = 2500;
     uint16_t t = (uint16_t)((us + TICK_US / 2) / TICK_US);
     uint16_t span = width_us > us ? width_us - us : us - width_us;
-    /* ticks per 20 ms frame for the whole span in `ms` (at least one):
-     * span / TICK_US * 20 / ms, in 16 bits (span <= 2000) */
-    uint16_t step = (uint16_t)(span * (20 / TICK_US) / (ms ? ms : 1) + 1);
+    /* ticks per 20 ms frame for the whole span in `ms`, rounded, at least
+     * one: span / TICK_US * 20 / ms, in 16 bits (span <= 2000) */
+    if (!ms)
+        ms = 1;
+    uint16_t step = (uint16_t)((span * (20 / TICK_US) + ms / 2) / ms);
+    if (!step)
+        step = 1;
     width_us = us;
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
         target_ticks = t;
         slew_ticks = step;
-        if (!ms)
-            pulse_ticks = t;
+        if (ms == 1)
+            pulse_ticks = t; /* 0 (or 1) ms: at once */
     }
 }
 
