@@ -352,6 +352,7 @@ def test_work_systems_persist_and_never_move_the_pen(mega) -> None:
     g.ok("G0 X10 Y10 Z5")
     g.ok("G55")                     # a change of system: WCO in the next report
     assert "|WCO:100.000,50.000,3.000" in g.status()
+    assert g.ok("$G")[0].startswith("[GC:G0 G55 G17 ")
     g.ok("G0 X10 Y10")
     g.ok("G0 Z-1")                  # machine Z 2: above the threshold, the pen stays up
     g.wait_state("Idle")
@@ -360,9 +361,14 @@ def test_work_systems_persist_and_never_move_the_pen(mega) -> None:
     g.ok("G10 L20 P0 X0 Y0")        # here is work 0,0 in G55
     g.ok("G28.1")
     g.ok("G0 X5 Y5")
+    g.ok("G30.1")
     g.ok("G28")
     g.wait_state("Idle")
     assert mpos(g.status()) == (110.0, 60.0)
+    g.ok("G30 G91 Y0")                # only Y goes to the stored G30
+    g.wait_state("Idle")
+    assert mpos(g.status()) == (110.0, 65.0)
+    g.ok("G90")
     assert p.trace()["pen_lifts"] == 0 and p.trace()["strokes"] == []
     # EEPROM: the offsets and G28 outlive a power cycle; G92 does not
     g.ok("G92 X1")
@@ -374,6 +380,7 @@ def test_work_systems_persist_and_never_move_the_pen(mega) -> None:
         params = "\n".join(g2.ok("$#"))
         assert "[G55:110.000,60.000,3.000]" in params, params
         assert "[G28:110.000,60.000,2.000]" in params, params
+        assert "[G30:115.000,65.000,2.000]" in params, params
         assert "[G92:0.000,0.000,0.000]" in params, params
         assert "[GC:G0 G54 " in g2.ok("$G")[0]  # power-up: G54
         g2.ok("$RST=#")
