@@ -69,28 +69,39 @@ static uint8_t hold_stopped(void)
     return (seg_hold_reached() || !machine_moving()) && !stepper_busy();
 }
 
+/* WCO and Ov as GRBL refreshes them: in the report after a change (the
+ * countdown set to 0), then every `every`+1-th one */
+static uint8_t due(uint8_t *countdown, uint8_t every)
+{
+    if (*countdown) {
+        (*countdown)--;
+        return 0;
+    }
+    *countdown = every;
+    return 1;
+}
+
 void machine_report_status(void)
 {
     uint8_t in = inputs_read();
-    RPT("<");
+    uint8_t busy = machine_moving();
+    PGM_P state = PSTR("Idle");
     if (mach.sleep)
-        RPT("Sleep");
+        state = PSTR("Sleep");
     else if (mach.alarm)
-        RPT("Alarm");
+        state = PSTR("Alarm");
     else if (mach.homing)
-        RPT("Home");
+        state = PSTR("Home");
     else if (mach.check)
-        RPT("Check");
+        state = PSTR("Check");
     else if (mach.hold && mach.jog)
-        RPT("Jog"); /* a jog being cancelled, as GRBL reports it */
+        state = PSTR("Jog"); /* a jog being cancelled, as GRBL reports it */
     else if (mach.hold)
-        report_pstr(hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1"));
-    else if (mach.jog && machine_moving())
-        RPT("Jog");
-    else if (machine_moving())
-        RPT("Run");
-    else
-        RPT("Idle");
+        state = hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1");
+    else if (busy)
+        state = mach.jog ? PSTR("Jog") : PSTR("Run");
+    RPT("<");
+    report_pstr(state);
     int32_t motor[N_AXIS], cart[N_AXIS];
     stepper_get_position(motor);
     plan_cart_from_motor(motor, cart);
@@ -119,10 +130,7 @@ void machine_report_status(void)
         RPT("|A:S");
     /* WCO as GRBL refreshes it: after a change, then every 30th report
      * while busy and every 10th while idle */
-    if (mach.wco_countdown) {
-        mach.wco_countdown--;
-    } else {
-        mach.wco_countdown = machine_moving() ? 29 : 9;
+    if (due(&mach.wco_countdown, busy ? 29 : 9)) {
         RPT("|WCO:");
         float wco[GC_AXES];
         for (uint8_t a = 0; a < GC_AXES; a++)
@@ -130,10 +138,7 @@ void machine_report_status(void)
         report_xyz(wco);
     }
     /* Ov likewise: after a change, then every 20th report while busy, every 10th idle */
-    if (mach.ov_countdown) {
-        mach.ov_countdown--;
-    } else {
-        mach.ov_countdown = machine_moving() ? 19 : 9;
+    if (due(&mach.ov_countdown, busy ? 19 : 9)) {
         RPT("|Ov:");
         for (uint8_t i = 0; i < 3; i++) {
             if (i)
@@ -244,17 +249,22 @@ void machine_poll(void)
 }
 
 /* Let the main loop sleep until the next interrupt (UART, a step, the 1 ms
- * servo tick) when there is nothing to prepare: simavr then skips time. */
-void machine_idle_wait(void)
+ * servo tick) when there is nothing to prepare: simavr then skips time.
+ * until_line_end: sleep on through every interrupt (feeding the watchdog)
+ * until a line end or another realtime request arrives. */
+void machine_idle_wait(uint8_t until_line_end)
 {
     set_sleep_mode(SLEEP_MODE_IDLE);
-    cli();
-    if (!rt_flags && serial_tx_idle()) {
+    do {
+        wdt_reset();
+        cli();
+        if (rt_flags || (!until_line_end && !serial_tx_idle()))
+            break; /* (waiting for a line, the transmit interrupt wakes us as any other) */
         sleep_enable();
         sei();
         sleep_cpu();
         sleep_disable();
-    }
+    } while (until_line_end);
     sei();
 }
 
@@ -264,7 +274,7 @@ uint8_t machine_sync(void)
         machine_poll();
         if (mach.abort)
             return 0;
-        machine_idle_wait();
+        machine_idle_wait(0);
     }
     return !mach.abort;
 }
@@ -279,7 +289,7 @@ uint8_t machine_dwell_ms(uint32_t ms)
         machine_poll();
         if (mach.abort)
             break;
-        machine_idle_wait();
+        machine_idle_wait(0);
     }
     mach.dwelling = 0;
     return !mach.abort;
@@ -311,7 +321,7 @@ static uint8_t wait_for_planner_room(void)
         machine_poll();
         if (mach.abort)
             return 0;
-        machine_idle_wait();
+        machine_idle_wait(0);
     }
     return 1;
 }

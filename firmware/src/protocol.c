@@ -71,10 +71,9 @@ static void soft_reset(void)
     uint8_t alarm = mach.alarm;
     uint8_t homed = mach.homed;
     machine_init();
-    if (mach.sleep && !alarm)
+    if (mach.sleep)
         alarm = ALARM_LOCKED; /* GRBL wakes from sleep locked */
-    mach.sleep = 0;
-    mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
+    mach.sleep = mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
     mach.dwelling = 0;
     seg_hold(0);
     mach.alarm = alarm;
@@ -110,7 +109,7 @@ void protocol_run(void)
                 stepper_enable(0);
                 report_msg(PSTR("Sleeping"));
             }
-            machine_idle_wait();
+            machine_idle_wait(0);
             continue;
         }
         if (mach.abort && !machine_moving())
@@ -121,8 +120,11 @@ void protocol_run(void)
         while (r == LB_NONE && (c = serial_read()) != SERIAL_NO_DATA)
             r = linebuf_feed(&lb, (uint8_t)c);
         if (r == LB_NONE) {
-            if (!machine_moving())
-                machine_idle_wait();
+            /* idle with half a line in: sleep through its bytes and the 1 ms
+             * ticks until its end (polling at every byte cost more than
+             * parsing the line), unless motors wait for their $1 delay */
+            machine_idle_wait(!machine_moving() && !mach.hold &&
+                              (settings.idle_delay_ms == 255 || !stepper_enabled()));
             continue;
         }
         uint8_t e;

@@ -110,26 +110,18 @@ void servo_set_us(uint16_t us) { servo_move(us, 0); }
 
 void servo_move(uint16_t us, uint16_t ms)
 {
-    if (us < 500)
-        us = 500;
-    if (us > 2500)
-        us = 2500;
-    uint16_t t = (uint16_t)((us + TICK_US / 2) / TICK_US);
+    /* us is $60 or $61: settings_set keeps both within 500-2500 */
     uint16_t span = width_us > us ? width_us - us : us - width_us;
-    /* ticks per 20 ms frame for the whole span in `ms`, rounded, at least
-     * one: span / TICK_US * 20 / ms, in 16 bits (span <= 2000) */
-    if (!ms)
-        ms = 1;
-    uint16_t step = (uint16_t)((span * (20 / TICK_US) + ms / 2) / ms);
-    if (!step)
-        step = 1;
     width_us = us;
+    /* ticks per 20 ms frame for the whole span in about `ms` (at least
+     * one): span / TICK_US * 20 / ms, in 16 bits (span <= 2000); no time:
+     * the whole way at the next frame (the width only counts from there) */
+    uint16_t step = ms ? (uint16_t)(span * (20 / TICK_US) / ms + 1) : 1000;
+    uint16_t t = (uint16_t)((us + TICK_US / 2) / TICK_US);
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
         target_ticks = t;
         slew_ticks = step;
-        if (ms == 1)
-            pulse_ticks = t; /* 0 (or 1) ms: at once */
     }
 }
 
