@@ -6,6 +6,7 @@
 #include "arc.h"
 #include "inputs.h"
 #include "machine.h"
+#include "plan_split.h"
 #include "planner.h"
 #include "realtime.h"
 #include "report.h"
@@ -315,46 +316,26 @@ static uint8_t outside_work_area(const float *t)
     return 0;
 }
 
-static uint8_t wait_for_planner_room(void)
+/* plan_line_split's wait: realtime work goes on while the planner is full */
+static uint8_t planner_room(void)
 {
-    while (!plan_free()) {
+    for (;;) {
         machine_poll();
         if (mach.abort)
             return 0;
+        if (plan_free())
+            return 1;
         machine_idle_wait(0);
     }
-    return 1;
 }
 
-/* Queue one straight move, waiting for planner room; moves too long for
- * the 16-bit step counters go in equal pieces. */
+/* Queue one straight move (in pieces if it is long), waiting for planner room. */
 static uint8_t line_to(const float *target, float feed, uint8_t flags)
 {
     if (mach.check)
         return STATUS_OK;
-    if (!wait_for_planner_room())
-        return ERR_LOCKED;
-    /* plan_line finds out whether the move fits; the split is the rare case */
-    if (plan_line(target, feed, flags) == PLAN_TOO_LONG) {
-        uint16_t pieces = plan_pieces(target);
-        int32_t from_steps[N_AXIS];
-        float from[N_AXIS], p[N_AXIS];
-        plan_get_position(from_steps);
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            from[a] = (float)from_steps[a] / settings.steps_per_mm[a];
-        for (uint16_t k = 1; k <= pieces; k++) {
-            for (uint8_t a = 0; a < N_AXIS; a++)
-                p[a] = k == pieces ? target[a] : from[a] + (target[a] - from[a]) * (float)k / (float)pieces;
-            if (!wait_for_planner_room())
-                return ERR_LOCKED;
-            plan_line(p, feed, flags);
-            machine_poll();
-            if (mach.abort)
-                return ERR_LOCKED;
-        }
-    }
-    machine_poll();
-    return mach.abort ? ERR_LOCKED : STATUS_OK;
+    /* (the next poll, in the next wait or the main loop, starts the steppers) */
+    return plan_line_split(target, feed, flags, planner_room) ? STATUS_OK : ERR_LOCKED;
 }
 
 static uint8_t soft_limit_violation(const gc_block_t *blk)

@@ -294,10 +294,15 @@ def test_feed_override_changes_the_plotted_speed(plotter) -> None:
         full = speed_between(plotter, 0, 0.5)
         for _ in range(5):
             g.ser.write(b"\x92")  # -10% each: 50%
-        plotter.wait_trace(lambda t: t["position"]["x"] > 40, 30)
-        half = speed_between(plotter, 0, 0.5)
-        status = g.status()
+        # measured from 5 mm after the firmware took them (the report says so),
+        # whenever that was in simulated time: the deceleration is over by then
+        deadline = time.monotonic() + 20
+        while "|Ov:50,100,100" not in (status := g.status()) and time.monotonic() < deadline:
+            pass
         assert "|Ov:50,100,100" in status, status
+        x0 = plotter.trace()["position"]["x"]
+        plotter.wait_trace(lambda t: t["position"]["x"] > x0 + 5, 30)
+        half = speed_between(plotter, 0, 0.5)
         assert full == pytest.approx(20.0, rel=0.05)
         assert half == pytest.approx(10.0, rel=0.05)
         g.ser.write(b"\x90")
