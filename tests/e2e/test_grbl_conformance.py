@@ -438,43 +438,44 @@ def test_inverse_time_feed_plots_in_the_given_time(mega) -> None:
 # --- the 328P and every profile: sleep, restore, slewed pen -----------------
 
 
-def test_sleep_lifts_the_pen_and_a_reset_wakes_it_locked(plotter) -> None:
-    g = Grbl(plotter.port)
+@pytest.fixture
+def g(plotter) -> Iterator[Grbl]:
+    """A connection to the plotter after a soft reset and $X."""
+    conn = Grbl(plotter.port)
     try:
-        fresh(g)
-        g.ok("G0 X10 Y10")
-        g.ok("M3")
-        assert plotter.trace()["pen"] == "down"
-        g.ok("$SLP")
-        g.wait_for(r"^\[MSG:Sleeping\]$", 10)
-        trace = plotter.wait_trace(lambda t: t["pen"] == "up" and not t["enabled"], 10)
-        assert trace["pen"] == "up"
-        assert g.status().startswith("<Sleep|")
-        g.ser.write(b"G0 X50\n")  # waits in the ring; the reset flushes it
-        assert g.read_lines(0.5) == []
-        g.ser.write(b"\x18")
-        g.wait_for(BANNER, 20)
-        g.wait_for(r"^\[MSG:'\$H'\|'\$X' to unlock\]$", 10)
-        assert g.status().startswith("<Alarm")
-        g.ok("$X")
-        assert mpos(g.status()) == (10.0, 10.0)
+        fresh(conn)
+        yield conn
     finally:
-        g.close()
+        conn.close()
 
 
-def test_restore_defaults(plotter) -> None:
-    g = Grbl(plotter.port)
-    try:
-        fresh(g)
-        g.ok("$110=5000")
-        g.ok("$RST=$")
-        g.wait_for(BANNER, 20)
-        fresh(g)
-        assert "$110=6000.000" in g.ok("$$")
-        assert g.send("$RST=#") == ["error:3"]  # the 328P build leaves it out
-        assert g.send("$RST=x") == ["error:3"]
-    finally:
-        g.close()
+def test_sleep_lifts_the_pen_and_a_reset_wakes_it_locked(plotter, g: Grbl) -> None:
+    g.ok("G0 X10 Y10")
+    g.ok("M3")
+    assert plotter.trace()["pen"] == "down"
+    g.ok("$SLP")
+    g.wait_for(r"^\[MSG:Sleeping\]$", 10)
+    trace = plotter.wait_trace(lambda t: t["pen"] == "up" and not t["enabled"], 10)
+    assert trace["pen"] == "up"
+    assert g.status().startswith("<Sleep|")
+    g.ser.write(b"G0 X50\n")  # waits in the ring; the reset flushes it
+    assert g.read_lines(0.5) == []
+    g.ser.write(b"\x18")
+    g.wait_for(BANNER, 20)
+    g.wait_for(r"^\[MSG:'\$H'\|'\$X' to unlock\]$", 10)
+    assert g.status().startswith("<Alarm")
+    g.ok("$X")
+    assert mpos(g.status()) == (10.0, 10.0)
+
+
+def test_restore_defaults(g: Grbl) -> None:
+    g.ok("$110=5000")
+    g.ok("$RST=$")
+    g.wait_for(BANNER, 20)
+    fresh(g)
+    assert "$110=6000.000" in g.ok("$$")
+    assert g.send("$RST=#") == ["error:3"]  # the 328P build leaves it out
+    assert g.send("$RST=x") == ["error:3"]
 
 
 def test_pen_lowers_at_the_slew_rate(plotter_factory) -> None:
