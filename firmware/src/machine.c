@@ -250,22 +250,17 @@ void machine_poll(void)
 }
 
 /* Let the main loop sleep until the next interrupt (UART, a step, the 1 ms
- * servo tick) when there is nothing to prepare: simavr then skips time.
- * until_line_end: sleep on through every interrupt (feeding the watchdog)
- * until a line end or another realtime request arrives. */
-void machine_idle_wait(uint8_t until_line_end)
+ * servo tick) when there is nothing to prepare: simavr then skips time. */
+void machine_idle_wait(void)
 {
     set_sleep_mode(SLEEP_MODE_IDLE);
-    do {
-        wdt_reset();
-        cli();
-        if (rt_flags || (!until_line_end && !serial_tx_idle()))
-            break; /* (waiting for a line, the transmit interrupt wakes us as any other) */
+    cli();
+    if (!rt_flags && serial_tx_idle()) {
         sleep_enable();
         sei();
         sleep_cpu();
         sleep_disable();
-    } while (until_line_end);
+    }
     sei();
 }
 
@@ -275,7 +270,7 @@ uint8_t machine_sync(void)
         machine_poll();
         if (mach.abort)
             return 0;
-        machine_idle_wait(0);
+        machine_idle_wait();
     }
     return !mach.abort;
 }
@@ -290,7 +285,7 @@ uint8_t machine_dwell_ms(uint32_t ms)
         machine_poll();
         if (mach.abort)
             break;
-        machine_idle_wait(0);
+        machine_idle_wait();
     }
     mach.dwelling = 0;
     return !mach.abort;
@@ -325,7 +320,7 @@ static uint8_t planner_room(void)
             return 0;
         if (plan_free())
             return 1;
-        machine_idle_wait(0);
+        machine_idle_wait();
     }
 }
 
@@ -334,8 +329,9 @@ static uint8_t line_to(const float *target, float feed, uint8_t flags)
 {
     if (mach.check)
         return STATUS_OK;
-    /* (the next poll, in the next wait or the main loop, starts the steppers) */
-    return plan_line_split(target, feed, flags, planner_room) ? STATUS_OK : ERR_LOCKED;
+    uint8_t queued = plan_line_split(target, feed, flags, planner_room);
+    machine_poll(); /* the steppers start before the line's ok */
+    return queued && !mach.abort ? STATUS_OK : ERR_LOCKED;
 }
 
 static uint8_t soft_limit_violation(const gc_block_t *blk)

@@ -36,8 +36,8 @@ extern gc_state_t gc;
 void machine_init(void);
 void machine_poll(void);              /* realtime work; call from every wait loop */
 uint8_t machine_moving(void);         /* motion queued or running */
-/* sleep until an interrupt (or a line end), unless realtime work or output waits */
-void machine_idle_wait(uint8_t until_line_end);
+/* sleep until an interrupt, unless realtime work or output waits */
+void machine_idle_wait(void);
 uint8_t machine_sync(void);           /* wait for all motion to end; 0 if aborted */
 uint8_t machine_execute(const gc_block_t *blk);
 uint8_t machine_jog(const char *body);

@@ -109,7 +109,7 @@ void protocol_run(void)
                 stepper_enable(0);
                 report_msg(PSTR("Sleeping"));
             }
-            machine_idle_wait(0);
+            machine_idle_wait();
             continue;
         }
         if (mach.abort && !machine_moving())
@@ -120,11 +120,8 @@ void protocol_run(void)
         while (r == LB_NONE && (c = serial_read()) != SERIAL_NO_DATA)
             r = linebuf_feed(&lb, (uint8_t)c);
         if (r == LB_NONE) {
-            /* idle with half a line in: sleep through its bytes and the 1 ms
-             * ticks until its end (polling at every byte cost more than
-             * parsing the line), unless motors wait for their $1 delay */
-            machine_idle_wait(!machine_moving() && !mach.hold &&
-                              (settings.idle_delay_ms == 255 || !stepper_enabled()));
+            if (!machine_moving())
+                machine_idle_wait();
             continue;
         }
         uint8_t e;

@@ -36,7 +36,6 @@ void realtime_alarm_isr(uint8_t code)
 uint8_t realtime_byte(uint8_t c)
 {
     switch (c) {
-    case '\n': case '\r': rt_flags |= RT_LINE_END; return 0; /* not realtime: into the ring */
     case '?': rt_flags |= RT_STATUS; return 1;
     case '!': rt_flags |= RT_HOLD; return 1;
     case '~': rt_flags |= RT_RESUME; return 1;

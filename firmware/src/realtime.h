@@ -11,7 +11,6 @@
 #define RT_ALARM 0x10   /* rt_alarm holds the code */
 #define RT_JOG_CANCEL 0x20
 #define RT_OVERRIDE 0x40 /* rt_ov changed: the planner takes the new feed/rapid percentages */
-#define RT_LINE_END 0x80 /* a line end went into the receive ring: a line may be complete */
 
 /* GRBL's override percentages: feed 10..200, rapid 25/50/100, spindle
  * 10..200 (the spindle is the pen: accepted and reported only) */
