@@ -14,6 +14,7 @@
 #include <math.h>
 #include <string.h>
 #include "arc.h"
+#include "plan_split.h"
 #include "planner.h"
 #include "ring.h"
 #include "segment.h"
@@ -131,27 +132,19 @@ static void sync_motion(void)
         t_main = exec_end;
 }
 
-static void plan_at(const float *target, float feed, uint8_t flags)
+/* plan_line_split's wait: run queued blocks until the planner has room */
+static uint8_t host_room(void)
 {
     while (plan_count() >= (uint8_t)cfg.depth)
         run_one();
+    return 1;
+}
+
+static void plan_at(const float *target, float feed, uint8_t flags)
+{
+    host_room();
     run_until(t_main);
-    uint8_t r = plan_line(target, feed, flags);
-    if (r == PLAN_TOO_LONG) { /* as machine.c's line_to: equal pieces */
-        uint16_t pieces = plan_pieces(target);
-        int32_t from_steps[N_AXIS];
-        float from[N_AXIS], p[N_AXIS];
-        plan_get_position(from_steps);
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            from[a] = (float)from_steps[a] / settings.steps_per_mm[a];
-        for (uint16_t k = 1; k <= pieces; k++) {
-            for (uint8_t a = 0; a < N_AXIS; a++)
-                p[a] = k == pieces ? target[a] : from[a] + (target[a] - from[a]) * (float)k / (float)pieces;
-            while (plan_count() >= (uint8_t)cfg.depth)
-                run_one();
-            plan_line(p, feed, flags);
-        }
-    }
+    plan_line_split(target, feed, flags, host_room); /* as machine.c's line_to */
     fill_at(t_main);
 }
 

@@ -4,7 +4,7 @@
 #define CONFIG_H
 
 #define FW_BANNER "Grbl 1.1h ['$' for help]"
-#define FW_BUILD "[VER:1.1h.plotbridge:]"
+#define FW_VERSION "[VER:1.1h.plotbridge:" /* then the $I= string and "]" */
 
 #define N_AXIS 2
 #define RX_SIZE 128          /* receive ring: GRBL's character-counting size */
@@ -24,6 +24,30 @@
 #endif
 #endif
 #define SEG_SIZE 8           /* step segment ring (7 usable) */
+
+/* GRBL rows that need more flash than the 328P has beside the pen features
+ * (GRBL's own config.h leaves rows out the same way). Each is 1 on the 2560
+ * and in the host builds; the 328P profiles leave them out unless the
+ * build says otherwise (EXTRA_CFLAGS=-DGRBL_WCS=1 ...; the size check
+ * fails if it does not fit). firmware/README.md lists what each costs.
+ *  GRBL_WCS:   G54-G59 and G28/G30 positions in EEPROM, G10 L2/L20, G28.1, G30.1,
+ *              $RST=# (without: G54 only, G28/G30 go to machine 0; error:20)
+ *  GRBL_LINES: $N0/$N1 startup lines and the $I= build info string (error:3)
+ *  GRBL_G93:   inverse time feed (error:20) */
+#if defined(__AVR_ATmega328P__)
+#define GRBL_FULL_DEFAULT 0
+#else
+#define GRBL_FULL_DEFAULT 1
+#endif
+#ifndef GRBL_WCS
+#define GRBL_WCS GRBL_FULL_DEFAULT
+#endif
+#ifndef GRBL_LINES
+#define GRBL_LINES GRBL_FULL_DEFAULT
+#endif
+#ifndef GRBL_G93
+#define GRBL_G93 GRBL_FULL_DEFAULT
+#endif
 
 /* Step timer: Timer1 at F_CPU/8 = 2 MHz. */
 #define STEP_TIMER_HZ (F_CPU / 8UL)

@@ -10,13 +10,14 @@
 #define M300_THRESHOLD 40.0f /* M300 S30 down, S50 up */
 
 /* word letters that carry a value, as bits for repeat detection */
-enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_COUNT };
-static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N', 'T'};
+enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_COUNT };
+static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N', 'T', 'L'};
 #define WB(w) (1u << (w))
 #define MAX_LINE_NUMBER 9999999.0f /* GRBL's limit on N */
 
 /* non-modal G commands (GRBL's group 0, one per line) */
-enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1 };
+enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1, NM_G10, NM_SET_HOME };
+#define N_COORD_SYSTEMS 6 /* G54..G59 */
 
 /* An unknown G/M number: a fraction on G0-G9 is "needs an integer" (23),
  * anything else unsupported (20). */
@@ -30,6 +31,9 @@ void gc_init(gc_state_t *st)
     memset(st, 0, sizeof(*st));
     st->motion = MOTION_G0;
     st->z = 1.0f;
+#if GRBL_WCS
+    coord_load(0, st->wcs);
+#endif
 }
 
 void gc_program_end(gc_state_t *st)
@@ -37,6 +41,25 @@ void gc_program_end(gc_state_t *st)
     st->motion = MOTION_G1;
     st->incremental = 0;
     st->plane = 0;
+#if GRBL_G93
+    st->inverse_time = 0;
+#endif
+#if GRBL_WCS
+    /* GRBL: back to G54 (its offset comes from EEPROM again) */
+    if (st->coord) {
+        st->coord = 0;
+        coord_load(0, st->wcs);
+    }
+#endif
+}
+
+float gc_wco(const gc_state_t *st, uint8_t a)
+{
+#if GRBL_WCS
+    return st->wcs[a] + st->g92[a];
+#else
+    return st->g92[a];
+#endif
 }
 
 static uint8_t word_index(char letter)
@@ -78,7 +101,8 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     uint16_t seen = 0;
     int8_t motion = -1;
     uint8_t non_modal = NM_NONE, g53 = 0, pen = PEN_KEEP, m300 = 0;
-    uint8_t g_units = 0, g_dist = 0, g_plane = 0; /* groups seen on this line */
+    uint8_t home_slot = GC_SLOT_G28; /* G28 or G30, and their .1 */
+    uint8_t g_units = 0, g_dist = 0, g_plane = 0, g_coord = 0, g_feed_mode = 0; /* groups seen on this line */
     uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pause = 0, m_stop_groups = 0, m_pen_groups = 0;
 
     memset(blk, 0, sizeof(*blk));
@@ -107,11 +131,47 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                         return ERR_MODAL_CONFLICT;
                     motion = code10 == 800 ? MOTION_NONE : (int8_t)(code10 / 10);
                     break;
-                case 40: case 280: case 920: case 921:
+#if GRBL_WCS
+                case 100: case 281: case 301:
+#endif
+                case 40: case 280: case 300: case 920: case 921:
                     if (non_modal)
                         return ERR_MODAL_CONFLICT;
-                    non_modal = code10 == 40 ? NM_DWELL : code10 == 280 ? NM_G28 :
-                                code10 == 920 ? NM_G92 : NM_G92_1;
+                    if (code10 >= 300 && code10 < 400)
+                        home_slot = GC_SLOT_G30;
+                    non_modal = code10 == 40 ? NM_DWELL : code10 == 100 ? NM_G10 :
+                                code10 % 10 && code10 < 400 ? NM_SET_HOME :
+                                code10 < 400 ? NM_G28 : code10 == 920 ? NM_G92 : NM_G92_1;
+                    break;
+#if GRBL_WCS
+                case 550: case 560: case 570: case 580: case 590:
+#endif
+                case 540:
+                    if (g_coord++)
+                        return ERR_MODAL_CONFLICT;
+#if GRBL_WCS
+                    {
+                        uint8_t c = (uint8_t)(code10 / 10 - 54);
+                        if (c != st.coord) {
+                            st.coord = c;
+                            blk->wco_changed = 1;
+                            if (!coord_load(c, st.wcs))
+                                return ERR_EEPROM_READ;
+                        }
+                    }
+#endif
+                    break;
+#if GRBL_G93
+                case 930:
+#endif
+                case 940:
+                    if (g_feed_mode++)
+                        return ERR_MODAL_CONFLICT;
+#if GRBL_G93
+                    if (st.inverse_time && code10 == 940)
+                        st.feed = 0.0f; /* G93 to G94: the feed is undefined until an F */
+                    st.inverse_time = code10 == 930;
+#endif
                     break;
                 case 530: g53 = 1; break;
                 case 170: case 180: case 190:
@@ -130,9 +190,9 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                     st.incremental = code10 == 910;
                     break;
                 /* accepted, nothing to do on a pen plotter: G40 (no cutter
-                 * compensation), G49 (no tool length offset), G54 (the one
-                 * work system), G61 (exact path), G91.1 (IJK relative), G94 */
-                case 400: case 490: case 540: case 610: case 911: case 940: break;
+                 * compensation), G49 (no tool length offset), G61 (exact
+                 * path), G91.1 (IJK relative) */
+                case 400: case 490: case 610: case 911: break;
                 default: return bad_code(code10);
                 }
             } else {
@@ -166,8 +226,12 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         val[w] = v;
     }
 
+    uint8_t inverse = 0;
+#if GRBL_G93
+    inverse = st.inverse_time; /* F is 1/min then, not a length */
+#endif
     if (st.inches) /* lengths (X Y Z I J R F) to mm once; mm lines multiply nothing */
-        for (uint8_t w = W_X; w <= W_F; w++)
+        for (uint8_t w = W_X; w <= (inverse ? W_R : W_F); w++)
             if (seen & WB(w))
                 val[w] *= 25.4f;
     uint8_t axes = (uint8_t)(seen & (WB(W_X) | WB(W_Y)));
@@ -193,15 +257,26 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
             return ERR_VALUE_WORD_MISSING;
         pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
     }
+#if GRBL_WCS
+    if (non_modal == NM_SET_HOME) {
+        /* G28.1/G30.1 store where the machine is; axis words on the line
+         * are then an ordinary motion in the modal mode, as in GRBL */
+        memcpy(blk->store, st.pos, sizeof(st.pos));
+        blk->store[2] = st.z;
+        blk->store_slot = (uint8_t)(home_slot + 1);
+        non_modal = NM_NONE;
+    }
+#endif
     if (seen & WB(W_Z)) {
         /* Z is the pen, decided on machine Z so that no offset can flip it;
-         * only a motion moves the pen (G92 Z and G53 Z never do) */
+         * only a motion moves the pen (G92 Z, G10 Z and G53 Z never do) */
         if (non_modal == NM_G92) {
-            st.z_offset = st.z - val[W_Z];
+            st.g92[2] = 0.0f;
+            st.g92[2] = st.z - gc_wco(&st, 2) - val[W_Z];
         } else if (non_modal == NM_NONE && !g53) {
             if ((motion >= 0 ? motion : st.motion) == MOTION_NONE)
                 return ERR_AXIS_WORDS_UNUSED;
-            float z = st.incremental ? st.z + val[W_Z] : val[W_Z] + st.z_offset;
+            float z = st.incremental ? st.z + val[W_Z] : val[W_Z] + gc_wco(&st, 2);
             if (fabsf(z) > GC_MAX_COORD)
                 return ERR_INVALID_TARGET;
             st.z = z;
@@ -226,7 +301,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         else if (st.incremental)
             target[a] = st.pos[a] + v;
         else
-            target[a] = v + st.offset[a];
+            target[a] = v + gc_wco(&st, a);
         if (fabsf(target[a]) > GC_MAX_COORD)
             return ERR_INVALID_TARGET;
     }
@@ -256,23 +331,65 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         if (!axes)
             return ERR_NO_AXIS_WORDS;
         for (uint8_t a = 0; a < N_AXIS; a++)
-            if (axes & (1u << a))
-                st.offset[a] = st.pos[a] - val[a];
+            if (axes & (1u << a)) {
+                st.g92[a] = 0.0f;
+                st.g92[a] = st.pos[a] - gc_wco(&st, a) - val[a];
+            }
         blk->wco_changed = 1;
     } else if (non_modal == NM_G92_1) {
         if (motion >= 0)
             return ERR_AXIS_COMMAND_CONFLICT;
-        memset(st.offset, 0, sizeof(st.offset));
-        st.z_offset = 0.0f;
+        memset(st.g92, 0, sizeof(st.g92));
         blk->wco_changed = 1;
+#if GRBL_WCS
+    } else if (non_modal == NM_G10) {
+        if (motion >= 0)
+            return ERR_AXIS_COMMAND_CONFLICT;
+        if (!(seen & (WB(W_X) | WB(W_Y) | WB(W_Z))))
+            return ERR_NO_AXIS_WORDS;
+        if ((~seen & (WB(W_P) | WB(W_L))))
+            return ERR_VALUE_WORD_MISSING;
+        if (val[W_P] >= N_COORD_SYSTEMS + 1)
+            return ERR_UNSUPPORTED_COORD;
+        uint8_t l = (uint8_t)val[W_L], p = (uint8_t)val[W_P];
+        if ((l != 2 && l != 20) || (l == 2 && (seen & WB(W_R))))
+            return ERR_UNSUPPORTED;
+        uint8_t slot = p ? (uint8_t)(p - 1) : st.coord;
+        if (!coord_load(slot, blk->store))
+            return ERR_EEPROM_READ;
+        for (uint8_t a = 0; a < GC_AXES; a++) {
+            if (!(seen & WB(a)))
+                continue;
+            /* L20: the offset that makes the machine's position read val;
+             * L2: the offset itself */
+            float machine = a < N_AXIS ? st.pos[a] : st.z;
+            blk->store[a] = l == 20 ? machine - st.g92[a] - val[a] : val[a];
+        }
+        if (slot == st.coord) {
+            memcpy(st.wcs, blk->store, sizeof(st.wcs));
+            blk->wco_changed = 1;
+        }
+        blk->store_slot = (uint8_t)(slot + 1);
+        used |= WB(W_P) | WB(W_L);
+#endif
     } else if (non_modal == NM_G28) {
         if (motion >= 0)
             return ERR_AXIS_COMMAND_CONFLICT;
         blk->action = ACT_G28;
         blk->has_via = axes != 0;
         memcpy(blk->via, target, sizeof(target));
+        /* then to the stored position (machine 0 without GRBL_WCS); with
+         * axis words only those axes go there, as GRBL 1.1 does */
+        float home[GC_AXES] = {0};
+#if GRBL_WCS
+        if (!coord_load(home_slot, home))
+            return ERR_EEPROM_READ;
+#else
+        (void)home_slot;
+#endif
+        uint8_t words = (uint8_t)(seen & (WB(W_X) | WB(W_Y) | WB(W_Z)));
         for (uint8_t a = 0; a < N_AXIS; a++)
-            st.pos[a] = blk->target[a] = 0.0f;
+            st.pos[a] = blk->target[a] = words && !(words & (1u << a)) ? st.pos[a] : home[a];
     } else {
         if (motion >= 0)
             st.motion = (uint8_t)motion;
@@ -289,6 +406,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 blk->feed = f;
             }
             blk->action = st.motion == MOTION_G0 ? ACT_RAPID : st.motion == MOTION_G1 ? ACT_LINE : ACT_ARC;
+            blk->inverse_time = inverse;
             if (blk->action == ACT_ARC) {
                 if (st.plane)
                     return ERR_UNSUPPORTED; /* an arc through Z: the pen has no Z motor */
@@ -331,6 +449,10 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         return ERR_UNUSED_WORDS;
     if (m_end)
         gc_program_end(&st);
+#if GRBL_G93
+    if (inverse) /* an inverse-time F holds for its own line only */
+        st.feed = 0.0f;
+#endif
     *st_out = st;
     return STATUS_OK;
 }

@@ -7,22 +7,33 @@
 #include "config.h"
 
 enum { MOTION_G0, MOTION_G1, MOTION_G2, MOTION_G3, MOTION_NONE }; /* NONE: G80 */
-enum { ACT_NONE, ACT_RAPID, ACT_LINE, ACT_ARC, ACT_DWELL, ACT_G28 };
+enum { ACT_NONE, ACT_RAPID, ACT_LINE, ACT_ARC, ACT_DWELL, ACT_G28 }; /* ACT_G28: G28 and G30 */
 enum { PEN_KEEP, PEN_UP, PEN_DOWN };
 enum { MOTORS_KEEP, MOTORS_ON, MOTORS_OFF };
 
 #define GC_MAX_COORD 100000.0f /* mm: anything further is a typo, and would overflow step counts */
+#define GC_AXES 3              /* X, Y and Z (the pen) in offsets and stored positions */
+/* stored positions (EEPROM, GRBL_WCS): G54..G59 are 0..5 */
+#define GC_SLOT_G28 6
+#define GC_SLOT_G30 7
+#define GC_SLOTS 8
 
 typedef struct {
     uint8_t motion;       /* MOTION_* */
     uint8_t incremental;  /* G91 */
     uint8_t inches;       /* G20 */
     uint8_t plane;        /* 0 G17, 1 G18, 2 G19 (arcs only in G17: no Z motor) */
+#if GRBL_G93
+    uint8_t inverse_time; /* G93: F is 1/min per move, and only for its own line */
+#endif
+#if GRBL_WCS
+    uint8_t coord;        /* 0..5: G54..G59 */
+    float wcs[GC_AXES];   /* the selected work system's offset, read from EEPROM */
+#endif
     float feed;           /* mm/min; 0 until an F word is seen */
     float pos[N_AXIS];    /* machine mm where the last accepted move ends */
-    float offset[N_AXIS]; /* G92: machine = work + offset */
     float z;              /* machine Z of the last Z word: the pen threshold is on it */
-    float z_offset;       /* G92 on Z: machine Z = work Z + z_offset (never moves the pen) */
+    float g92[GC_AXES];   /* G92: machine = work + wcs + g92 (never moves the pen) */
 } gc_state_t;
 
 typedef struct {
@@ -32,8 +43,11 @@ typedef struct {
     uint8_t motors;       /* MOTORS_* */
     uint8_t program_end;  /* M2/M30: after the motion */
     uint8_t pause;        /* M0/M1: feed hold (Hold:0) once the motion before it ends */
-    uint8_t wco_changed;  /* G92/G92.1: the status report shows WCO next time */
+    uint8_t wco_changed;  /* G92/G92.1/G10/G54..: the status report shows WCO next time */
     uint8_t has_via;      /* G28 with axis words */
+    uint8_t store_slot;   /* G10, G28.1, G30.1: GC_SLOT_* + 1 to write `store` to, 0 none */
+    uint8_t inverse_time; /* G93: feed is 1/min, machine scales it by the move's length */
+    float store[GC_AXES]; /* machine mm (G28.1/G30.1) or offset (G10) to store */
     float start[N_AXIS];  /* machine mm */
     float target[N_AXIS];
     float via[N_AXIS];
@@ -48,4 +62,11 @@ void gc_init(gc_state_t *st);
 uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog);
 /* Program end (M2/M30): modal state back to the power-up defaults, position kept. */
 void gc_program_end(gc_state_t *st);
+/* Work coordinate offset (wcs + g92) of axis a (0..2), as WCO and $# show it. */
+float gc_wco(const gc_state_t *st, uint8_t a);
+
+/* Stored positions (settings_store.c on the chip, a RAM copy in host
+ * builds): 0 and zeros when the copy is bad (GRBL's error:7). */
+uint8_t coord_load(uint8_t slot, float *xyz);
+void coord_save(uint8_t slot, const float *xyz);
 #endif

@@ -6,6 +6,7 @@
 #include "arc.h"
 #include "inputs.h"
 #include "machine.h"
+#include "plan_split.h"
 #include "planner.h"
 #include "realtime.h"
 #include "report.h"
@@ -69,36 +70,47 @@ static uint8_t hold_stopped(void)
     return (seg_hold_reached() || !machine_moving()) && !stepper_busy();
 }
 
+/* WCO and Ov as GRBL refreshes them: in the report after a change (the
+ * countdown set to 0), then every `every`+1-th one */
+static uint8_t due(uint8_t *countdown, uint8_t every)
+{
+    if (*countdown) {
+        (*countdown)--;
+        return 0;
+    }
+    *countdown = every;
+    return 1;
+}
+
 void machine_report_status(void)
 {
     uint8_t in = inputs_read();
-    RPT("<");
-    if (mach.alarm)
-        RPT("Alarm");
+    uint8_t busy = machine_moving();
+    PGM_P state = PSTR("Idle");
+    if (mach.sleep)
+        state = PSTR("Sleep");
+    else if (mach.alarm)
+        state = PSTR("Alarm");
     else if (mach.homing)
-        RPT("Home");
+        state = PSTR("Home");
     else if (mach.check)
-        RPT("Check");
+        state = PSTR("Check");
     else if (mach.hold && mach.jog)
-        RPT("Jog"); /* a jog being cancelled, as GRBL reports it */
+        state = PSTR("Jog"); /* a jog being cancelled, as GRBL reports it */
     else if (mach.hold)
-        report_pstr(hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1"));
-    else if (mach.jog && machine_moving())
-        RPT("Jog");
-    else if (machine_moving())
-        RPT("Run");
-    else
-        RPT("Idle");
+        state = hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1");
+    else if (busy)
+        state = mach.jog ? PSTR("Jog") : PSTR("Run");
+    RPT("<");
+    report_pstr(state);
     int32_t motor[N_AXIS], cart[N_AXIS];
     stepper_get_position(motor);
     plan_cart_from_motor(motor, cart);
-    float div = settings.report_inches ? 25.4f : 1.0f;
     RPT("|MPos:");
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        report_fixed((float)cart[a] / settings.steps_per_mm[a] / div, 3);
-        RPT(",");
-    }
-    RPT("0.000");
+    float mpos[GC_AXES] = {0};
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        mpos[a] = (float)cart[a] / settings.steps_per_mm[a];
+    report_xyz(mpos);
     if (settings.report_mask & 2) {
         RPT("|Bf:");
         report_uint(plan_free());
@@ -119,22 +131,15 @@ void machine_report_status(void)
         RPT("|A:S");
     /* WCO as GRBL refreshes it: after a change, then every 30th report
      * while busy and every 10th while idle */
-    if (mach.wco_countdown) {
-        mach.wco_countdown--;
-    } else {
-        mach.wco_countdown = machine_moving() ? 29 : 9;
+    if (due(&mach.wco_countdown, busy ? 29 : 9)) {
         RPT("|WCO:");
-        for (uint8_t a = 0; a < N_AXIS; a++) {
-            report_fixed(gc.offset[a] / div, 3);
-            RPT(",");
-        }
-        report_fixed(gc.z_offset / div, 3);
+        float wco[GC_AXES];
+        for (uint8_t a = 0; a < GC_AXES; a++)
+            wco[a] = gc_wco(&gc, a);
+        report_xyz(wco);
     }
     /* Ov likewise: after a change, then every 20th report while busy, every 10th idle */
-    if (mach.ov_countdown) {
-        mach.ov_countdown--;
-    } else {
-        mach.ov_countdown = machine_moving() ? 19 : 9;
+    if (due(&mach.ov_countdown, busy ? 19 : 9)) {
         RPT("|Ov:");
         for (uint8_t i = 0; i < 3; i++) {
             if (i)
@@ -149,6 +154,15 @@ void machine_pen_up_now(void)
 {
     servo_set_us(settings.pen_up_us);
     mach.pen_down = mach.pen_lifted = mach.resuming = 0;
+}
+
+/* The servo toward the pen's new place at $64 (lower) / $65 (raise):
+ * returns the milliseconds that takes. */
+static uint16_t pen_servo(uint8_t down)
+{
+    uint16_t ms = down ? settings.pen_lower_ms : settings.pen_raise_ms;
+    servo_move(down ? settings.pen_down_us : settings.pen_up_us, ms);
+    return ms;
 }
 
 static void start_hold(void)
@@ -192,12 +206,14 @@ void machine_poll(void)
             start_hold();
     }
     if ((f & RT_RESUME) && mach.hold && !mach.jog_cancel && !mach.alarm && !mach.resuming) {
-        /* the pen goes back down where it was lifted; motion waits out the settle */
+        /* the pen goes back down where it was lifted; motion waits out the
+         * lowering and the settle */
+        uint16_t ms = settings.pen_settle_ms;
         if (mach.pen_lifted)
-            servo_set_us(settings.pen_down_us);
+            ms += pen_servo(1);
         mach.pen_lifted = 0;
         mach.resuming = 1;
-        mach.resume_at = machine_ms() + settings.pen_settle_ms;
+        mach.resume_at = machine_ms() + ms;
     }
     if (mach.resuming && (int32_t)(machine_ms() - mach.resume_at) >= 0) {
         mach.resuming = 0;
@@ -209,7 +225,7 @@ void machine_poll(void)
     /* a pen-safe hold: once stopped on the path, the pen leaves the paper */
     if (mach.hold && mach.pen_down && !mach.pen_lifted && !mach.resuming && !mach.jog &&
         hold_stopped()) {
-        servo_set_us(settings.pen_up_us);
+        pen_servo(0);
         mach.pen_lifted = 1;
     }
     seg_fill();
@@ -235,11 +251,11 @@ void machine_poll(void)
 
 /* Let the main loop sleep until the next interrupt (UART, a step, the 1 ms
  * servo tick) when there is nothing to prepare: simavr then skips time. */
-static void idle_wait(void)
+void machine_idle_wait(void)
 {
     set_sleep_mode(SLEEP_MODE_IDLE);
     cli();
-    if (!rt_flags) {
+    if (!rt_flags && serial_tx_idle()) {
         sleep_enable();
         sei();
         sleep_cpu();
@@ -254,7 +270,7 @@ uint8_t machine_sync(void)
         machine_poll();
         if (mach.abort)
             return 0;
-        idle_wait();
+        machine_idle_wait();
     }
     return !mach.abort;
 }
@@ -269,7 +285,7 @@ uint8_t machine_dwell_ms(uint32_t ms)
         machine_poll();
         if (mach.abort)
             break;
-        idle_wait();
+        machine_idle_wait();
     }
     mach.dwelling = 0;
     return !mach.abort;
@@ -284,8 +300,7 @@ void machine_pen(uint8_t down)
     if (down == mach.pen_down)
         return;
     mach.pen_down = down;
-    servo_set_us(down ? settings.pen_down_us : settings.pen_up_us);
-    machine_dwell_ms(settings.pen_settle_ms);
+    machine_dwell_ms((uint32_t)pen_servo(down) + settings.pen_settle_ms);
 }
 
 static uint8_t outside_work_area(const float *t)
@@ -296,46 +311,27 @@ static uint8_t outside_work_area(const float *t)
     return 0;
 }
 
-static uint8_t wait_for_planner_room(void)
+/* plan_line_split's wait: realtime work goes on while the planner is full */
+static uint8_t planner_room(void)
 {
-    while (!plan_free()) {
+    for (;;) {
         machine_poll();
         if (mach.abort)
             return 0;
-        idle_wait();
+        if (plan_free())
+            return 1;
+        machine_idle_wait();
     }
-    return 1;
 }
 
-/* Queue one straight move, waiting for planner room; moves too long for
- * the 16-bit step counters go in equal pieces. */
+/* Queue one straight move (in pieces if it is long), waiting for planner room. */
 static uint8_t line_to(const float *target, float feed, uint8_t flags)
 {
     if (mach.check)
         return STATUS_OK;
-    if (!wait_for_planner_room())
-        return ERR_LOCKED;
-    /* plan_line finds out whether the move fits; the split is the rare case */
-    if (plan_line(target, feed, flags) == PLAN_TOO_LONG) {
-        uint16_t pieces = plan_pieces(target);
-        int32_t from_steps[N_AXIS];
-        float from[N_AXIS], p[N_AXIS];
-        plan_get_position(from_steps);
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            from[a] = (float)from_steps[a] / settings.steps_per_mm[a];
-        for (uint16_t k = 1; k <= pieces; k++) {
-            for (uint8_t a = 0; a < N_AXIS; a++)
-                p[a] = k == pieces ? target[a] : from[a] + (target[a] - from[a]) * (float)k / (float)pieces;
-            if (!wait_for_planner_room())
-                return ERR_LOCKED;
-            plan_line(p, feed, flags);
-            machine_poll();
-            if (mach.abort)
-                return ERR_LOCKED;
-        }
-    }
-    machine_poll();
-    return mach.abort ? ERR_LOCKED : STATUS_OK;
+    uint8_t queued = plan_line_split(target, feed, flags, planner_room);
+    machine_poll(); /* the steppers start before the line's ok */
+    return queued && !mach.abort ? STATUS_OK : ERR_LOCKED;
 }
 
 static uint8_t soft_limit_violation(const gc_block_t *blk)
@@ -383,15 +379,31 @@ uint8_t machine_execute(const gc_block_t *blk)
     uint8_t e = STATUS_OK;
     switch (blk->action) {
     case ACT_RAPID: e = line_to(blk->target, 0.0f, PB_RAPID); break;
-    case ACT_LINE: e = line_to(blk->target, blk->feed, 0); break;
+    case ACT_LINE: {
+        float feed = blk->feed;
+#if GRBL_G93
+        /* G93: F is how many times a minute this move could be done */
+        if (blk->inverse_time) {
+            float dx = blk->target[0] - blk->start[0], dy = blk->target[1] - blk->start[1];
+            feed *= sqrtf(dx * dx + dy * dy);
+        }
+#endif
+        e = line_to(blk->target, feed, 0);
+        break;
+    }
     case ACT_ARC: {
         arc_t arc;
         e = arc_init(&arc, blk->start, blk->target, blk->center, blk->clockwise, settings.arc_tolerance);
+        float feed = blk->feed;
+#if GRBL_G93
+        if (blk->inverse_time)
+            feed *= fabsf(arc.sweep) * 0.5f * (arc.r0 + arc.r1);
+#endif
         /* check mode queues nothing: the chords would only starve the watchdog */
         for (uint16_t k = 1; !e && !mach.check && k <= arc.segments; k++) {
             float p[N_AXIS];
             arc_point(&arc, k, p);
-            e = line_to(p, blk->feed, 0);
+            e = line_to(p, feed, 0);
         }
         break;
     }
@@ -418,6 +430,11 @@ uint8_t machine_execute(const gc_block_t *blk)
     }
     if (blk->wco_changed)
         mach.wco_countdown = 0;
+#if GRBL_WCS
+    /* EEPROM writes stall the CPU: after the queued motion, as GRBL does */
+    if (!e && blk->store_slot && machine_sync())
+        coord_save((uint8_t)(blk->store_slot - 1), blk->store);
+#endif
     if (!e && blk->motors == MOTORS_OFF && !mach.check && machine_sync())
         stepper_enable(0);
     if (mach.abort)

@@ -22,6 +22,7 @@ typedef struct {
     uint8_t pen_down;
     uint8_t dwelling;
     uint8_t homed;
+    uint8_t sleep;         /* $SLP: 1 after its ok, 2 asleep until a reset */
     uint8_t pen_lifted;    /* a hold lifted the pen (pen_down stays set) */
     uint8_t resuming;      /* pen lowered again after a hold: waiting out the settle */
     uint8_t wco_countdown; /* status reports until WCO is shown again (0: next one) */
@@ -35,6 +36,8 @@ extern gc_state_t gc;
 void machine_init(void);
 void machine_poll(void);              /* realtime work; call from every wait loop */
 uint8_t machine_moving(void);         /* motion queued or running */
+/* sleep until an interrupt, unless realtime work or output waits */
+void machine_idle_wait(void);
 uint8_t machine_sync(void);           /* wait for all motion to end; 0 if aborted */
 uint8_t machine_execute(const gc_block_t *blk);
 uint8_t machine_jog(const char *body);

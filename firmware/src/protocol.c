@@ -1,5 +1,3 @@
-#include <avr/interrupt.h>
-#include <avr/sleep.h>
 #include "dollar.h"
 #include "gcode.h"
 #include "inputs.h"
@@ -18,7 +16,7 @@
 
 static linebuf_t lb;
 
-static uint8_t execute_gcode(const char *line)
+uint8_t protocol_gcode(const char *line)
 {
     if (mach.alarm)
         return ERR_LOCKED;
@@ -43,7 +41,24 @@ static uint8_t execute_line(const char *line)
         return STATUS_OK;
     if (line[0] == '$')
         return dollar_execute(line);
-    return execute_gcode(line);
+    return protocol_gcode(line);
+}
+
+void protocol_startup_lines(void)
+{
+#if GRBL_LINES
+    /* the line buffer is free here (after a reset, or $H's line is done) */
+    for (uint8_t n = 0; n < EELINE_STARTUP_COUNT; n++) {
+        uint8_t ok = eeline_load(n, lb.text);
+        if (ok && !lb.text[0])
+            continue;
+        RPT(">");
+        report_str(lb.text);
+        RPT(":");
+        report_status_code(ok ? protocol_gcode(lb.text) : ERR_EEPROM_READ);
+    }
+    lb.text[0] = 0;
+#endif
 }
 
 /* Soft reset: motion is already stopped (in the interrupt that saw 0x18);
@@ -56,7 +71,9 @@ static void soft_reset(void)
     uint8_t alarm = mach.alarm;
     uint8_t homed = mach.homed;
     machine_init();
-    mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
+    if (mach.sleep)
+        alarm = ALARM_LOCKED; /* GRBL wakes from sleep locked */
+    mach.sleep = mach.abort = mach.reset = mach.hold = mach.jog = mach.jog_cancel = mach.check = 0;
     mach.dwelling = 0;
     seg_hold(0);
     mach.alarm = alarm;
@@ -69,28 +86,30 @@ static void soft_reset(void)
     report_banner();
     if (mach.alarm)
         report_unlock_hint();
-}
-
-static void idle_sleep(void)
-{
-    set_sleep_mode(SLEEP_MODE_IDLE);
-    cli();
-    if (!rt_flags && serial_tx_idle()) {
-        sleep_enable();
-        sei();
-        sleep_cpu();
-        sleep_disable();
-    }
-    sei();
+    else
+        protocol_startup_lines();
 }
 
 void protocol_run(void)
 {
     linebuf_reset(&lb);
+    if (!mach.alarm)
+        protocol_startup_lines();
     for (;;) {
         machine_poll();
         if (mach.reset) {
             soft_reset();
+            continue;
+        }
+        if (mach.sleep) {
+            /* $SLP: lines wait in the receive ring until a reset flushes them */
+            if (mach.sleep == 1) {
+                mach.sleep = 2;
+                machine_pen_up_now();
+                stepper_enable(0);
+                report_msg(PSTR("Sleeping"));
+            }
+            machine_idle_wait();
             continue;
         }
         if (mach.abort && !machine_moving())
@@ -102,7 +121,7 @@ void protocol_run(void)
             r = linebuf_feed(&lb, (uint8_t)c);
         if (r == LB_NONE) {
             if (!machine_moving())
-                idle_sleep();
+                machine_idle_wait();
             continue;
         }
         uint8_t e;

@@ -2,6 +2,7 @@
 #include "report.h"
 #include "serial.h"
 #include "config.h"
+#include "settings.h"
 
 void report_pstr(PGM_P s)
 {
@@ -28,6 +29,16 @@ void report_fixed(float v, uint8_t decimals)
     char buf[FMT_MAX];
     fmt_fixed(buf, v, decimals);
     report_str(buf);
+}
+
+void report_xyz(const float *v)
+{
+    float div = settings.report_inches ? 25.4f : 1.0f; /* $13 */
+    for (uint8_t a = 0; a < 3; a++) {
+        if (a)
+            RPT(",");
+        report_fixed(v[a] / div, 3);
+    }
 }
 
 void report_status_code(uint8_t code)

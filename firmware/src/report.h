@@ -9,6 +9,7 @@ void report_pstr(PGM_P s);
 void report_str(const char *s);
 void report_uint(uint32_t v);
 void report_fixed(float v, uint8_t decimals);
+void report_xyz(const float *v);       /* "x,y,z" in mm or inches ($13) */
 void report_status_code(uint8_t code); /* "ok" or "error:N" */
 void report_alarm(uint8_t code);
 void report_banner(void);

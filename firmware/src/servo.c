@@ -11,6 +11,9 @@
  * the interrupt latency (a few us per edge); the chip has no such error.
  * Boards whose servo pin is not OC2A set the pin from this interrupt instead
  * (SERVO_OC2A unset in the board header).
+ * A pen move may be slewed ($64/$65): at each frame start the width steps
+ * toward its target by a fixed number of ticks, so the pen travels at that
+ * rate instead of dropping onto the paper (a fast drop leaves a dot).
  * The same interrupt keeps the millisecond timebase, and samples the inputs
  * on boards without pin-change wiring. */
 #include <avr/interrupt.h>
@@ -28,6 +31,8 @@
 #define COM_CLEAR (1 << COM2A1)
 
 static volatile uint16_t pulse_ticks;
+static volatile uint16_t target_ticks; /* where a slewed move ends */
+static volatile uint16_t slew_ticks;   /* width change per 20 ms frame */
 static uint16_t width_us;
 static uint8_t high;          /* level after the current interval's match */
 static uint16_t remaining;    /* ticks left in the current part, including the current interval */
@@ -68,6 +73,12 @@ ISR(TIMER2_COMPA_vect)
     remaining -= interval;
     if (remaining == 0) {  /* the edge just happened in hardware */
         high = !high;
+        /* a new frame: one slew step (a compare and an add, ~20 cycles once
+         * per 20 ms; the width stays fixed within the frame) */
+        if (high && pulse_ticks != target_ticks) {
+            uint16_t p = pulse_ticks, t = target_ticks, d = slew_ticks;
+            pulse_ticks = p < t ? (t - p > d ? p + d : t) : (p - t > d ? p - d : t);
+        }
         remaining = high ? pulse_ticks : (uint16_t)(FRAME_TICKS - pulse_ticks);
     }
     load_next();
@@ -95,14 +106,23 @@ void servo_init(void)
     TCCR2B = 1 << CS22; /* clk/64 */
 }
 
-void servo_set_us(uint16_t us)
+void servo_set_us(uint16_t us) { servo_move(us, 0); }
+
+void servo_move(uint16_t us, uint16_t ms)
 {
-    if (us < 500)
-        us = 500;
-    if (us > 2500)
-        us = 2500;
+    /* us is $60 or $61: settings_set keeps both within 500-2500 */
+    uint16_t span = width_us > us ? width_us - us : us - width_us;
     width_us = us;
-    ATOMIC_BLOCK(ATOMIC_RESTORESTATE) { pulse_ticks = (uint16_t)((us + TICK_US / 2) / TICK_US); }
+    /* ticks per 20 ms frame for the whole span in about `ms` (at least
+     * one): span / TICK_US * 20 / ms, in 16 bits (span <= 2000); no time:
+     * the whole way at the next frame (the width only counts from there) */
+    uint16_t step = ms ? (uint16_t)(span * (20 / TICK_US) / ms + 1) : 1000;
+    uint16_t t = (uint16_t)((us + TICK_US / 2) / TICK_US);
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+    {
+        target_ticks = t;
+        slew_ticks = step;
+    }
 }
 
 uint16_t servo_get_us(void) { return width_us; }

@@ -5,7 +5,7 @@
 #include <stdint.h>
 #include "config.h"
 
-#define SETTINGS_VERSION 3
+#define SETTINGS_VERSION 4
 
 typedef struct {
     float steps_per_mm[N_AXIS];   /* $100 $101 */
@@ -21,6 +21,8 @@ typedef struct {
     uint16_t pen_up_us;           /* $60 */
     uint16_t pen_down_us;         /* $61 */
     uint16_t pen_settle_ms;       /* $62 */
+    uint16_t pen_lower_ms;        /* $64: time the servo takes to lower the pen (0: at once) */
+    uint16_t pen_raise_ms;        /* $65: time to raise it */
     uint8_t pulse_us;             /* $0 */
     uint8_t idle_delay_ms;        /* $1 (255: keep enabled) */
     uint8_t step_invert;          /* $2 */
@@ -38,9 +40,9 @@ typedef struct {
 
 extern settings_t settings;
 
-/* The $ numbers in the order $$ lists them. */
-extern const uint8_t settings_ids[];
+/* How many $ rows $$ lists; settings_id(i) is the i-th one's number. */
 extern const uint8_t settings_count;
+uint8_t settings_id(uint8_t i);
 
 void settings_defaults(settings_t *s);
 /* Store value under $id; returns STATUS_OK or an error code. */
@@ -51,7 +53,21 @@ uint8_t settings_get(const settings_t *s, uint8_t id, float *value);
 uint8_t settings_is_integer(uint8_t id);
 uint8_t settings_checksum(const uint8_t *data, uint16_t len);
 
-/* EEPROM side (settings_store.c, AVR only): 1 if the stored copy was valid. */
+/* EEPROM side (settings_store.c, AVR only): 1 if the stored copy was valid
+ * (a bad one restores everything to defaults, as GRBL does). */
 uint8_t settings_load(void);
 void settings_save(void);
+/* $RST=$ settings, $RST=# stored positions, $RST=* everything (bits). */
+#define RESTORE_SETTINGS 1
+#define RESTORE_COORDS 2
+#define RESTORE_LINES 4
+#define RESTORE_ALL 7
+void settings_restore(uint8_t what);
+/* $N0, $N1 (slots 0, 1) and the $I= string (EELINE_BUILD_INFO), GRBL_LINES:
+ * line holds LINE_SIZE + 1 chars; 0 (and an empty line) when the copy was bad. */
+#define EELINE_STARTUP_COUNT 2
+#define EELINE_BUILD_INFO 2
+#define EELINE_COUNT 3
+uint8_t eeline_load(uint8_t slot, char *line);
+void eeline_save(uint8_t slot, const char *line);
 #endif

@@ -3,6 +3,7 @@
 #include <string.h>
 #include "check.h"
 #include "gcode.h"
+#include "host_store.h"
 #include "status.h"
 #include "tests.h"
 
@@ -151,4 +152,86 @@ void test_gcode_pen(void)
     CHECK(parse("G92.1") == STATUS_OK && blk.pen == PEN_KEEP && blk.wco_changed);
     CHECK(parse("G0Z0") == STATUS_OK && blk.pen == PEN_DOWN);
     CHECK(parse("G28Z5") == STATUS_OK && blk.pen == PEN_KEEP);
+}
+
+/* what machine.c does with a block's store request */
+static void store(void)
+{
+    if (blk.store_slot)
+        coord_save((uint8_t)(blk.store_slot - 1), blk.store);
+}
+
+/* G54-G59 with G10 L2/L20, G28/G30 and their .1, as GRBL 1.1 */
+void test_gcode_coords(void)
+{
+    host_store_reset();
+    gc_init(&st);
+    CHECK(parse("G10L2P2X10Y20Z1") == STATUS_OK && blk.store_slot == 2 && !blk.wco_changed);
+    store();
+    CHECK_NEAR(blk.store[0], 10, 1e-6);
+    CHECK(parse("G55") == STATUS_OK && st.coord == 1);
+    CHECK_NEAR(gc_wco(&st, 0), 10, 1e-6);
+    CHECK(parse("G0X5Y5") == STATUS_OK);
+    CHECK_NEAR(blk.target[0], 15, 1e-5);
+    CHECK_NEAR(blk.target[1], 25, 1e-5);
+    /* the Z offset never flips the pen: work Z 0 is machine Z 1, above the threshold */
+    CHECK(parse("G0Z0") == STATUS_OK && blk.pen == PEN_UP);
+    /* L20: the offset that makes here read X1 (G92 counted) */
+    CHECK(parse("G92X0") == STATUS_OK);
+    CHECK(parse("G10L20P0X1") == STATUS_OK && blk.store_slot == 2 && blk.wco_changed);
+    store();
+    CHECK_NEAR(gc_wco(&st, 0), 14, 1e-5); /* machine 15 reads 1 */
+    CHECK(parse("G92.1") == STATUS_OK);
+    CHECK(parse("G10L20P1X0Y0") == STATUS_OK && blk.store_slot == 1 && !blk.wco_changed);
+    store();
+    CHECK(parse("G54") == STATUS_OK);
+    CHECK_NEAR(gc_wco(&st, 0), 15, 1e-5);
+    CHECK_NEAR(gc_wco(&st, 1), 25, 1e-5);
+    /* errors: GRBL's numbers */
+    CHECK(parse("G10L2X1") == ERR_VALUE_WORD_MISSING);
+    CHECK(parse("G10P1X1") == ERR_VALUE_WORD_MISSING);
+    CHECK(parse("G10L2P7X1") == ERR_UNSUPPORTED_COORD);
+    CHECK(parse("G10L3P1X1") == ERR_UNSUPPORTED);
+    CHECK(parse("G10L2P1R1X1") == ERR_UNSUPPORTED);
+    CHECK(parse("G10L2P1") == ERR_NO_AXIS_WORDS);
+    CHECK(parse("G1G10L2P1X1") == ERR_AXIS_COMMAND_CONFLICT);
+    CHECK(parse("G54G55") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G0L2X1") == ERR_UNUSED_WORDS);
+    host_store_corrupt(3);
+    CHECK(parse("G57") == ERR_EEPROM_READ && st.coord == 0);
+    CHECK(parse("G57") == STATUS_OK && st.coord == 3); /* rewritten as zeros */
+    CHECK(parse("G54") == STATUS_OK);
+    /* G28.1 stores where the machine is; G28 goes there (only the named axes
+     * when axis words are given, as GRBL 1.1) */
+    CHECK(parse("G53G0X30Y40") == STATUS_OK);
+    CHECK(parse("G28.1") == STATUS_OK && blk.store_slot == GC_SLOT_G28 + 1 && blk.action == ACT_NONE);
+    store();
+    CHECK(parse("G30.1") == STATUS_OK && blk.store_slot == GC_SLOT_G30 + 1);
+    store();
+    CHECK(parse("G53G0X1Y2") == STATUS_OK);
+    CHECK(parse("G28") == STATUS_OK && blk.action == ACT_G28 && !blk.has_via);
+    CHECK_NEAR(blk.target[0], 30, 1e-5);
+    CHECK_NEAR(blk.target[1], 40, 1e-5);
+    CHECK(parse("G53G0X1Y2") == STATUS_OK);
+    CHECK(parse("G28G91X0") == STATUS_OK && blk.has_via);
+    CHECK_NEAR(blk.target[0], 30, 1e-5);
+    CHECK_NEAR(blk.target[1], 2, 1e-5); /* Y not named: stays */
+    CHECK(parse("G90G30") == STATUS_OK);
+    CHECK_NEAR(blk.target[0], 30, 1e-5);
+    /* program end: back to G54 */
+    CHECK(parse("G55") == STATUS_OK && parse("M2") == STATUS_OK && st.coord == 0);
+}
+
+/* G93: F per line, 1/min, not scaled by G20; G94 afterwards needs an F */
+void test_gcode_inverse_time(void)
+{
+    host_store_reset();
+    gc_init(&st);
+    CHECK(parse("G93G1X10F2") == STATUS_OK && blk.inverse_time && blk.feed == 2.0f);
+    CHECK(parse("X20") == ERR_UNDEFINED_FEED);
+    CHECK(parse("G0X0") == STATUS_OK);
+    CHECK(parse("G20G1X1F3") == STATUS_OK && blk.feed == 3.0f);
+    CHECK(parse("G21G94G1X5") == ERR_UNDEFINED_FEED);
+    CHECK(parse("G21G94G1X5F100") == STATUS_OK && !blk.inverse_time);
+    CHECK(parse("G93G94") == ERR_MODAL_CONFLICT);
 }

@@ -18,6 +18,8 @@ static const test_case cases[] = {
     {"gcode_errors", test_gcode_errors},
     {"gcode_arcs", test_gcode_arcs},
     {"gcode_pen", test_gcode_pen},
+    {"gcode_coords", test_gcode_coords},
+    {"gcode_inverse_time", test_gcode_inverse_time},
     {"arc_segments", test_arc_segments},
     {"arc_full_circle", test_arc_full_circle},
     {"planner_junctions", test_planner_junctions},

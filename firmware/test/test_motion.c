@@ -427,7 +427,7 @@ void test_settings(void)
     CHECK(!settings_is_integer(100) && !settings_is_integer(11) && settings_is_integer(22) && settings_is_integer(62));
     /* every listed id reads back */
     for (uint8_t i = 0; i < settings_count; i++)
-        CHECK(settings_get(&s, settings_ids[i], &v));
+        CHECK(settings_get(&s, settings_id(i), &v));
     /* the checksum sees a changed byte and swapped bytes */
     uint8_t data[4] = {1, 2, 3, 4}, swapped[4] = {2, 1, 3, 4}, changed[4] = {1, 2, 3, 5};
     CHECK(settings_checksum(data, 4) != settings_checksum(swapped, 4));

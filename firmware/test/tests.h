@@ -9,6 +9,8 @@ void test_gcode_valid(void);
 void test_gcode_errors(void);
 void test_gcode_arcs(void);
 void test_gcode_pen(void);
+void test_gcode_coords(void);
+void test_gcode_inverse_time(void);
 void test_arc_segments(void);
 void test_arc_full_circle(void);
 void test_planner_junctions(void);

@@ -11,13 +11,16 @@ from __future__ import annotations
 import csv
 import math
 import re
+import subprocess
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
 from tests.fixtures.grbl import Grbl, clean, mpos
+from tests.fixtures.plotsim import FIRMWARE_DIR, PLOTSIM, Plotter
 
 pytestmark = pytest.mark.e2e
 
@@ -46,6 +49,7 @@ class Row:
     ours: str
     probe: list[str]
     answer: str
+    answer_2560: str | None  # where the Mega 2560 answers differently (the 328P leaves it out)
 
 
 def table_rows() -> list[Row]:
@@ -57,15 +61,17 @@ def table_rows() -> list[Row]:
         if line.startswith("### "):
             section = line[4:].strip()
             continue
-        if not line.startswith("| ") or line.startswith("| ---"):
+        if not section or not line.startswith("| ") or line.startswith("| ---"):
             continue
         cells = [c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]]
-        if len(cells) != 4 or cells[2] == "probe":
+        if len(cells) not in (4, 5) or cells[2] == "probe":
             continue
         probe = [p.replace("\\|", "|") for p in re.findall(r"`([^`]+)`", cells[2])]
         answers = re.findall(r"`([^`]+)`", cells[3])
         assert probe and len(answers) == 1, f"row without probe or answer: {line}"
-        rows.append(Row(section, cells[0], cells[1], probe, answers[0].replace("\\|", "|")))
+        mega = re.findall(r"`([^`]+)`", cells[4]) if len(cells) == 5 else []
+        rows.append(Row(section, cells[0], cells[1], probe, answers[0].replace("\\|", "|"),
+                        mega[0].replace("\\|", "|") if mega else None))
     return rows
 
 
@@ -97,6 +103,18 @@ def run_probe(g: Grbl, probe: list[str]) -> list[str]:
     return out
 
 
+def answers(g: Grbl, row: Row, want: str) -> str | None:
+    """Runs the row's probe; None if the answer came, else what went wrong."""
+    out = run_probe(g, row.probe)
+    deadline = time.monotonic() + 20
+    while want not in "\n".join(out) and time.monotonic() < deadline:
+        out += g.read_lines(0.2)
+        g.queue.clear()
+    if want in "\n".join(out):
+        return None
+    return f"{row.section} {row.item}: {row.probe} -> {out}, want {want!r}"
+
+
 def test_every_table_row_answers_as_documented(plotter) -> None:
     g = Grbl(plotter.port)
     try:
@@ -105,14 +123,8 @@ def test_every_table_row_answers_as_documented(plotter) -> None:
         failures = []
         for row in table_rows():
             fresh(g)
-            out = run_probe(g, row.probe)
-            deadline = time.monotonic() + 20
-            while row.answer not in "\n".join(out) and time.monotonic() < deadline:
-                out += g.read_lines(0.2)
-                g.queue.clear()
-            if row.answer not in "\n".join(out):
-                failures.append(
-                    f"{row.section} {row.item}: {row.probe} -> {out}, want {row.answer!r}")
+            if (failure := answers(g, row, row.answer)) is not None:
+                failures.append(failure)
             # settings a probe changed go back to their defaults (they live in EEPROM)
             changed = [m.group(1) for p in row.probe if (m := re.fullmatch(r"\$(\d+)=.*", p))]
             if changed:
@@ -282,14 +294,213 @@ def test_feed_override_changes_the_plotted_speed(plotter) -> None:
         full = speed_between(plotter, 0, 0.5)
         for _ in range(5):
             g.ser.write(b"\x92")  # -10% each: 50%
-        plotter.wait_trace(lambda t: t["position"]["x"] > 40, 30)
-        half = speed_between(plotter, 0, 0.5)
-        status = g.status()
+        # measured from 5 mm after the firmware took them (the report says so),
+        # whenever that was in simulated time: the deceleration is over by then
+        deadline = time.monotonic() + 20
+        while "|Ov:50,100,100" not in (status := g.status()) and time.monotonic() < deadline:
+            pass
         assert "|Ov:50,100,100" in status, status
+        x0 = plotter.trace()["position"]["x"]
+        plotter.wait_trace(lambda t: t["position"]["x"] > x0 + 5, 30)
+        half = speed_between(plotter, 0, 0.5)
         assert full == pytest.approx(20.0, rel=0.05)
         assert half == pytest.approx(10.0, rel=0.05)
         g.ser.write(b"\x90")
         g.ser.write(b"\x18")
         g.wait_for(BANNER, 20)
+    finally:
+        g.close()
+
+
+# --- the Mega 2560: the rows the 328P leaves out (config.h GRBL_*) ----------
+
+MEGA = "mega-ramps14"
+
+
+@pytest.fixture(scope="module")
+def mega_elf(sim_build) -> Path:
+    subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={MEGA}", "all"],
+                   check=True, capture_output=True)
+    return FIRMWARE_DIR / "build" / MEGA / "plotbridge.elf"
+
+
+@pytest.fixture
+def mega(mega_elf, tmp_path) -> Iterator[tuple[Plotter, Grbl]]:
+    p = Plotter(PLOTSIM, mega_elf, tmp_path / "mega.eeprom", 0, (0, 0), ["--board", MEGA]).start()
+    g = Grbl(p.port)
+    try:
+        yield p, g
+    finally:
+        g.close()
+        p.cleanup()
+
+
+def test_mega_rows_answer_as_documented(mega) -> None:
+    _, g = mega
+    failures = []
+    for row in table_rows():
+        if row.answer_2560 is None:
+            continue
+        fresh(g)
+        g.ok("$RST=*")  # what the last row stored goes (then a reset)
+        g.wait_for(BANNER, 20)
+        fresh(g)
+        if (failure := answers(g, row, row.answer_2560)) is not None:
+            failures.append(failure)
+    assert not failures, "\n".join(failures)
+
+
+def test_work_systems_persist_and_never_move_the_pen(mega) -> None:
+    p, g = mega
+    fresh(g)
+    g.ok("G10 L2 P2 X100 Y50 Z3")   # G55: work 0,0 at machine 100,50; Z offset 3
+    g.ok("G0 X10 Y10 Z5")
+    g.ok("G55")                     # a change of system: WCO in the next report
+    assert "|WCO:100.000,50.000,3.000" in g.status()
+    assert g.ok("$G")[0].startswith("[GC:G0 G55 G17 ")
+    g.ok("G0 X10 Y10")
+    g.ok("G0 Z-1")                  # machine Z 2: above the threshold, the pen stays up
+    g.wait_state("Idle")
+    assert mpos(g.status()) == (110.0, 60.0)
+    assert p.trace()["pen"] == "up"
+    g.ok("G10 L20 P0 X0 Y0")        # here is work 0,0 in G55
+    g.ok("G28.1")
+    g.ok("G0 X5 Y5")
+    g.ok("G30.1")
+    g.ok("G28")
+    g.wait_state("Idle")
+    assert mpos(g.status()) == (110.0, 60.0)
+    g.ok("G30 G91 Y0")                # only Y goes to the stored G30
+    g.wait_state("Idle")
+    assert mpos(g.status()) == (110.0, 65.0)
+    g.ok("G90")
+    assert p.trace()["pen_lifts"] == 0 and p.trace()["strokes"] == []
+    # EEPROM: the offsets and G28 outlive a power cycle; G92 does not
+    g.ok("G92 X1")
+    p.restart()
+    g.close()
+    g2 = Grbl(p.port)
+    try:
+        fresh(g2)
+        params = "\n".join(g2.ok("$#"))
+        assert "[G55:110.000,60.000,3.000]" in params, params
+        assert "[G28:110.000,60.000,2.000]" in params, params
+        assert "[G30:115.000,65.000,2.000]" in params, params
+        assert "[G92:0.000,0.000,0.000]" in params, params
+        assert "[GC:G0 G54 " in g2.ok("$G")[0]  # power-up: G54
+        g2.ok("$RST=#")
+        g2.wait_for(BANNER, 20)
+        fresh(g2)
+        assert "[G55:0.000,0.000,0.000]" in "\n".join(g2.ok("$#"))
+    finally:
+        g2.close()
+
+
+def test_startup_lines_run_after_each_reset(mega) -> None:
+    _, g = mega
+    fresh(g)
+    g.ok("$N0=G20 G91")
+    g.ok("$N1=G0 X1")                # runs now (checked) and after every reset
+    assert g.ok("$N")[:2] == ["$N0=G20G91", "$N1=G0X1"]
+    assert g.send("$N1=G4 P0") == ["error:8"]  # storing waits for Idle, as GRBL
+    g.wait_state("Idle")
+    assert g.send("$N1=G5") == ["error:20"]  # a bad line is not stored
+    g.ser.write(b"\x18")
+    g.wait_for(BANNER, 20)
+    got = g.wait_for(r"^>G0X1:ok$", 20)
+    assert ">G20G91:ok" in got
+    g.wait_state("Idle")
+    # inches, incremental: two resets' X1 moves are 2 inches from the start
+    assert mpos(g.status())[0] == pytest.approx(2 * 25.4, abs=0.02)
+    g.ok("$I=PEN PLOTTER")
+    assert "[VER:1.1h.plotbridge:PENPLOTTER]" in g.ok("$I")
+    g.ok("$RST=*")
+    g.wait_for(BANNER, 20)
+    fresh(g)
+    assert g.ok("$N")[:2] == ["$N0=", "$N1="]
+
+
+def test_inverse_time_feed_plots_in_the_given_time(mega) -> None:
+    _, g = mega
+    fresh(g)
+    g.ok("G0 X10 Y10")
+    g.ok("G4 P0")
+    g.ok("G93 G1 X210 F6")  # 200 mm in 1/6 min: 1200 mm/min, whatever the distance
+    speeds = []
+    while (status := g.status()).startswith("<Run"):
+        speeds.append(int(re.search(r"\|FS:(\d+)", status).group(1)))
+    assert max(speeds) == pytest.approx(1200, abs=2), speeds
+    assert g.send("G1 X10") == ["error:22"]  # F holds for its own line only
+    g.ok("G94 G1 X20 F600")
+    assert "G94" in g.ok("$G")[0]
+
+
+# --- the 328P and every profile: sleep, restore, slewed pen -----------------
+
+
+@pytest.fixture
+def g(plotter) -> Iterator[Grbl]:
+    """A connection to the plotter after a soft reset and $X."""
+    conn = Grbl(plotter.port)
+    try:
+        fresh(conn)
+        yield conn
+    finally:
+        conn.close()
+
+
+def test_sleep_lifts_the_pen_and_a_reset_wakes_it_locked(plotter, g: Grbl) -> None:
+    g.ok("G0 X10 Y10")
+    g.ok("M3")
+    assert plotter.trace()["pen"] == "down"
+    g.ok("$SLP")
+    g.wait_for(r"^\[MSG:Sleeping\]$", 10)
+    trace = plotter.wait_trace(lambda t: t["pen"] == "up" and not t["enabled"], 10)
+    assert trace["pen"] == "up"
+    assert g.status().startswith("<Sleep|")
+    g.ser.write(b"G0 X50\n")  # waits in the ring; the reset flushes it
+    assert g.read_lines(0.5) == []
+    g.ser.write(b"\x18")
+    g.wait_for(BANNER, 20)
+    g.wait_for(r"^\[MSG:'\$H'\|'\$X' to unlock\]$", 10)
+    assert g.status().startswith("<Alarm")
+    g.ok("$X")
+    assert mpos(g.status()) == (10.0, 10.0)
+
+
+def test_restore_defaults(g: Grbl) -> None:
+    g.ok("$110=5000")
+    g.ok("$RST=$")
+    g.wait_for(BANNER, 20)
+    fresh(g)
+    assert "$110=6000.000" in g.ok("$$")
+    assert g.send("$RST=#") == ["error:3"]  # the 328P build leaves it out
+    assert g.send("$RST=x") == ["error:3"]
+
+
+def test_pen_lowers_at_the_slew_rate(plotter_factory) -> None:
+    plotter = plotter_factory(speed=1)  # real time: the trace is sampled as the servo moves
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        g.ok("$64=600")  # 600 ms for the whole way down
+        g.ok("$62=0")
+        samples = []
+        g.ser.write(b"M3\n")
+        t_end = time.monotonic() + 10
+        while time.monotonic() < t_end:
+            t = plotter.trace()
+            samples.append((t["sim_time"], t["pen_us"]))
+            if t["pen_us"] >= 1999:
+                break
+            time.sleep(0.01)
+        g.wait_for("^ok$", 10)
+        moving = [s for s in samples if 1010 < s[1] < 1990]
+        assert len(moving) >= 5, samples  # on the way, not a jump
+        start = next(s for s in samples if s[1] > 1010)[0]
+        end = next(s for s in samples if s[1] >= 1999)[0]
+        assert end - start == pytest.approx(0.6, abs=0.1)
+        g.ok("M5")  # $65=0: raising at once
+        plotter.wait_trace(lambda t: t["pen_us"] < 1010, 5)
     finally:
         g.close()
