@@ -250,7 +250,7 @@ class Runner:
                     job.lines_done = start - 1
                     if not await self._pen_change(job, layer):
                         return  # stopped, cancelled or lost during the change
-                    floor, preamble = start, await self._travel(program, runs, number)
+                    floor, preamble = start, await self._travel(program, start)
                 reader = ProgramReader(program, start, preamble)
                 self._motion, self._floor = reader.motion, floor  # motion: filled as it goes
                 start_time = time.time()
@@ -311,13 +311,9 @@ class Runner:
             return ["M5", "$H"]
         return []
 
-    async def _travel(self, program: Path, runs: list[tuple[int, int | None, int]],
-                      number: int) -> list[str]:  # fmt: skip
-        """Before a layer that follows a skipped one: the way to where it starts (the
-        program's own travel to it may lie in the skipped layer); else nothing."""
-        start, _, layer = runs[number]
-        if runs[number - 1][2] + 1 == layer:
-            return []
+    async def _travel(self, program: Path, start: int) -> list[str]:
+        """After a pen change: pen up, back from the park position to where the layer
+        starts (the program's travel to it may lie before the `M0`, or in a skipped layer)."""
         return (await asyncio.to_thread(resume_preamble, program, ResumePoint(start)))[1]
 
     async def _pen_change(self, job: Job, index: int) -> bool:
