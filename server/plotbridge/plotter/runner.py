@@ -82,6 +82,7 @@ class Runner:
         self._stopped_job: Job | None = None  # waits for the exact position after a reset
         self._stopped_at = 0.0
         self._orphan: Job | None = None  # ran here when the server died (see orphaned)
+        self._orphan_at = 0.0
         self._orphan_writer: asyncio.Task[None] | None = None
         self._idle_poll_hz = link.poll_hz
 
@@ -146,7 +147,7 @@ class Runner:
     def orphaned(self, job: Job) -> None:
         """`job` ran here when the server died: the board ran on through what it held,
         and its first standing report tells where that ended (kept in the job's mark)."""
-        self._orphan = job
+        self._orphan, self._orphan_at = job, time.time()
 
     def lost(self) -> None:
         """The plotter dropped out: its job is `interrupted`, resumable."""
@@ -199,10 +200,12 @@ class Runner:
         """The first Idle (or Alarm) report while an orphaned job waits: where the board
         stood once it had run out of the moves the dead server had sent."""
         job = self._orphan
-        if (job is None or status.state not in ("Idle", "Alarm") or status.x is None
-                or status.y is None):
+        if (job is None or status.state not in ("Idle", "Alarm") or not status.connected
+                or status.updated_at <= self._orphan_at or status.x is None or status.y is None):
             return
         self._orphan = None
+        log.info("job %s: after the server's restart the board stands at %s, %s (%s)",
+                 job.id, status.x, status.y, status.state)  # fmt: skip
         if job.state == "interrupted":
             path = self.jobs_dir / job.id / MARK_FILE
             self._orphan_writer = asyncio.get_running_loop().create_task(
