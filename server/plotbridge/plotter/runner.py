@@ -39,6 +39,7 @@ SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
 AFTER_JOB_S = 120.0  # s a park move or a homing cycle after a job may take
 JOB_POLL_HZ = 15.0  # status reports while a job runs: a lost link redraws at most 1/15 s
+EXACT_STOP_S = 2.0  # s a command after an estop waits for the report of where the steps stopped
 MARK_FILE = "resume.mark"  # in the job folder: the last report's line range and position
 
 Report = Callable[[Job, bool], None]
@@ -81,6 +82,8 @@ class Runner:
         self._mark_writer: asyncio.Task[None] | None = None
         self._stopped_job: Job | None = None  # waits for the exact position after a reset
         self._stopped_at = 0.0
+        self._stop_known = asyncio.Event()  # set: no stop waits for its exact report
+        self._stop_known.set()
         self._orphan: Job | None = None  # ran here when the server died (see orphaned)
         self._orphan_at = 0.0
         self._orphan_writer: asyncio.Task[None] | None = None
@@ -102,7 +105,7 @@ class Runner:
         self._floor = line
         self._motion = bytearray()
         self._mark = None
-        self._stopped_job = None
+        self._stop_told()
         self.link.poll_hz = JOB_POLL_HZ
         self.report(job, True)
         log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
@@ -186,14 +189,32 @@ class Runner:
                 self._keep_mark(job, Mark(job.safe_line, job.lines_done, status.x, status.y))
         self._follow_buttons(job, status.state)
 
+    async def exact_stop_known(self, limit: float = EXACT_STOP_S) -> None:
+        """Before a command after an emergency stop (`$H` moves the carriage): wait (at
+        most `limit` s) for the report that tells where the steps stopped."""
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(limit):
+                await self._stop_known.wait()
+        self._stop_told()  # none came: the last report's mark stands
+
+    def _stop_told(self) -> None:
+        self._stopped_job = None
+        self._stop_known.set()
+
     def _exact_stop(self, status: MachineStatus) -> None:
-        """The first report after an emergency stop's reset: where the steps stopped."""
+        """The first report after an emergency stop's reset: where the steps stopped. Only
+        an Alarm report (a reset in motion) is taken: an Idle one may come after `$H`
+        (at home) when no report came between the reset and the homing."""
         job = self._stopped_job
+        if job is not None and status.updated_at > self._stopped_at and status.state == "Idle":
+            self._stop_told()  # not reset in motion: the last report's mark stands
         if (job is None or job.state != "stopped" or status.updated_at <= self._stopped_at
-                or status.state not in ("Alarm", "Idle") or status.x is None
+                or status.state != "Alarm" or status.x is None
                 or status.y is None or self._mark is None):
             return
-        self._stopped_job = None
+        self._stop_told()
+        log.info("job %s: the steps stopped at %s, %s (%s, the first report after the reset)",
+                 job.id, status.x, status.y, status.state)  # fmt: skip
         self._keep_mark(job, Mark(self._mark.first, job.lines_done, status.x, status.y))
 
     def _ran_out(self, status: MachineStatus) -> None:
@@ -417,6 +438,7 @@ class Runner:
     def _estopped(self, job: Job) -> None:
         job.resume_line = self._resume_line(job)
         self._stopped_job, self._stopped_at = job, time.time()
+        self._stop_known.clear()
         self._finish(job, "stopped", "emergency stop")
 
     def _interrupt(self, job: Job) -> None:
