@@ -202,14 +202,12 @@ class Runner:
         self._stop_known.set()
 
     def _exact_stop(self, status: MachineStatus) -> None:
-        """The first report after an emergency stop's reset: where the steps stopped. Only
-        an Alarm report (a reset in motion) is taken: an Idle one may come after `$H`
-        (at home) when no report came between the reset and the homing."""
+        """The first report after an emergency stop's reset: where the steps stopped (Alarm
+        after a reset in motion, Idle if the planner had run dry). Commands wait for it
+        (`exact_stop_known`), so it is never a report from after a `$H`."""
         job = self._stopped_job
-        if job is not None and status.updated_at > self._stopped_at and status.state == "Idle":
-            self._stop_told()  # not reset in motion: the last report's mark stands
         if (job is None or job.state != "stopped" or status.updated_at <= self._stopped_at
-                or status.state != "Alarm" or status.x is None
+                or status.state not in ("Alarm", "Idle") or status.x is None
                 or status.y is None or self._mark is None):
             return
         self._stop_told()
