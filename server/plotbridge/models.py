@@ -96,6 +96,14 @@ class ResumeBody(Strict):
     overlap: float = Field(0.0, ge=0, le=1000)
     home: bool = False
 
+    @property
+    def special(self) -> bool:
+        """From a point or after homing (else: a plain continue or resume)."""
+        return self.from_ is not None or self.home
+
+    def where(self) -> dict[str, Any] | None:
+        return self.from_.model_dump(exclude_none=True) if self.from_ is not None else None
+
     @model_validator(mode="after")
     def overlap_needs_a_point(self) -> ResumeBody:
         if self.overlap and self.from_ is None:

@@ -7,6 +7,7 @@ killed mid-stroke (the board's run-out position keeps the redraw within one repo
 from __future__ import annotations
 
 import contextlib
+import json
 import math
 import os
 import signal
@@ -14,6 +15,7 @@ import time
 
 import pytest
 from plotbridge.plotter.runner import JOB_POLL_HZ
+from websockets.sync.client import connect
 
 from tests.e2e.test_server import ESTOP_REDRAW_MM, FEED, assert_same_drawing, preview, submit
 from tests.fixtures.server import running_server
@@ -63,6 +65,13 @@ def plotted(server, plotter, gcode: str, pen_changes: int = 0) -> dict:
     return finish(server, submit(server, gcode)["id"], pen_changes)
 
 
+def next_answer(ws) -> dict:
+    """The next ack or error on a WebSocket (other messages passed over)."""
+    while (message := json.loads(ws.recv(timeout=30)))["type"] not in ("ack", "error"):
+        pass
+    return message
+
+
 def near(p, q, tol: float = TOL) -> bool:
     return math.dist(p[:2], q) <= tol
 
@@ -99,7 +108,12 @@ def test_resume_from_a_layer_and_bad_points(server, plotter):
         response = server.client.post(f"/api/jobs/{job['id']}/resume", json=body)
         assert response.status_code == status and words in response.text, response.text
     plotter.clear()
-    resume(server, job["id"], {"from": {"layer": 2}})
+    url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
+    with connect(url) as ws:  # by the WebSocket, as the REST body
+        ws.send(json.dumps({"type": "resume", "job": job["id"], "from": {"layer": 9}}))
+        assert next_answer(ws)["detail"].startswith("from: layer 9"), "a bad layer is refused"
+        ws.send(json.dumps({"type": "resume", "job": job["id"], "from": {"layer": 2}}))
+        assert next_answer(ws) == {"type": "ack", "command": "resume"}
     finish(server, job["id"], pen_changes=1)  # between layers 2 and 3 only
     strokes = plotter.trace()["strokes"]
     assert [round(s[0][1]) for s in strokes] == [20, 30], strokes

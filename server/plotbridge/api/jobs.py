@@ -117,9 +117,8 @@ async def resume_job(job_id: str, c: Parts, plotter: Target = None,
                      body: ResumeBody | None = None) -> dict[str, Any]:  # fmt: skip
     """Continue a paused job or a pen change; resume a stopped or interrupted one where it
     stopped; with a body, from a point (`from`, `overlap`) and/or after homing (`home`)."""
-    if body is not None and (body.from_ is not None or body.home):
-        where = body.from_.model_dump(exclude_none=True) if body.from_ else None
-        await c.queue.resume_from(job_id, plotter, where, body.overlap, body.home)
+    if body is not None and body.special:
+        await c.queue.resume_from(job_id, plotter, body.where(), body.overlap, body.home)
     else:
         c.queue.resume(job_id, plotter)
     return c.queue.get(job_id).public()
