@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
 
 from plotbridge.importing.fields import openapi_fields
 from plotbridge.papers import PAPER_PATTERN
@@ -58,6 +58,57 @@ class Placement(Strict):
     scale: float = Field(1.0, gt=0, le=100)
     dx: float = Field(0.0, ge=-10000, le=10000)
     dy: float = Field(0.0, ge=-10000, le=10000)
+
+
+class StartBody(Strict):
+    """Start options: the layers to plot (1-based), the others skipped."""
+
+    layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1, max_length=1000)
+    start_layer: int | None = Field(None, ge=1, description="plot from this layer on")
+
+
+class ResumeFrom(Strict):
+    """A point of the program: a stroke vertex nearest to x, y (mm), a line, or a layer."""
+
+    x: float | None = Field(None, ge=-1e5, le=1e5)
+    y: float | None = Field(None, ge=-1e5, le=1e5)
+    line: int | None = Field(None, ge=1)
+    layer: int | None = Field(None, ge=1)
+
+    @model_validator(mode="after")
+    def one_kind(self) -> ResumeFrom:
+        kinds = [name for name, given in (("x/y", self.x is not None or self.y is not None),
+                                          ("line", self.line is not None),
+                                          ("layer", self.layer is not None)) if given]  # fmt: skip
+        if len(kinds) != 1:
+            raise ValueError("give exactly one of {x, y}, {line} or {layer}"
+                             + (f", not {' and '.join(kinds)}" if kinds else ""))  # fmt: skip
+        if kinds == ["x/y"] and (self.x is None or self.y is None):
+            raise ValueError("x and y go together")
+        return self
+
+
+class ResumeBody(Strict):
+    """Resume options: where from (default: where the job stopped), how far back along
+    the stroke to start (mm), and whether to home ($H) first."""
+
+    from_: ResumeFrom | None = Field(None, alias="from")
+    overlap: float = Field(0.0, ge=0, le=1000)
+    home: bool = False
+
+    @property
+    def special(self) -> bool:
+        """From a point or after homing (else: a plain continue or resume)."""
+        return self.from_ is not None or self.home
+
+    def where(self) -> dict[str, Any] | None:
+        return self.from_.model_dump(exclude_none=True) if self.from_ is not None else None
+
+    @model_validator(mode="after")
+    def overlap_needs_a_point(self) -> ResumeBody:
+        if self.overlap and self.from_ is None:
+            raise ValueError("overlap goes with from (a point to go back from)")
+        return self
 
 
 class PatchJobBody(Strict):

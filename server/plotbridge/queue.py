@@ -24,7 +24,8 @@ from plotbridge.events import EventHub
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job
 from plotbridge.jobs.store import JobStore
-from plotbridge.plotter.plotter import Plotter
+from plotbridge.plotter.plotter import HOMING_S, Plotter
+from plotbridge.resume import PickError, ResumePoint, first_line, pick
 
 log = logging.getLogger("plotbridge.queue")
 
@@ -67,6 +68,8 @@ class JobQueue:
                 job.state = "interrupted"
                 job.resume_line = job.safe_line or 1
                 job.error = "the server stopped while this job was running"
+                if job.plotter in self.plotters:  # where its board ran out tells the rest
+                    self.plotters[job.plotter].runner.orphaned(job)
                 self.store.write(job.record(), len(self.jobs))
                 log.info("job %s (%s) interrupted by a server restart", job.id, job.name)
             elif job.state == "waiting":  # waits again once the plotters are there
@@ -184,6 +187,64 @@ class JobQueue:
             log.info("job %s waits: %s", job.id, reason)
         return job
 
+    def select_layers(self, job_id: str, layers: list[int] | None,
+                      start_layer: int | None) -> None:  # fmt: skip
+        """The start options: plot `layers` (1-based; None: all) from `start_layer` on."""
+        job = self.get(job_id)
+        if job.active:
+            raise Refused(409, f"job {job_id} is already {job.state}")
+        count = max(len(job.layers), 1)
+        if layers is None and start_layer is None:
+            job.plot_layers = None
+            return
+        chosen = set(layers if layers is not None else range(1, count + 1))
+        wrong = sorted(k for k in chosen | {start_layer or 1} if not 1 <= k <= count)
+        if wrong:
+            raise Refused(422, f"layer {wrong[0]}: job {job_id} has {count} layer(s), "
+                               f"numbered 1 to {count}")  # fmt: skip
+        chosen = {k for k in chosen if k >= (start_layer or 1)}
+        if not chosen:
+            raise Refused(422, f"no layer left to plot: start_layer {start_layer} comes after "
+                               f"every layer in {sorted(set(layers or []))}")  # fmt: skip
+        job.plot_layers = sorted(chosen)
+
+    async def resume_from(self, job_id: str, target: str | None, where: dict[str, Any] | None,
+                          overlap: float, home: bool) -> Job:  # fmt: skip
+        """Plot a finished job again from a point (`where`, see `resume.pick`) with
+        `overlap` mm back along its stroke, or resume a stopped or interrupted one exactly;
+        with `home`, home its plotter first ($H, until Idle)."""
+        job = self.get(job_id)
+        if job.active or job.state in ("queued", "waiting"):
+            raise Refused(409, f"job {job_id} is {job.state}: only a stopped, interrupted or "
+                               "finished job resumes from a point")  # fmt: skip
+        if where is None and job.state not in RESUMABLE:
+            raise Refused(409, f"job {job_id} is {job.state}: say where to resume it from "
+                               "(from), or restart it")  # fmt: skip
+        point: ResumePoint | None = None
+        if where is not None:
+            program = self.importer.program_path(job_id)
+            try:
+                point = await asyncio.to_thread(pick, program, job.layers, job.lines_total,
+                                                where, overlap)  # fmt: skip
+            except PickError as exc:
+                raise Refused(422, f"from: {exc}") from exc
+            except OSError as exc:
+                raise Refused(409, f"job {job_id} has no program to resume: {exc}") from exc
+        if target is not None:
+            self.plotter(target)
+            job.target = target
+        if home:
+            unit = next(iter(self._candidates(job)))
+            log.info("job %s: homing %s before the resume", job_id, unit.name)
+            await unit.send("home", "$H", wait=HOMING_S)
+        plotter, reason = self._place(job)
+        if plotter is None:
+            raise Refused(409, reason)
+        if point is not None:
+            job.lines_done = point.line - 1
+        self._begin(job, plotter, point)
+        return job
+
     def restart(self, job_id: str, target: str | None = None) -> Job:
         """Start a finished job (stopped, interrupted, failed...) again from its first line,
         without a new upload; refused, it keeps its resume line."""
@@ -241,9 +302,13 @@ class JobQueue:
         previous = self.plotters.get(job.plotter or "")
         return previous is None or previous is plotter or previous.work_area == plotter.work_area
 
-    def _begin(self, job: Job, plotter: Plotter) -> None:
-        resume = job.state in RESUMABLE and job.resume_line is not None
-        plotter.runner.begin(job, (job.resume_line or 1) if resume else 1, resume)
+    def _begin(self, job: Job, plotter: Plotter, point: ResumePoint | None = None) -> None:
+        if point is not None:
+            plotter.runner.begin(job, point.line, True, point)
+        elif job.state in RESUMABLE and job.resume_line is not None:
+            plotter.runner.begin(job, job.resume_line, True)
+        else:
+            plotter.runner.begin(job, first_line(job.layers, job.plot_layers))
 
     # ---- control -------------------------------------------------------------------------
 

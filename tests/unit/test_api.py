@@ -514,9 +514,9 @@ async def interrupted_after_12_lines(api) -> str:
 
     jid = (await upload(api.client)).json()["id"]
     await api.client.post(f"/api/jobs/{jid}/start")
-    for _ in range(12):
+    for done in range(1, 13):  # one step per acknowledgement (two could merge into one)
         api.link.step()
-        await asyncio.sleep(0.01)
+        await settle(lambda done=done: api.queue.jobs[jid].lines_done >= done)
     api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
     await settle(lambda: api.queue.jobs[jid].state == "interrupted")
@@ -527,8 +527,8 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     jid = await interrupted_after_12_lines(api)
     interrupted = (await api.client.get(f"/api/jobs/{jid}")).json()
     assert interrupted["resume_line"] == 5  # the last SEGMENT_BLOCKS moves are not known done
-    def preamble(program, line):
-        return ["M5", "G0 X6 Y0"]
+    def preamble(program, point):
+        return point.line, ["M5", "G0 X6 Y0"]
 
     monkeypatch.setattr("plotbridge.plotter.runner.resume_preamble", preamble)
     api.link.set_state("Idle", planner_free=15)

@@ -57,15 +57,15 @@ def test_resume_preamble_restores_position_and_pen(tmp_path):
     r = run_import(tmp_path, "G0 X10 Y10\nM3\nG1 X20 F600\nG1 Y20\nM5\nG0 X50 Y50\n")
     lines = program_lines(r)
     assert lines[6] == "G1 X20.000 Y20.000 F600"      # program line 7
-    assert resume_preamble(r.program_path, ResumePoint(7)) == [
-        "M5", "G21", "G90", "G0 X20.0000 Y10.0000", "M3"]
-    assert resume_preamble(r.program_path, ResumePoint(9)) == [
-        "M5", "G21", "G90", "G0 X20.0000 Y20.0000"]
-    assert resume_preamble(r.program_path, ResumePoint(1)) == [
-        "M5", "G21", "G90", "G0 X0.0000 Y0.0000"]
+    assert resume_preamble(r.program_path, ResumePoint(7)) == (7, [
+        "M5", "G21", "G90", "G0 X20.0000 Y10.0000", "M3"])
+    assert resume_preamble(r.program_path, ResumePoint(9)) == (9, [
+        "M5", "G21", "G90", "G0 X20.0000 Y20.0000"])
+    assert resume_preamble(r.program_path, ResumePoint(1)) == (1, [
+        "M5", "G21", "G90", "G0 X0.0000 Y0.0000"])
     # where the pen stopped on line 7: the pen goes down there, line 7 draws the rest
-    assert resume_preamble(r.program_path, ResumePoint(7, (20.0, 13.25))) == [
-        "M5", "G21", "G90", "G0 X20.0000 Y13.2500", "M3"]
+    assert resume_preamble(r.program_path, ResumePoint(7, (20.0, 13.25))) == (7, [
+        "M5", "G21", "G90", "G0 X20.0000 Y13.2500", "M3"])
 
 
 def test_locate_finds_the_executing_line_and_point(tmp_path):
@@ -87,9 +87,10 @@ def test_locate_finds_the_executing_line_and_point(tmp_path):
 
 def test_resume_after_an_arc(tmp_path):
     r = run_import(tmp_path, "G0 X10 Y10\nM3\nG2 X30 Y10 I10 J0 F600\nG1 X40 F600\n")
-    assert resume_preamble(r.program_path, ResumePoint(7))[-2:] == ["G0 X30.0000 Y10.0000", "M3"]
-    # a stop on the arc resumes from the arc's start: redrawn, never skipped
-    assert locate(r.program_path, Mark(5, 8, 20.0, 20.0)) == ResumePoint(6)
+    assert resume_preamble(r.program_path, ResumePoint(7))[1][-2:] == [
+        "G0 X30.0000 Y10.0000", "M3"]
+    # a stop on the arc resumes on the arc (tests/unit/test_resume_point.py)
+    assert locate(r.program_path, Mark(5, 8, 20.0, 20.0)) == ResumePoint(6, (20.0, 20.0))
 
 
 def test_normalized_program_is_plain(tmp_path):

@@ -470,6 +470,43 @@ export function createActions(store, socket, estop) {
       }
     },
 
+    // ---- resume from a point ----
+    pickResumePoint(jobId, vertex) {
+      store.update((st) => {
+        st.resumePick = { jobId, x: vertex.x, y: vertex.y };
+      });
+    },
+
+    setResumeOverlap(value) {
+      const mm = Number(value);
+      store.update((st) => {
+        st.resumeOverlap = Number.isFinite(mm) && mm >= 0 ? mm : 0;
+      });
+    },
+
+    /** Resume a job from its picked point (with the overlap), else where it stopped;
+     * `home`: $H first. */
+    async resumeFromPoint(id, home) {
+      const target = s.jobs.find((j) => sameId(j.id, id));
+      if (!target) return;
+      const pick = s.resumePick && sameId(s.resumePick.jobId, id) ? s.resumePick : null;
+      const body = pick ? { from: { x: pick.x, y: pick.y }, overlap: s.resumeOverlap } : {};
+      if (home) body.home = true;
+      try {
+        const updated = await api.post(`/api/jobs/${encodeURIComponent(target.id)}/resume`, body);
+        if (updated && updated.id !== undefined) upsertJob(updated);
+        store.update((st) => {
+          st.resumePick = null;
+          st.selectedJobId = target.id;
+          st.estop = null;
+        });
+      } catch (err) {
+        store.update((st) => {
+          st.notice = { text: `resume “${target.name}”: ${err.message}`, error: true };
+        });
+      }
+    },
+
     // ---- plotters ----
     selectPlotter(name) {
       store.update((st) => {

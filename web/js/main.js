@@ -5,7 +5,7 @@ import { api, setUnauthorizedHandler } from "./api.js";
 import { $, setDisabled, setHidden, setText } from "./dom.js";
 import { createEstop } from "./estop.js";
 import { PreviewCanvas } from "./preview.js";
-import { paperRect, pointsDone, refineWithPen } from "./preview-data.js";
+import { nearestVertex, paperRect, pointsDone, refineWithPen } from "./preview-data.js";
 import { createSocket } from "./socket.js";
 import { createStore, initialState, previewJob } from "./store.js";
 import { bindConsole, renderConsole } from "./views/console.js";
@@ -13,6 +13,7 @@ import { bindControl, renderControl } from "./views/control.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
 import { bindPlotters, renderPlotters } from "./views/plotters.js";
+import { PICKABLE, bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
 const TABS = ["plot", "control", "settings", "console"];
@@ -41,6 +42,8 @@ function renderPreview(state) {
   const m = state.machine;
   const pen = m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
   preview.setPen(pen);
+  const pick = state.resumePick;
+  preview.setPicked(job && pick && pick.jobId === job.id ? pick : null);
   let done = 0;
   let tail = null;
   if (geom && job) {
@@ -97,6 +100,7 @@ function render(state) {
   if (state.tab === "plot") {
     renderJobs(state);
     renderPreview(state);
+    renderResume(state);
   } else if (state.tab === "control") renderControl(state);
   else if (state.tab === "settings") renderSettings(state);
   else renderConsole(state);
@@ -171,11 +175,18 @@ function bind() {
   bindControl(actions);
   bindSettings(actions);
   bindConsole(actions);
+  bindResume(actions);
 }
 
 async function start() {
   bind();
   preview = new PreviewCanvas($("#preview"));
+  preview.onPick = (p) => {
+    const job = previewJob(store.state);
+    const entry = job && store.state.previews[job.id];
+    const vertex = entry && entry.geom && PICKABLE.has(job.state) ? nearestVertex(entry.geom, p.x, p.y) : null;
+    if (vertex) actions.pickResumePoint(job.id, vertex);
+  };
   // A login link's token (#token=...) is exchanged for a session at once and taken
   // out of the address bar and the history.
   const linkToken = new URLSearchParams(location.hash.slice(1)).get("token");

@@ -145,3 +145,18 @@ export function paperRect(placement) {
   const [w, h] = landscape ? [size[1], size[0]] : size;
   return { x: 0, y: 0, w, h };
 }
+
+/** The stroke vertex nearest to (x, y) mm, as {x, y}, or null when nothing is drawn. */
+export function nearestVertex(geom, x, y) {
+  const coords = geom && geom.strokes ? geom.strokes.coords : null;
+  if (!coords || coords.length < 2) return null;
+  let best = -1, bestD = Infinity;
+  for (let i = 0; i < coords.length; i += 2) {
+    const d = (coords[i] - x) ** 2 + (coords[i + 1] - y) ** 2;
+    if (d < bestD) {
+      bestD = d;
+      best = i;
+    }
+  }
+  return { x: coords[best], y: coords[best + 1] };
+}

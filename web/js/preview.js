@@ -22,7 +22,9 @@ const COLORS = {
   travel: "rgba(120, 130, 140, 0.35)",
   penDown: "#e03131",
   penUp: "#212529",
+  picked: "#2b8a3e",
 };
+const CLICK_PX = 4; // a press that moves less than this is a click (picks a point), not a pan
 const SETTLE_MS = 120; // after the last pan/zoom event, re-render crisp
 const FRAME_BUDGET_MS = 8; // static-layer rebuilding per frame
 const MIN_PX = 0.6; // device pixels: closer points are not visible apart
@@ -110,6 +112,8 @@ export class PreviewCanvas {
     this.done = 0; // points drawn
     this.tail = null; // live pen position continuing the drawn part
     this.pen = null; // {x, y, down}
+    this.picked = null; // {x, y}: the resume point picked on the drawing
+    this.onPick = null; // called with {x, y} mm when the drawing is clicked
     this.view = null; // {scale (css px per mm), ox, oy (css px of machine 0,0)}
     this.userView = false; // the user panned or zoomed: keep their view
     this.dirty = false;
@@ -159,6 +163,15 @@ export class PreviewCanvas {
     if (points !== this.done || !tail !== !t || (tail && (tail.x !== t.x || tail.y !== t.y))) {
       this.done = points;
       this.tail = tail;
+      this.invalidate();
+    }
+  }
+
+  setPicked(point) {
+    const same = point === this.picked
+      || (point && this.picked && point.x === this.picked.x && point.y === this.picked.y);
+    if (!same) {
+      this.picked = point;
       this.invalidate();
     }
   }
@@ -357,6 +370,13 @@ export class PreviewCanvas {
       ctx.strokeStyle = COLORS.done;
       ctx.stroke(path);
     }
+    if (this.picked) {
+      const x = t.a * this.picked.x + t.e, y = t.f - t.a * this.picked.y;
+      ctx.beginPath();
+      ctx.arc(x, y, 5 * dpr, 0, 2 * Math.PI);
+      ctx.fillStyle = COLORS.picked;
+      ctx.fill();
+    }
     if (this.pen) {
       const x = t.a * this.pen.x + t.e, y = t.f - t.a * this.pen.y;
       const r = 6 * dpr;
@@ -395,6 +415,7 @@ export class PreviewCanvas {
         // the pointer is already gone: nothing to capture
       }
       this.pointers.set(e.pointerId, local(e));
+      this.pressed = this.pointers.size === 1 ? local(e) : null;
     });
     c.addEventListener("pointermove", (e) => {
       const prev = this.pointers.get(e.pointerId);
@@ -412,7 +433,15 @@ export class PreviewCanvas {
       this.pointers.set(e.pointerId, now);
     });
     const up = (e) => this.pointers.delete(e.pointerId);
-    c.addEventListener("pointerup", up);
+    c.addEventListener("pointerup", (e) => {
+      const p = local(e), from = this.pressed;
+      this.pressed = null;
+      up(e);
+      if (from && this.view && this.onPick && Math.hypot(p.x - from.x, p.y - from.y) < CLICK_PX) {
+        const v = this.view;
+        this.onPick({ x: (p.x - v.ox) / v.scale, y: (v.oy - p.y) / v.scale });
+      }
+    });
     c.addEventListener("pointercancel", up);
     c.addEventListener("wheel", (e) => {
       e.preventDefault();

@@ -28,6 +28,8 @@ export function initialState() {
     logSeq: 0,
     estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via }
     notice: null,             // { text, error }
+    resumePick: null,         // { jobId, x, y }: the stroke vertex picked to resume from
+    resumeOverlap: 1,         // mm back along the stroke from the picked point
   };
 }
 

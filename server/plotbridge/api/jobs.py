@@ -11,7 +11,7 @@ from fastapi.responses import FileResponse, JSONResponse, Response
 from plotbridge.api.deps import GUARD, Parts, upload_error
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
-from plotbridge.models import MoveBody, PatchJobBody, upload_openapi
+from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, StartBody, upload_openapi
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
 router = APIRouter(prefix="/api", dependencies=GUARD)
@@ -89,13 +89,20 @@ async def delete_job(job_id: str, c: Parts) -> Response:
 
 
 @router.post("/jobs/{job_id}/start", response_model=Job)
-async def start_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
+async def start_job(job_id: str, c: Parts, plotter: Target = None,
+                    body: StartBody | None = None) -> dict[str, Any]:  # fmt: skip
+    """Start (or resume) a job; the body's `layers`/`start_layer` plot some layers only."""
+    if body is not None:
+        c.queue.select_layers(job_id, body.layers, body.start_layer)
     return c.queue.start(job_id, plotter).public()
 
 
 @router.post("/jobs/{job_id}/restart", response_model=Job)
-async def restart_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
-    """A stopped, interrupted, failed (or done) job again from its first line."""
+async def restart_job(job_id: str, c: Parts, plotter: Target = None,
+                      body: StartBody | None = None) -> dict[str, Any]:  # fmt: skip
+    """A stopped, interrupted, failed (or done) job again from its first (plotted) line."""
+    if body is not None:
+        c.queue.select_layers(job_id, body.layers, body.start_layer)
     return c.queue.restart(job_id, plotter).public()
 
 
@@ -106,8 +113,14 @@ async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
 
 
 @router.post("/jobs/{job_id}/resume", response_model=Job)
-async def resume_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
-    c.queue.resume(job_id, plotter)
+async def resume_job(job_id: str, c: Parts, plotter: Target = None,
+                     body: ResumeBody | None = None) -> dict[str, Any]:  # fmt: skip
+    """Continue a paused job or a pen change; resume a stopped or interrupted one where it
+    stopped; with a body, from a point (`from`, `overlap`) and/or after homing (`home`)."""
+    if body is not None and body.special:
+        await c.queue.resume_from(job_id, plotter, body.where(), body.overlap, body.home)
+    else:
+        c.queue.resume(job_id, plotter)
     return c.queue.get(job_id).public()
 
 

@@ -13,12 +13,13 @@ from pydantic import ValidationError
 
 from plotbridge.api.deps import Components
 from plotbridge.errors import Refused
-from plotbridge.models import JogBody
+from plotbridge.models import JogBody, ResumeBody
 from plotbridge.ws import Client
 
 log = logging.getLogger("plotbridge.api.ws")
 
 WS_MESSAGE_MAX = 4096  # characters; the longest real message (a console line) is ~200
+RESUME_WORDS = frozenset({"from", "overlap", "home"})  # a resume that may wait for homing
 WS_COMMANDS_WAITING = 16  # per WebSocket client: jog and console lines not yet answered
 
 router = APIRouter()
@@ -70,7 +71,7 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
                 return
             elif body is None:
                 c.clients.send(client, {"type": "error", "command": None, "detail": kind})
-            elif kind in ("jog", "command"):
+            elif kind in ("jog", "command") or (kind == "resume" and RESUME_WORDS & body.keys()):
                 try:
                     waiting.put_nowait((kind, body))
                 except asyncio.QueueFull:
@@ -114,8 +115,15 @@ async def _command(c: Components, kind: Any, message: dict[str, Any]) -> dict[st
         target = name if isinstance(name, str) else None
         if kind == "pause":
             c.queue.pause(message.get("job"), target)
-        elif kind == "resume":
-            c.queue.resume(message.get("job"), target)
+        elif kind == "resume":  # with from/overlap/home: as POST /api/jobs/{id}/resume's body
+            body = ResumeBody(**{k: v for k, v in message.items() if k in RESUME_WORDS})
+            job = message.get("job")
+            if not body.special:
+                c.queue.resume(job, target)
+            elif not isinstance(job, str):
+                raise Refused(422, "a resume from a point or after homing names its job")
+            else:
+                await c.queue.resume_from(job, target, body.where(), body.overlap, body.home)
         elif kind == "jog":
             body = JogBody(**{k: v for k, v in message.items() if k not in ("type", "plotter")})
             await c.queue.plotter(target).jog(body.dx, body.dy, body.feed)

@@ -109,6 +109,9 @@ class Importer:
     def preview_path(self, job_id: str) -> Path:
         return self.jobs_dir / job_id / "preview.json"
 
+    def program_path(self, job_id: str) -> Path:
+        return self.jobs_dir / job_id / "program.gcode"
+
     async def patterns(self) -> dict[str, str]:
         if self._patterns is None:
             self._patterns = await self._worker(patterns)

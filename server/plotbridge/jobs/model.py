@@ -100,6 +100,8 @@ class Job(BaseModel):
     after: AfterJob | None = None
     """What the plotter does once this job is done; None: the server's default."""
     pen_change: dict[str, Any] | None = None
+    plot_layers: list[int] | None = None
+    """The layers (1-based) a start plots, the others skipped; None: all (start options)."""
     """In `pen_change`: {"layer" (1-based), "layers", "name", "colour", "message"}."""
     # the server's own:
     kind: Literal["file", "pattern"] = Field("file", exclude=True)

@@ -184,6 +184,7 @@ class Plotter:
         """One line to the board while no job runs; the lines it answered before `ok`."""
         if self.job is not None:
             raise Refused(409, f"cannot {action} while job {self.job.id} is running")
+        await self.runner.exact_stop_known()  # before $H moves the carriage away
         try:
             return await self.link.command(line, timeout=wait)
         except CommandError as exc:  # error:9 is GRBL's "not in this state" (Alarm, Jog)

@@ -23,7 +23,14 @@ from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the impo
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
 from plotbridge.program.reader import ProgramReader
-from plotbridge.resume import Mark, ResumePoint, first_unexecuted_line, locate, resume_preamble
+from plotbridge.resume import (
+    Mark,
+    ResumePoint,
+    first_unexecuted_line,
+    layer_runs,
+    locate,
+    resume_preamble,
+)  # fmt: skip
 
 log = logging.getLogger("plotbridge.runner")
 
@@ -32,15 +39,11 @@ SAVE_INTERVAL = 1.0  # s between progress writes to the store while running
 SETTLE_S = 0.5  # s for the board to report our own ! or ~ (button presses are told apart)
 AFTER_JOB_S = 120.0  # s a park move or a homing cycle after a job may take
 JOB_POLL_HZ = 15.0  # status reports while a job runs: a lost link redraws at most 1/15 s
+EXACT_STOP_S = 2.0  # s a command after an estop waits for the report of where the steps stopped
 MARK_FILE = "resume.mark"  # in the job folder: the last report's line range and position
 
 Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
-
-
-def layer_pauses(job: Job) -> list[int]:
-    """The program lines of the `M0`s between the job's layers (docs/INTERNALS.md, Layers)."""
-    return [int(layer["first_line"]) - 1 for layer in job.layers[1:]]
 
 
 async def _until(lines: AsyncIterator[tuple[int, str]],
@@ -79,13 +82,20 @@ class Runner:
         self._mark_writer: asyncio.Task[None] | None = None
         self._stopped_job: Job | None = None  # waits for the exact position after a reset
         self._stopped_at = 0.0
+        self._stop_known = asyncio.Event()  # set: no stop waits for its exact report
+        self._stop_known.set()
+        self._orphan: Job | None = None  # ran here when the server died (see orphaned)
+        self._orphan_at = 0.0
+        self._orphan_writer: asyncio.Task[None] | None = None
         self._idle_poll_hz = link.poll_hz
 
     # ---- starting and stopping -----------------------------------------------
 
-    def begin(self, job: Job, line: int, resumed: bool = False) -> None:
-        """Start streaming `job` from its start, or resume it (from where the last run's
-        mark shows the pen stopped, else from `line`)."""
+    def begin(self, job: Job, line: int, resumed: bool = False,
+              point: ResumePoint | None = None) -> None:  # fmt: skip
+        """Start streaming `job` from `line` (its start, or its first plotted layer's), or
+        resume it: from `point` (picked by the user), else from where the last run's mark
+        shows the pen stopped, else from `line`."""
         self.job = job
         job.state, job.error, job.waiting = "running", None, None
         job.plotter = self.plotter
@@ -95,12 +105,12 @@ class Runner:
         self._floor = line
         self._motion = bytearray()
         self._mark = None
-        self._stopped_job = None
+        self._stop_told()
         self.link.poll_hz = JOB_POLL_HZ
         self.report(job, True)
         log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
                  "resumed" if resumed else "started", self.plotter, line)  # fmt: skip
-        self._task = asyncio.create_task(self._run(job, line, resumed),
+        self._task = asyncio.create_task(self._run(job, line, resumed, point),
                                          name=f"run-{self.plotter}")  # fmt: skip
 
     async def close(self) -> None:
@@ -137,6 +147,11 @@ class Runner:
         if job is not None and job.active:
             self._estopped(job)
 
+    def orphaned(self, job: Job) -> None:
+        """`job` ran here when the server died: the board ran on through what it held,
+        and its first standing report tells where that ended (kept in the job's mark)."""
+        self._orphan, self._orphan_at = job, time.time()
+
     def lost(self) -> None:
         """The plotter dropped out: its job is `interrupted`, resumable."""
         if self.job is not None:
@@ -160,6 +175,7 @@ class Runner:
         job = self.job
         if job is None or not job.active:
             self._exact_stop(status)
+            self._ran_out(status)
             return
         if job.state == "pen_change":  # the board's resume button (Pn:S) ends the change
             if "S" in (status.pins or ""):
@@ -173,15 +189,46 @@ class Runner:
                 self._keep_mark(job, Mark(job.safe_line, job.lines_done, status.x, status.y))
         self._follow_buttons(job, status.state)
 
+    async def exact_stop_known(self, limit: float = EXACT_STOP_S) -> None:
+        """Before a command after an emergency stop (`$H` moves the carriage): wait (at
+        most `limit` s) for the report that tells where the steps stopped."""
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(limit):
+                await self._stop_known.wait()
+        self._stop_told()  # none came: the last report's mark stands
+
+    def _stop_told(self) -> None:
+        self._stopped_job = None
+        self._stop_known.set()
+
     def _exact_stop(self, status: MachineStatus) -> None:
-        """The first report after an emergency stop's reset: where the steps stopped."""
+        """The first report after an emergency stop's reset: where the steps stopped (Alarm
+        after a reset in motion, Idle if the planner had run dry). Commands wait for it
+        (`exact_stop_known`), so it is never a report from after a `$H`."""
         job = self._stopped_job
         if (job is None or job.state != "stopped" or status.updated_at <= self._stopped_at
                 or status.state not in ("Alarm", "Idle") or status.x is None
                 or status.y is None or self._mark is None):
             return
-        self._stopped_job = None
+        self._stop_told()
+        log.info("job %s: the steps stopped at %s, %s (%s, the first report after the reset)",
+                 job.id, status.x, status.y, status.state)  # fmt: skip
         self._keep_mark(job, Mark(self._mark.first, job.lines_done, status.x, status.y))
+
+    def _ran_out(self, status: MachineStatus) -> None:
+        """The first Idle (or Alarm) report while an orphaned job waits: where the board
+        stood once it had run out of the moves the dead server had sent."""
+        job = self._orphan
+        if (job is None or status.state not in ("Idle", "Alarm") or not status.connected
+                or status.updated_at <= self._orphan_at or status.x is None or status.y is None):
+            return
+        self._orphan = None
+        log.info("job %s: after the server's restart the board stands at %s, %s (%s)",
+                 job.id, status.x, status.y, status.state)  # fmt: skip
+        if job.state == "interrupted":
+            path = self.jobs_dir / job.id / MARK_FILE
+            self._orphan_writer = asyncio.get_running_loop().create_task(
+                asyncio.to_thread(Mark.ran_out, path, (status.x, status.y)))  # fmt: skip
 
     def _keep_mark(self, job: Job, mark: Mark) -> None:
         """Remember the mark and write it to the job folder, one write at a time (the
@@ -214,29 +261,29 @@ class Runner:
 
     # ---- streaming -------------------------------------------------------------------
 
-    async def _run(self, job: Job, line: int, resumed: bool) -> None:
+    async def _run(self, job: Job, line: int, resumed: bool, point: ResumePoint | None) -> None:
         program = self.jobs_dir / job.id / "program.gcode"
         try:
-            line, preamble = await asyncio.to_thread(self._preamble, job, program, line,
-                                                     resumed)  # fmt: skip
-            pauses = layer_pauses(job)
-            while True:  # one layer (from `line` to the next layer's M0) at a time
-                pause = next((m0 for m0 in pauses if m0 >= line), None)
-                reader = ProgramReader(program, line, preamble)
-                self._motion, self._floor = reader.motion, line  # motion: filled as it goes
+            floor, line, preamble = await asyncio.to_thread(self._preamble, job, program, line,
+                                                            resumed, point)  # fmt: skip
+            runs = layer_runs(job.layers, job.plot_layers, line)
+            for number, (start, stop, layer) in enumerate(runs):  # a layer at a time
+                if number:  # after a layer: the M0s (not sent) and skipped layers are done
+                    job.lines_done = start - 1
+                    if not await self._pen_change(job, layer):
+                        return  # stopped, cancelled or lost during the change
+                    floor, preamble = start, await self._travel(program, start)
+                reader = ProgramReader(program, start, preamble)
+                self._motion, self._floor = reader.motion, floor  # motion: filled as it goes
                 start_time = time.time()
-                async with contextlib.aclosing(_until(reader.lines(), pause)) as lines:
+                async with contextlib.aclosing(_until(reader.lines(), stop)) as lines:
                     await self.link.stream(wire.compact_async(lines, self.link.settings),
                                            self._on_ack)  # fmt: skip
                 state = await self._wait_done(start_time)
                 if not job.active:
                     return  # settled meanwhile (estop, cancel)
-                if pause is None or state != "Idle":
+                if state != "Idle":
                     break
-                job.lines_done = pause  # the M0 itself is not sent: the server pauses instead
-                if not await self._pen_change(job, pause):
-                    return  # stopped, cancelled or lost during the change
-                line, preamble = pause + 1, []
             if state == "Idle":
                 job.lines_done = job.lines_total
                 after = self._after_lines(job)
@@ -286,13 +333,17 @@ class Runner:
             return ["M5", "$H"]
         return []
 
-    async def _pen_change(self, job: Job, pause: int) -> bool:
+    async def _travel(self, program: Path, start: int) -> list[str]:
+        """After a pen change: pen up, back from the park position to where the layer
+        starts (the program's travel to it may lie before the `M0`, or in a skipped layer)."""
+        return (await asyncio.to_thread(resume_preamble, program, ResumePoint(start)))[1]
+
+    async def _pen_change(self, job: Job, index: int) -> bool:
         """Between layers: pen up, carriage parked, the job `pen_change` until it is
         resumed (UI, REST, WebSocket, or the board's resume button). False when the job
         ended meanwhile (emergency stop, cancel, link lost)."""
         for line in self._park_lines():
             await self.link.command(line, timeout=AFTER_JOB_S)
-        index = next(i for i, layer in enumerate(job.layers) if layer["first_line"] - 1 == pause)
         layer = job.layers[index]
         name, colour = layer.get("name") or f"layer {index + 1}", layer.get("colour") or ""
         message = (f"Layer {index + 1} of {len(job.layers)}, '{name}': load its pen"
@@ -316,23 +367,27 @@ class Runner:
                 log.warning("after job %s: %s failed: %s", job.id, line, exc)
                 return
 
-    def _preamble(self, job: Job, program: Path, line: int,
-                  resumed: bool) -> tuple[int, list[str]]:  # fmt: skip
-        """What goes before program line `line` (blocking): nothing from the start (the
-        last run's mark goes); on a resume, the way to the point where the pen stopped
-        when the last run's mark tells it, else to the start of `line`."""
+    def _preamble(self, job: Job, program: Path, line: int, resumed: bool,
+                  point: ResumePoint | None) -> tuple[int, int, list[str]]:  # fmt: skip
+        """The resume point's line, the line to stream from and what goes before it
+        (blocking): nothing from line 1 (the last run's mark goes), the way to `line` from
+        a later start or to a `point` picked; on a resume, the way to the point where the
+        pen stopped when the last run's mark tells it, else to the start of `line`."""
         path = self.jobs_dir / job.id / MARK_FILE
         mark = Mark.load(path)
-        if not resumed:
+        if not resumed or point is not None:
             path.unlink(missing_ok=True)
-            return 1, []
-        point = locate(program, mark) if mark is not None else ResumePoint(line)
-        if point.at is None:  # two safe bounds: the later wins
-            point = ResumePoint(max(point.line, line))
+            if point is None and line == 1:
+                return 1, 1, []
+            point = point or ResumePoint(line)
+        else:
+            point = locate(program, mark) if mark is not None else ResumePoint(line)
+            if point.at is None:  # two safe bounds: the later wins
+                point = ResumePoint(max(point.line, line))
         if point.line != line:
             log.info("job %s resumes at line %d, at %s (conservative line %d)",
                      job.id, point.line, point.at, line)  # fmt: skip
-        return point.line, resume_preamble(program, point)
+        return point.line, *resume_preamble(program, point)
 
     async def _wait_done(self, since: float) -> str:
         """After the last ok: wait until the board is Idle (or fails)."""
@@ -381,6 +436,7 @@ class Runner:
     def _estopped(self, job: Job) -> None:
         job.resume_line = self._resume_line(job)
         self._stopped_job, self._stopped_at = job, time.time()
+        self._stop_known.clear()
         self._finish(job, "stopped", "emergency stop")
 
     def _interrupt(self, job: Job) -> None:
