@@ -8,6 +8,7 @@ from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from plotbridge.importing.fields import openapi_fields
 from plotbridge.papers import PAPER_PATTERN
+from plotbridge.pens.model import LayerRef, PenRef
 
 
 class Strict(BaseModel):
@@ -63,6 +64,14 @@ class Placement(Strict):
 class PatchJobBody(Strict):
     name: str | None = Field(None, min_length=1, max_length=200)
     placement: Placement | None = None
+    pens: dict[LayerRef, PenRef] | None = None
+    """Which pen draws which layer (docs/INTERNALS.md, "Pen library")."""
+
+
+class StartBody(Strict):
+    """Options of a start (all optional; the body itself may be left out)."""
+
+    pens: dict[LayerRef, PenRef] | None = None
 
 
 class Position(BaseModel):
@@ -116,6 +125,8 @@ def upload_openapi() -> dict[str, Any]:
         "start": {"type": "boolean", "description": "start the job at once"},
         "optimize": {"type": "boolean", "description": "merge and reorder strokes"},
         "layers": {"type": "string", "description": "SVG group ids, labels or stroke colours"},
+        "pens": {"type": "string", "description": "which pen draws which layer: "
+                 "LAYER=PEN,... or a JSON object (layer by number or name, pen by id or name)"},
         **Placement.model_json_schema()["properties"],
         **openapi_fields(),
     }

@@ -100,7 +100,8 @@ class Job(BaseModel):
     after: AfterJob | None = None
     """What the plotter does once this job is done; None: the server's default."""
     pen_change: dict[str, Any] | None = None
-    """In `pen_change`: {"layer" (1-based), "layers", "name", "colour", "message"}."""
+    """In `pen_change`: {"reason" ("layer" or "reink"), "layer" (1-based), "layers", "name",
+    "colour", "pen" (its name or None), "message"}."""
     # the server's own:
     kind: Literal["file", "pattern"] = Field("file", exclude=True)
     source: str = Field("", exclude=True)
