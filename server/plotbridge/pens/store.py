@@ -73,8 +73,8 @@ class PenStore:
         with self._lock:
             self._db.execute("BEGIN")
             try:
-                self._db.executemany("UPDATE pens SET odometer_mm = ? WHERE id = ?",
-                                     [(mm, pen_id) for pen_id, mm in odometers.items()])  # fmt: skip
+                rows = [(mm, pen_id) for pen_id, mm in odometers.items()]
+                self._db.executemany("UPDATE pens SET odometer_mm = ? WHERE id = ?", rows)
                 self._db.execute("COMMIT")
             except BaseException:
                 self._db.execute("ROLLBACK")
