@@ -1,0 +1,113 @@
+"""End to end: the pen library on a real `plotbridge serve` and the virtual plotter. A
+two-layer drawing with two pens: each layer's servo positions reach the firmware ($60/$61,
+seen by the simulator's servo decoder and in `$$`), the odometers match what the layers
+drew and survive a restart, and a pen past its re-ink interval pauses the job at a
+stroke's end until it is continued."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.e2e.test_pen_change import INK, assert_parked, layer, wait_pen_change
+from tests.e2e.test_server import assert_same_drawing, preview
+
+pytestmark = pytest.mark.e2e
+
+FINE = {"name": "fineliner 0.3 black", "colour": "#000000", "up_us": 1100, "down_us": 1900,
+        "speed": 2400}  # fmt: skip
+SERVO_US = 8  # the servo timer ticks 4 µs (firmware/src/servo.c), edges may land one off
+MARKER = {"name": "red marker", "colour": "#ff0000", "up_us": 1250, "down_us": 1750}
+
+
+def two_layers(second: str) -> str:
+    return (f'<svg xmlns="http://www.w3.org/2000/svg" {INK} width="100mm" height="40mm" '
+            f'viewBox="0 0 100 40">{layer("outline", 5)}{second}</svg>')
+
+
+def add_pen(server, **fields) -> dict:
+    response = server.client.post("/api/pens", json=fields)
+    assert response.status_code == 201, response.text
+    return response.json()
+
+
+def odometers(server) -> dict[str, float]:
+    return {pen["name"]: pen["odometer_m"] * 1000 for pen in server.client.get("/api/pens").json()}
+
+
+def board_settings(server) -> dict[str, str]:
+    """The firmware's own `$$`, asked through the console."""
+    answer = server.client.post("/api/machine/command", json={"line": "$$"})
+    assert answer.status_code == 200, answer.text
+    return dict(line.split("=", 1) for line in answer.json()["responses"] if "=" in line)
+
+
+def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
+    server.home()
+    add_pen(server, **FINE)
+    add_pen(server, **MARKER)
+    plotter.clear()
+    drawing = two_layers(layer("shade", 30))
+    response = server.client.post(
+        "/api/jobs", files={"file": ("pens.svg", drawing)},
+        data={"start": "true", "pens": "2=red marker"},
+    )  # fmt: skip
+    assert response.status_code == 201, response.text
+    job = response.json()
+    assert [lay["pen"] for lay in job["layers"]] == [1, 2]  # "outline": by colour #000000
+
+    changing = wait_pen_change(server, job["id"], 2)
+    assert changing["pen_change"]["message"] == (
+        "Layer 2 of 2, 'shade': load pen 'red marker', then continue")
+    assert_parked(plotter)
+    assert plotter.trace()["pen_us"] == pytest.approx(FINE["up_us"], abs=SERVO_US)  # layer 1
+    assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
+
+    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+    assert done["state"] == "done", done
+    assert plotter.trace()["pen_us"] == pytest.approx(MARKER["up_us"], abs=SERVO_US)
+    dollars = board_settings(server)
+    assert (dollars["$60"], dollars["$61"]) == (str(MARKER["up_us"]), str(MARKER["down_us"]))
+    assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
+
+    want = {FINE["name"]: done["layers"][0]["pen_down_mm"],
+            MARKER["name"]: done["layers"][1]["pen_down_mm"]}  # fmt: skip
+    assert all(mm > 50 for mm in want.values()), want
+    server.wait_job(job["id"], "done")
+    got = odometers(server)
+    for name, mm in want.items():
+        assert got[name] == pytest.approx(mm, rel=0.005), (name, got, want)
+    server.restart()
+    assert odometers(server) == pytest.approx(got, rel=1e-6)
+
+
+def test_a_pen_past_its_reink_interval_pauses_at_a_stroke_end(server, plotter):
+    server.home()
+    add_pen(server, **FINE)
+    add_pen(server, **{**MARKER, "reink_m": 0.1})  # a 15 mm square is 60 mm: due in the 2nd
+    plotter.clear()
+    squares = "".join(f'<rect x="{x}" y="10" width="15" height="15" fill="none" stroke="red"/>'
+                      for x in (30, 50, 70))  # fmt: skip
+    drawing = two_layers(f'<g inkscape:groupmode="layer" inkscape:label="red">{squares}</g>')
+    job = server.client.post("/api/jobs", files={"file": ("reink.svg", drawing)},
+                             data={"start": "true", "pens": "red=red marker",
+                                   "optimize": "false"}).json()  # fmt: skip
+    wait_pen_change(server, job["id"], 2)
+    server.client.post(f"/api/jobs/{job['id']}/resume")
+
+    reink = server.wait_job(job["id"], ("pen_change", "done", "failed"), 120)
+    while reink["state"] == "pen_change" and reink["pen_change"]["reason"] != "reink":
+        reink = server.job(job["id"])
+    assert reink["state"] == "pen_change", reink
+    prompt = reink["pen_change"]
+    assert prompt["layer"] == 2 and prompt["pen"] == "red marker"
+    assert prompt["message"].startswith("Re-ink pen 'red marker': 0.1 m drawn")
+    assert_parked(plotter)
+    assert len(plotter.trace()["strokes"]) == 3  # the outline and two whole squares
+
+    assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
+    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+    assert done["state"] == "done", done
+    drawn = plotter.trace()["strokes"]
+    assert len(drawn) == 4  # the third square once, not a part of any again
+    assert_same_drawing(preview(server, job["id"])["strokes"], drawn)
+    assert odometers(server)["red marker"] == pytest.approx(180, rel=0.005)
