@@ -72,6 +72,8 @@ class StartBody(Strict):
     """Options of a start (all optional; the body itself may be left out)."""
 
     pens: dict[LayerRef, PenRef] | None = None
+    layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1)
+    """Plot only these layers (1-based numbers, in the job's order); kept for resumes."""
 
 
 class Position(BaseModel):

@@ -156,6 +156,20 @@ class JobQueue:
         self._changed(job)
         return job
 
+    def plot_layers(self, job_id: str, layers: list[int]) -> Job:
+        """Plot only these layers (1-based) when the job starts or resumes."""
+        job = self.get(job_id)
+        if job.active:
+            raise Refused(409, f"job {job_id} is {job.state}; choose its layers before it runs")
+        count = max(len(job.layers), 1)
+        wrong = [n for n in layers if n > count]
+        if wrong:
+            raise Refused(422, f"layers: the job has {count} layer{'s' * (count > 1)}; "
+                               f"there is no layer {', '.join(map(str, wrong))}")  # fmt: skip
+        job.plot_layers = sorted(set(layers)) if len(job.layers) > 1 else None
+        self._changed(job)
+        return job
+
     def _assign_pens(self, job: Job, wanted: dict[str, Any] | None,
                      kept: list[dict[str, Any]] | None = None) -> None:  # fmt: skip
         if self.pens is not None:

@@ -6,10 +6,15 @@ stroke's end until it is continued."""
 
 from __future__ import annotations
 
+import json
+import threading
+import time
+
 import pytest
 
-from tests.e2e.test_pen_change import INK, assert_parked, layer, wait_pen_change
+from tests.e2e.test_pen_change import INK, THREE_LAYERS, assert_parked, layer, wait_pen_change
 from tests.e2e.test_server import assert_same_drawing, preview
+from tests.e2e.test_submit import submit
 
 pytestmark = pytest.mark.e2e
 
@@ -111,3 +116,33 @@ def test_a_pen_past_its_reink_interval_pauses_at_a_stroke_end(server, plotter):
     assert len(drawn) == 4  # the third square once, not a part of any again
     assert_same_drawing(preview(server, job["id"])["strokes"], drawn)
     assert odometers(server)["red marker"] == pytest.approx(180, rel=0.005)
+
+
+def test_submit_picks_layers_and_pens_and_shows_the_prompts(server, plotter, tmp_path):
+    server.home()
+    add_pen(server, **MARKER)
+    plotter.clear()
+    drawing = tmp_path / "three.svg"
+    drawing.write_text(THREE_LAYERS)
+    proc = submit(server, str(drawing), "--layers", "1,3", "--pen", "3=red marker",
+                  "--pen", "outline=red marker", "--start", "--wait", "--json")  # fmt: skip
+    errors: list[str] = []
+    reader = threading.Thread(target=lambda: errors.extend(proc.stderr), daemon=True)
+    reader.start()
+    try:
+        deadline = time.monotonic() + 120
+        prompt = "Layer 3 of 3, 'detail': load pen 'red marker', then continue"
+        while not any(prompt in line for line in errors):  # layer 2 is skipped
+            assert proc.poll() is None and time.monotonic() < deadline, errors
+            time.sleep(0.05)
+        job = server.client.get("/api/jobs").json()[-1]
+        assert job["plot_layers"] == [1, 3]
+        assert [lay["pen"] for lay in job["layers"]] == [1, None, 1]
+        server.client.post(f"/api/jobs/{job['id']}/resume")
+        out, _ = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, errors
+    assert json.loads(out)["state"] == "done"
+    assert len(plotter.trace()["strokes"]) == 2

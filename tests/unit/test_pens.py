@@ -124,6 +124,7 @@ async def test_library_flushes_odometers_on_a_timer(tmp_path, monkeypatch):
     library.drawn(marker.id, 10.0)
     await settle(lambda: any(m["type"] == "pens" and m["pens"][0]["odometer_m"] == 0.01
                              for m in messages))  # fmt: skip
+    await asyncio.wrap_future(library.store.submit(lambda: None))  # the writer got there
     reader = PenLibrary(path, EventHub())  # a second view of the same file
     assert reader.odometer_mm(marker.id) == pytest.approx(10.0)
     reader.close()
@@ -236,3 +237,26 @@ async def test_layers_plot_with_their_pens_odometer_and_reink(tmp_path, monkeypa
         assert odometers == {"a": pytest.approx(0.005), "thin": pytest.approx(0.010)}
         again = await client.patch(f"/api/jobs/{job['id']}", json={"pens": {"1": "thin"}})
         assert again.status_code == 200 and again.json()["layers"][0]["pen"] == 2
+
+
+async def test_a_start_plots_only_the_chosen_layers(tmp_path, monkeypatch):
+    monkeypatch.setattr(Importer, "_import", layered_import)
+    app, link = make_app(tmp_path)
+    link.auto_ack = True
+    async with serving(app) as client:
+        queue = app.state.components.queue
+        job = (await upload(client)).json()
+        bad = await client.post(f"/api/jobs/{job['id']}/start", json={"layers": [1, 4]})
+        assert bad.status_code == 422 and "no layer 4" in bad.text
+        bad = await client.post(f"/api/jobs/{job['id']}/start", json={"layers": []})
+        assert bad.status_code == 422
+        started = await client.post(f"/api/jobs/{job['id']}/start", json={"layers": [1, 3]})
+        assert started.status_code == 200 and started.json()["plot_layers"] == [1, 3]
+        await settle(lambda: queue.jobs[job["id"]].state == "pen_change")
+        assert queue.jobs[job["id"]].pen_change["layer"] == 3  # layer 2 is skipped
+        await client.post(f"/api/jobs/{job['id']}/resume")
+        await settle(lambda: queue.jobs[job["id"]].state == "done")
+        layers = queue.jobs[job["id"]].layers
+        second = range(layers[1]["first_line"], layers[1]["last_line"] + 1)
+        sent = [n for n, _ in link.streamed]
+        assert not set(second) & set(sent) and layers[2]["last_line"] in sent

@@ -101,6 +101,8 @@ async def delete_job(job_id: str, c: Parts) -> Response:
 @router.post("/jobs/{job_id}/start", response_model=Job)
 async def start_job(job_id: str, c: Parts, plotter: Target = None,
                     body: StartBody | None = None) -> dict[str, Any]:  # fmt: skip
+    if body is not None and body.layers is not None:
+        c.queue.plot_layers(job_id, body.layers)
     if body is not None and body.pens is not None:
         c.queue.set_pens(job_id, body.pens)
     return c.queue.start(job_id, plotter).public()

@@ -50,6 +50,19 @@ def layer_at(job: Job, line: int) -> int:
                default=0)  # fmt: skip
 
 
+def plotted_from(job: Job, line: int) -> int | None:
+    """`line`, or the first line of the next layer the job plots when `line`'s layer is not
+    among `job.plot_layers`; None when no plotted layer is left."""
+    if not job.plot_layers or not job.layers:
+        return line
+    index = layer_at(job, line)
+    if index + 1 in job.plot_layers:
+        return line
+    later = (i for i in range(index + 1, len(job.layers)) if i + 1 in job.plot_layers)
+    following = next(later, None)
+    return None if following is None else int(job.layers[following]["first_line"])
+
+
 async def _until(lines: AsyncIterator[tuple[int, str]],
                  stop: int | None) -> AsyncIterator[tuple[int, str]]:  # fmt: skip
     """The lines before program line `stop` (all with None); the preamble (0) passes."""
@@ -230,6 +243,9 @@ class Runner:
             line, preamble = await asyncio.to_thread(self._preamble, job, program, line,
                                                      resumed)  # fmt: skip
             pauses = layer_pauses(job)
+            first = plotted_from(job, line)
+            if first is not None and first != line:  # the first layers are not plotted
+                line, preamble = first, ["G21", "G90", "M5"]
             while True:  # one layer (from `line` to the next layer's M0) at a time
                 pause = next((m0 for m0 in pauses if m0 >= line), None)
                 feed = self._feed = await self._load_pen(job, line)
@@ -250,12 +266,13 @@ class Runner:
                     x, y = feed.position  # back where the pen went up, then on
                     line, preamble = feed.stopped_at + 1, [f"G0 X{x:.3f} Y{y:.3f}"]
                     continue
-                if pause is None or state != "Idle":
+                following = plotted_from(job, pause + 1) if pause is not None else None
+                if following is None or state != "Idle":
                     break
                 job.lines_done = pause  # the M0 itself is not sent: the server pauses instead
-                if not await self._wait_for_pen(job, self._layer_prompt(job, pause + 1)):
+                if not await self._wait_for_pen(job, self._layer_prompt(job, following)):
                     return  # stopped, cancelled or lost during the change
-                line, preamble = pause + 1, []
+                line, preamble = following, []
             if state == "Idle":
                 job.lines_done = job.lines_total
                 after = self._after_lines(job)
