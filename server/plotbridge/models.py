@@ -4,15 +4,20 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, StringConstraints
 
 from plotbridge.importing.fields import openapi_fields
 from plotbridge.papers import PAPER_PATTERN
-from plotbridge.pens.model import LayerRef, PenRef
 
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+LayerRef = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=200)]
+PenRef = Annotated[str | int | None, Field(description="a pen's id or name; null: none")]
+LayerPens = dict[LayerRef, PenRef]
+"""Which pen draws which layer: the layer by 1-based number or name, the pen by id or name."""
 
 
 class LoginBody(Strict):
@@ -64,14 +69,14 @@ class Placement(Strict):
 class PatchJobBody(Strict):
     name: str | None = Field(None, min_length=1, max_length=200)
     placement: Placement | None = None
-    pens: dict[LayerRef, PenRef] | None = None
+    pens: LayerPens | None = None
     """Which pen draws which layer (docs/INTERNALS.md, "Pen library")."""
 
 
 class StartBody(Strict):
     """Options of a start (all optional; the body itself may be left out)."""
 
-    pens: dict[LayerRef, PenRef] | None = None
+    pens: LayerPens | None = None
     layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1)
     """Plot only these layers (1-based numbers, in the job's order); kept for resumes."""
 

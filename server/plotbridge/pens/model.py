@@ -5,7 +5,9 @@ from __future__ import annotations
 import json
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, StringConstraints, ValidationError
+from pydantic import ConfigDict, Field, StringConstraints, ValidationError
+
+from plotbridge.models import LayerPens, Strict
 
 SERVO_US = (500, 2500)  # the firmware's accepted range for $60/$61 (firmware/src/settings.c)
 
@@ -16,10 +18,6 @@ ServoUs = Annotated[int, Field(ge=SERVO_US[0], le=SERVO_US[1])]
 Speed = Annotated[float, Field(gt=0, le=100_000, description="draw feed, mm/min")]
 Accel = Annotated[float, Field(gt=0, le=100_000, description="acceleration limit, mm/s²")]
 Interval = Annotated[float, Field(gt=0, le=1_000_000, description="re-ink interval, m")]
-
-
-class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class PenSpec(Strict):
@@ -65,15 +63,10 @@ class TryBody(Strict):
     down: bool = Field(description="lower (true) or lift (false) the pen")
 
 
-LayerRef = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=200)]
-PenRef = Annotated[str | int | None, Field(description="a pen's id or name; null: none")]
-
-
 class LayerPensBody(Strict):
-    """Which pen draws which layer: the layer by 1-based number or name, the pen by id or
-    name (null: none)."""
+    """Which pen draws which layer (the upload field's shape, checked)."""
 
-    pens: dict[LayerRef, PenRef]
+    pens: LayerPens
 
 
 def parse_layer_pens(text: str) -> dict[str, str | int | None]:
