@@ -16,7 +16,7 @@ from collections import deque
 from collections.abc import AsyncIterator, Callable
 
 from plotbridge.pens.model import Pen
-from plotbridge.program.reader import PEN_DOWN, PEN_UP, Command
+from plotbridge.program.reader import PEN_UP, Command, Tracker
 
 DRAW_WORDS = frozenset({"G1", "G2", "G3", "G01", "G02", "G03"})
 FEED = re.compile(r"(?<=\s)F[0-9.]+", re.IGNORECASE)
@@ -70,27 +70,21 @@ class PenFeed:
     async def lines(self, source: AsyncIterator[tuple[int, str]]
                     ) -> AsyncIterator[tuple[int, str]]:  # fmt: skip
         speed = self.pen.speed if self.pen is not None else None
-        x = y = 0.0
-        down = False
+        at = Tracker()
         async with contextlib.aclosing(source):
             async for number, text in source:
                 command = Command.parse(text)
-                if command.moves:
-                    if down and number > 0 and command.word in DRAW_WORDS:
-                        length = move_length(command, x, y)
+                if command.word in DRAW_WORDS:
+                    if at.down and number > 0:
+                        length = move_length(command, at.x, at.y)
                         self.sent_mm += length
                         self._pending.append((number, length))
                     if speed is not None and command.feed is not None and command.feed > speed:
                         text = FEED.sub(f"F{speed:g}", text)
-                    x = command.x if command.x is not None else x
-                    y = command.y if command.y is not None else y
-                elif command.word == PEN_DOWN:
-                    down = True
-                elif command.word == PEN_UP:
-                    down = False
+                at.follow(command)
                 yield number, text
                 if command.word == PEN_UP and number > 0 and self.reink_due:
-                    self.stopped_at, self.position = number, (x, y)
+                    self.stopped_at, self.position = number, (at.x, at.y)
                     return
 
     def acked(self, line: int) -> None:
