@@ -6,7 +6,9 @@ stroke's end until it is continued."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import sqlite3
 import threading
 import time
 
@@ -37,6 +39,12 @@ def add_pen(server, **fields) -> dict:
 
 def odometers(server) -> dict[str, float]:
     return {pen["name"]: pen["odometer_m"] * 1000 for pen in server.client.get("/api/pens").json()}
+
+
+def stored_odometers(server) -> dict[str, float]:
+    """What the database file holds (read by a second connection, as after a crash)."""
+    with contextlib.closing(sqlite3.connect(server.data_dir / "plotbridge.db")) as db:
+        return dict(db.execute("SELECT name, odometer_mm FROM pens").fetchall())
 
 
 def board_settings(server) -> dict[str, str]:
@@ -81,8 +89,23 @@ def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
     got = odometers(server)
     for name, mm in want.items():
         assert got[name] == pytest.approx(mm, rel=0.005), (name, got, want)
-    server.restart()
+    server.restart()  # a clean stop writes what is left
     assert odometers(server) == pytest.approx(got, rel=1e-6)
+
+    # and without one: once the odometers are on disk (at most a second after the
+    # job), a killed server keeps them too
+    written = {name: mm * 2 for name, mm in got.items()}
+    server.client.post(f"/api/jobs/{job['id']}/restart")
+    wait_pen_change(server, job["id"], 2)
+    server.client.post(f"/api/jobs/{job['id']}/resume")
+    server.wait_job(job["id"], ("done",), 120)
+    deadline = time.monotonic() + 10
+    while stored_odometers(server) != pytest.approx(written, rel=0.005):
+        assert time.monotonic() < deadline, (stored_odometers(server), written)
+        time.sleep(0.1)
+    server.kill()
+    server.start()
+    assert odometers(server) == pytest.approx(written, rel=0.005)
 
 
 def test_a_pen_past_its_reink_interval_pauses_at_a_stroke_end(server, plotter):
