@@ -21,7 +21,7 @@ from tests.e2e.test_submit import submit
 pytestmark = pytest.mark.e2e
 
 FINE = {"name": "fineliner 0.3 black", "colour": "#000000", "up_us": 1100, "down_us": 1900,
-        "speed": 2400}  # fmt: skip
+        "speed": 1200}  # fmt: skip
 SERVO_US = 8  # the servo timer ticks 4 µs (firmware/src/servo.c), edges may land one off
 MARKER = {"name": "red marker", "colour": "#ff0000", "up_us": 1250, "down_us": 1750}
 
@@ -80,7 +80,11 @@ def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
     assert plotter.trace()["pen_us"] == pytest.approx(MARKER["up_us"], abs=SERVO_US)
     dollars = board_settings(server)
     assert (dollars["$60"], dollars["$61"]) == (str(MARKER["up_us"]), str(MARKER["down_us"]))
-    assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
+    drawn = plotter.trace()["strokes"]
+    assert_same_drawing(preview(server, job["id"])["strokes"], drawn)
+    seconds = [stroke[-1][2] - stroke[0][2] for stroke in drawn]  # simulated time
+    assert seconds[0] >= 60 / (1200 / 60) * 0.99, seconds  # 60 mm at the fineliner's 20 mm/s
+    assert seconds[1] < 60 / (1200 / 60) * 0.8, seconds  # the marker: the program's 50 mm/s
 
     want = {FINE["name"]: done["layers"][0]["pen_down_mm"],
             MARKER["name"]: done["layers"][1]["pen_down_mm"]}  # fmt: skip
@@ -95,6 +99,7 @@ def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
     # and without one: once the odometers are on disk (at most a second after the
     # job), a killed server keeps them too
     written = {name: mm * 2 for name, mm in got.items()}
+    server.home()  # the restarted server may find the board not yet connected, or in Alarm
     server.client.post(f"/api/jobs/{job['id']}/restart")
     wait_pen_change(server, job["id"], 2)
     server.client.post(f"/api/jobs/{job['id']}/resume")
