@@ -72,6 +72,10 @@ class PenFeed:
         speed = self.pen.speed if self.pen is not None else None
         at = Tracker()
         async with contextlib.aclosing(source):
+            if self.pen is None:  # nothing to change or count: no parsing on the way
+                async for item in source:
+                    yield item
+                return
             async for number, text in source:
                 command = Command.parse(text)
                 if command.word in DRAW_WORDS:
