@@ -248,29 +248,14 @@ class Runner:
                 line, preamble = first, ["G21", "G90", "M5"]
             while True:  # one layer (from `line` to the next layer's M0) at a time
                 pause = next((m0 for m0 in pauses if m0 >= line), None)
-                feed = self._feed = await self._load_pen(job, line)
-                reader = ProgramReader(program, line, preamble)
-                self._motion, self._floor = reader.motion, line  # motion: filled as it goes
-                start_time = time.time()
-                async with contextlib.aclosing(_until(reader.lines(), pause)) as lines:
-                    await self.link.stream(wire.compact_async(feed.lines(lines),
-                                                              self.link.settings),
-                                           self._on_ack)  # fmt: skip
-                state = await self._wait_done(start_time)
-                if not job.active:
+                state = await self._stream_layer(job, program, line, pause, preamble)
+                if state is None:
                     return  # settled meanwhile (estop, cancel)
-                if state == "Idle" and feed.stopped_at is not None:  # due for re-inking
-                    job.lines_done = feed.stopped_at
-                    if not await self._wait_for_pen(job, self._reink_prompt(job, feed)):
-                        return
-                    x, y = feed.position  # back where the pen went up, then on
-                    line, preamble = feed.stopped_at + 1, [f"G0 X{x:.3f} Y{y:.3f}"]
-                    continue
                 following = plotted_from(job, pause + 1) if pause is not None else None
                 if following is None or state != "Idle":
                     break
                 job.lines_done = pause  # the M0 itself is not sent: the server pauses instead
-                if not await self._wait_for_pen(job, self._layer_prompt(job, following)):
+                if not await self._pen_change(job, layer_at(job, following)):
                     return  # stopped, cancelled or lost during the change
                 line, preamble = following, []
             if state == "Idle":
@@ -325,6 +310,30 @@ class Runner:
             return ["M5", "$H"]
         return []
 
+    async def _stream_layer(self, job: Job, program: Path, line: int, stop: int | None,
+                            preamble: list[str]) -> str | None:  # fmt: skip
+        """Stream the program from `line` to `stop` (not sent; None: the end) with the
+        layer's pen, pausing to re-ink where due. The board's state once it stands (None:
+        the job ended meanwhile: emergency stop, cancel, link lost during a re-ink)."""
+        while True:
+            feed = self._feed = await self._load_pen(job, line)
+            reader = ProgramReader(program, line, preamble)
+            self._motion, self._floor = reader.motion, line  # motion: filled as it goes
+            start_time = time.time()
+            async with contextlib.aclosing(_until(reader.lines(), stop)) as lines:
+                await self.link.stream(wire.compact_async(feed.lines(lines), self.link.settings),
+                                       self._on_ack)  # fmt: skip
+            state = await self._wait_done(start_time)
+            if not job.active:
+                return None
+            if state != "Idle" or feed.stopped_at is None:
+                return state
+            job.lines_done = feed.stopped_at  # due for re-inking, at a stroke's end
+            if not await self._wait_for_pen(job, self._reink_prompt(job, feed)):
+                return None
+            x, y = feed.position  # back where the pen went up, then on
+            line, preamble = feed.stopped_at + 1, [f"G0 X{x:.3f} Y{y:.3f}"]
+
     async def _load_pen(self, job: Job, line: int) -> PenFeed:
         """The pen of the layer that `line` is in: its servo positions written to the
         board ($60/$61, only those that differ), and its feed for the stream."""
@@ -338,9 +347,12 @@ class Runner:
         odometer = self.pens.odometer_mm(pen.id) if self.pens and pen else 0.0
         return PenFeed(pen, odometer, self.pens.drawn if self.pens else lambda _p, _mm: None)
 
-    def _layer_prompt(self, job: Job, line: int) -> dict[str, object]:
-        """What to load before the layer that starts at `line`."""
-        index = layer_at(job, line)
+    async def _pen_change(self, job: Job, index: int) -> bool:
+        """Between layers: wait for the pen of layer `index` (0-based) to be loaded."""
+        return await self._wait_for_pen(job, self._layer_prompt(job, index))
+
+    def _layer_prompt(self, job: Job, index: int) -> dict[str, object]:
+        """What to load before layer `index` (0-based)."""
         layer = job.layers[index]
         name, colour = layer.get("name") or f"layer {index + 1}", layer.get("colour") or ""
         pen = self.pens.layer_pen(layer) if self.pens is not None else None
@@ -354,7 +366,7 @@ class Runner:
     def _reink_prompt(self, job: Job, feed: PenFeed) -> dict[str, object]:
         """The pen went past a multiple of its re-ink interval."""
         assert feed.pen is not None and feed.stopped_at is not None
-        prompt = self._layer_prompt(job, feed.stopped_at)
+        prompt = self._layer_prompt(job, layer_at(job, feed.stopped_at))
         metres = (self.pens.odometer_mm(feed.pen.id) if self.pens else 0.0) / 1000
         prompt.update(reason="reink", message=f"Re-ink pen '{feed.pen.name}': {metres:.1f} m "
                                               "drawn; continue when it is ready")  # fmt: skip
