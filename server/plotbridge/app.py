@@ -13,7 +13,7 @@ from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from plotbridge import __version__
-from plotbridge.api import jobs, plotters, session, ws
+from plotbridge.api import jobs, pens, plotters, session, ws
 from plotbridge.api.deps import Components, error
 from plotbridge.apidocs import mount_docs
 from plotbridge.auth import Auth
@@ -24,6 +24,7 @@ from plotbridge.guard.middleware import Guard
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.store import JobStore
 from plotbridge.models import ERROR_RESPONSES
+from plotbridge.pens import PenLibrary
 from plotbridge.plotter.link import Link
 from plotbridge.plotter.plotter import Plotter, WorkArea
 from plotbridge.queue import JobQueue
@@ -58,11 +59,14 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     importer = Importer(config.jobs_dir, settings=lambda: boards[0].link.settings,
                         limits=config.import_limits)  # fmt: skip
     importer.clean()
+    library = PenLibrary(config.db_path, events)
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
                      work_area=b.work_area, home_on_connect=config.home_on_connect,
-                     after_job=config.after_job, park=config.park)  # type: ignore[arg-type]
+                     after_job=config.after_job, park=config.park,  # type: ignore[arg-type]
+                     pens=library)
              for b in boards]  # fmt: skip
-    queue = JobQueue(units, store, importer, events, auto_start=config.auto_start)
+    queue = JobQueue(units, store, importer, events, auto_start=config.auto_start,
+                     pens=library)  # fmt: skip
     queue.load()
 
     @asynccontextmanager
@@ -75,6 +79,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
             for plotter in units:
                 await plotter.stop()
             importer.close()
+            library.close()
             store.close()
 
     app = FastAPI(
@@ -86,7 +91,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     app.add_middleware(
         Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
     )
-    app.state.components = Components(config, auth, events, queue, clients)
+    app.state.components = Components(config, auth, events, queue, clients, library)
 
     @app.exception_handler(Refused)
     async def refused(_: Request, exc: Refused) -> JSONResponse:
@@ -109,7 +114,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         log.exception("unexpected error")  # a bug: bad input must never land here
         return error(500, f"internal error: {type(exc).__name__}: {exc}")
 
-    for router in (session.router, plotters.router, jobs.router, ws.router):
+    for router in (session.router, plotters.router, jobs.router, pens.router, ws.router):
         app.include_router(router)
     if config.web_dir is not None and config.web_dir.is_dir():
         app.mount("/", StaticFiles(directory=config.web_dir, html=True), name="web")

@@ -212,11 +212,14 @@ class Plotbridge:
         layers: Iterable[str] | None = None,
         plotter: str | None = None,
         start: bool = False,
+        pens: dict[str, str | int | None] | None = None,
         **placement: Any,
     ) -> Job:
         """Upload a file (a path), or a drawing in memory (bytes or a binary file object,
-        with `filename` naming its format: "art.svg"). Placement keywords: paper,
-        margin, fit, rotate, scale, dx, dy, optimize, pen_dialect. The new job."""
+        with `filename` naming its format: "art.svg"). `layers` imports only those SVG
+        layers (labels, ids or stroke colours); `pens` names the pen of some layers
+        ({layer number or name: pen name or id}). Placement keywords: paper, margin, fit,
+        rotate, scale, dx, dy, optimize, pen_dialect. The new job."""
         unknown = set(placement) - set(PLACEMENT)
         if unknown:
             raise TypeError(f"unknown placement option(s): {', '.join(sorted(unknown))}")
@@ -228,6 +231,8 @@ class Plotbridge:
             fields["layers"] = ",".join(layers)
         if plotter:
             fields["plotter"] = plotter
+        if pens:
+            fields["pens"] = json.dumps(pens)
         if start:
             fields["start"] = "true"
         if isinstance(source, (str, os.PathLike)):
@@ -250,10 +255,31 @@ class Plotbridge:
                                   f"{describe_detail(job['start_error'])}", 409, job)  # fmt: skip
         return job
 
-    def start(self, job_id: str, plotter: str | None = None) -> Job:
-        """Start a queued job (on `plotter`, where the server drives several)."""
+    def start(self, job_id: str, plotter: str | None = None, *,
+              layers: Iterable[int] | None = None,
+              pens: dict[str, str | int | None] | None = None) -> Job:  # fmt: skip
+        """Start a queued job (on `plotter`, where the server drives several); `layers`:
+        plot only these (1-based numbers); `pens`: {layer: pen} as for `upload`."""
         params = {"plotter": plotter} if plotter else None
-        return self.request("POST", f"/api/jobs/{job_id}/start", "start", params=params)
+        body = {key: value for key, value in (("layers", list(layers or [])), ("pens", pens))
+                if value}  # fmt: skip
+        return self.request("POST", f"/api/jobs/{job_id}/start", "start", params=params,
+                            json=body or None)  # fmt: skip
+
+    # ---- pens ------------------------------------------------------------------------
+
+    def pens(self) -> list[dict[str, Any]]:
+        """The pen library: every pen with its settings and odometer."""
+        return self.request("GET", "/api/pens", "list the pens")
+
+    def add_pen(self, name: str, **settings: Any) -> dict[str, Any]:
+        """A new pen: colour, up_us, down_us, speed, accel, reink_m (all optional)."""
+        return self.request("POST", "/api/pens", "add a pen", json={"name": name, **settings})
+
+    def set_pens(self, job_id: str, pens: dict[str, str | int | None]) -> Job:
+        """Which pen draws which layer of a job that does not run."""
+        return self.request("PATCH", f"/api/jobs/{job_id}", "set the pens",
+                            json={"pens": pens})  # fmt: skip
 
     def active_job(self) -> Job | None:
         """The job that is running (or paused, or waiting for a pen change), if any."""

@@ -4,7 +4,14 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    StringConstraints,
+    model_validator,
+)
 
 from plotbridge.importing.fields import openapi_fields
 from plotbridge.papers import PAPER_PATTERN
@@ -12,6 +19,12 @@ from plotbridge.papers import PAPER_PATTERN
 
 class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+LayerRef = Annotated[str, StringConstraints(strip_whitespace=True, min_length=1, max_length=200)]
+PenRef = Annotated[str | int | None, Field(description="a pen's id or name; null: none")]
+LayerPens = dict[LayerRef, PenRef]
+"""Which pen draws which layer: the layer by 1-based number or name, the pen by id or name."""
 
 
 class LoginBody(Strict):
@@ -58,13 +71,6 @@ class Placement(Strict):
     scale: float = Field(1.0, gt=0, le=100)
     dx: float = Field(0.0, ge=-10000, le=10000)
     dy: float = Field(0.0, ge=-10000, le=10000)
-
-
-class StartBody(Strict):
-    """Start options: the layers to plot (1-based), the others skipped."""
-
-    layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1, max_length=1000)
-    start_layer: int | None = Field(None, ge=1, description="plot from this layer on")
 
 
 class ResumeFrom(Strict):
@@ -114,6 +120,17 @@ class ResumeBody(Strict):
 class PatchJobBody(Strict):
     name: str | None = Field(None, min_length=1, max_length=200)
     placement: Placement | None = None
+    pens: LayerPens | None = None
+    """Which pen draws which layer (docs/INTERNALS.md, "Pen library")."""
+
+
+class StartBody(Strict):
+    """Options of a start (all optional; the body itself may be left out): the layers to
+    plot (1-based, the others skipped; kept for resumes) and each layer's pen."""
+
+    layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1, max_length=1000)
+    start_layer: int | None = Field(None, ge=1, description="plot from this layer on")
+    pens: LayerPens | None = None
 
 
 class Position(BaseModel):
@@ -167,6 +184,8 @@ def upload_openapi() -> dict[str, Any]:
         "start": {"type": "boolean", "description": "start the job at once"},
         "optimize": {"type": "boolean", "description": "merge and reorder strokes"},
         "layers": {"type": "string", "description": "SVG group ids, labels or stroke colours"},
+        "pens": {"type": "string", "description": "which pen draws which layer: "
+                 "LAYER=PEN,... or a JSON object (layer by number or name, pen by id or name)"},
         **Placement.model_json_schema()["properties"],
         **openapi_fields(),
     }

@@ -19,8 +19,13 @@ def job_progress(name: str, quiet: bool = False) -> Iterator[Callable[[dict[str,
     )  # fmt: skip
     with Progress(*columns, console=Console(stderr=True), disable=quiet) as progress:
         bar = progress.add_task(name, total=1.0)
+        shown: list[str | None] = [None]
 
         def update(job: dict[str, Any]) -> None:
+            prompt = (job.get("pen_change") or {}).get("message")
+            if prompt and prompt != shown[0]:  # a pen change or re-ink: kept above the bar
+                progress.console.print(f"{name}: {prompt} (plotbridge resume, or the UI)")
+            shown[0] = prompt
             progress.update(
                 bar, completed=job.get("progress") or 0, description=describe(name, job)
             )

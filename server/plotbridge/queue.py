@@ -24,6 +24,7 @@ from plotbridge.events import EventHub
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job
 from plotbridge.jobs.store import JobStore
+from plotbridge.pens import PenLibrary
 from plotbridge.plotter.plotter import HOMING_S, Plotter
 from plotbridge.resume import PickError, ResumePoint, first_line, pick
 
@@ -32,7 +33,8 @@ log = logging.getLogger("plotbridge.queue")
 
 class JobQueue:
     def __init__(self, plotters: list[Plotter], store: JobStore, importer: Importer,
-                 events: EventHub, auto_start: bool = False) -> None:  # fmt: skip
+                 events: EventHub, auto_start: bool = False,
+                 pens: PenLibrary | None = None) -> None:  # fmt: skip
         if not plotters:
             raise ValueError("a server needs at least one plotter")
         self.plotters = {plotter.name: plotter for plotter in plotters}
@@ -40,6 +42,7 @@ class JobQueue:
         self.importer = importer
         self.events = events
         self.auto_start = auto_start
+        self.pens = pens
         self.jobs: dict[str, Job] = {}  # in queue order
         for plotter in plotters:
             plotter.on_ready = lambda _plotter: self.dispatch()
@@ -102,8 +105,10 @@ class JobQueue:
 
     async def create(self, *, kind: str, source: Path | str, filename: str, name: str,
                      options: dict[str, Any], placement: dict[str, Any],
-                     target: str | None = None, after: str | None = None) -> Job:  # fmt: skip
-        """Import an upload (a file already on disk) or a pattern into a new queued job."""
+                     target: str | None = None, after: str | None = None,
+                     pens: dict[str, Any] | None = None) -> Job:  # fmt: skip
+        """Import an upload (a file already on disk) or a pattern into a new queued job;
+        `pens` names pens for some of its layers (the others get their default pen)."""
         if target is not None:
             self.plotter(target)
         job_id, kept, result = await self.importer.create(kind, source, filename, options)
@@ -112,6 +117,11 @@ class JobQueue:
                   format=result.format, lines_total=result.lines_total,
                   estimate_s=result.estimate_s)  # fmt: skip
         job.imported(result)
+        try:
+            self._assign_pens(job, pens)
+        except Refused:
+            await self.importer.delete(job_id)
+            raise
         self.jobs[job_id] = job
         await asyncio.wrap_future(self.store.save(job, len(self.jobs) - 1))
         self.events.publish({"type": "job", "job": job.public()})
@@ -130,13 +140,31 @@ class JobQueue:
                 job_id, job.kind, job.source, job.filename, options,
                 still_wanted=lambda: job.state == "queued",
             )  # fmt: skip
+            kept = job.layers
             job.imported(result)
+            self._assign_pens(job, None, kept)
             job.options = options
             job.placement = {**job.placement, **placement}
         if name is not None:
             job.name = name
         self._changed(job)
         return job
+
+    def set_pens(self, job_id: str, pens: dict[str, Any]) -> Job:
+        """Which pen draws which layer (by layer number or name), while the job does not run."""
+        job = self.get(job_id)
+        if job.active:
+            raise Refused(409, f"job {job_id} is {job.state}; change its pens before it runs")
+        self._assign_pens(job, pens, job.layers)
+        self._changed(job)
+        return job
+
+    def _assign_pens(self, job: Job, wanted: dict[str, Any] | None,
+                     kept: list[dict[str, Any]] | None = None) -> None:  # fmt: skip
+        if self.pens is not None:
+            self.pens.assign(job.layers, wanted, kept)
+        elif wanted:
+            raise Refused(409, "this server has no pen library")
 
     def move(self, job_id: str, position: int) -> list[dict[str, Any]]:
         job = self.get(job_id)

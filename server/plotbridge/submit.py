@@ -27,7 +27,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--fit", action="store_true", default=None, help="scale to fit")
     parser.add_argument("--rotate", type=int, choices=(0, 90, 180, 270), help="quarter turns")
     parser.add_argument("--scale", type=float, help="scale factor")
-    parser.add_argument("--layers", help="comma-separated layers to plot (SVG)")
+    parser.add_argument(
+        "--layers", help="layers to plot, comma-separated: numbers (1,3: the job's layers, "
+        "with --start) or SVG layer labels, ids or stroke colours (only those are imported)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--pen", action="append", default=[], metavar="LAYER=PEN", type=layer_pen,
+        help="the pen (name or id in the pen library) for a layer (number or name); repeat",
+    )  # fmt: skip
     parser.add_argument(
         "--optimize", action=argparse.BooleanOptionalAction, default=None,
         help="reorder and merge strokes to cut pen-up travel",
@@ -37,12 +44,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def layer_pen(text: str) -> tuple[str, str]:
+    """`--pen LAYER=PEN`."""
+    layer, sep, pen = text.partition("=")
+    if not sep or not layer.strip() or not pen.strip():
+        raise argparse.ArgumentTypeError(f"expected LAYER=PEN (e.g. 2='fineliner'), got {text!r}")
+    return layer.strip(), pen.strip()
+
+
 def send(pb: Plotbridge, args: argparse.Namespace) -> dict[str, Any]:
     placement = {key: getattr(args, key) for key in PLACEMENT_FIELDS}
     layers = [p.strip() for p in args.layers.split(",") if p.strip()] if args.layers else None
-    job = pb.upload(args.file, name=args.name, layers=layers, plotter=args.plotter, **placement)
+    numbers = [int(p) for p in layers] if layers and all(p.isdigit() for p in layers) else None
+    pens: dict[str, str | int | None] = dict(args.pen)
+    job = pb.upload(args.file, name=args.name, layers=None if numbers else layers,
+                    plotter=args.plotter, pens=pens or None, **placement)  # fmt: skip
     if args.start:
-        job = pb.start(job["id"])
+        job = pb.start(job["id"], layers=numbers)
     if args.wait:
         with job_progress(job["name"], quiet=args.json) as update:
             job = pb.wait(job["id"], update, poll=args.poll)
@@ -52,6 +70,11 @@ def send(pb: Plotbridge, args: argparse.Namespace) -> dict[str, Any]:
 def run(args: argparse.Namespace) -> int:
     if not args.file.is_file():
         print(f"plotbridge submit: no such file: {args.file}", file=sys.stderr)
+        return 2
+    if args.layers and all(p.strip().isdigit() for p in args.layers.split(",") if p.strip()) \
+            and not args.start:
+        print("plotbridge submit: --layers with numbers picks the layers a start plots: "
+              "add --start", file=sys.stderr)  # fmt: skip
         return 2
     try:
         with connect(args) as pb:

@@ -3,6 +3,7 @@
 
 import { api, ApiError, uploadJob } from "./api.js";
 import { LOG_LIMIT } from "./views/console.js";
+import { loadPens } from "./views/pens.js";
 import { buildGeometry } from "./preview-data.js";
 import { holdAction, previewJob } from "./store.js";
 
@@ -225,6 +226,7 @@ export function createActions(store, socket, estop) {
       api.get("/api/server").then((d) => store.update((st) => {
         st.server = d;
       })).catch(() => {});
+      loadPens(store);
       api.get("/api/patterns").then((d) => store.update((st) => {
         st.patterns = asList(d, "patterns");
       })).catch(() => {});
@@ -292,6 +294,11 @@ export function createActions(store, socket, estop) {
           const rank = new Map(msg.order.map((id, i) => [String(id), i]));
           const at = (j) => rank.get(String(j.id)) ?? -1;
           st.jobs = [...st.jobs].sort((a, b) => at(a) - at(b));
+        });
+      }
+      else if (msg.type === "pens" && Array.isArray(msg.pens)) {
+        store.update((st) => {
+          st.pens.list = msg.pens;
         });
       }
       else if (msg.type === "log") actions.appendLog(msg.direction || "rx", msg.line ?? "");

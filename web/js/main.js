@@ -12,11 +12,12 @@ import { bindConsole, renderConsole } from "./views/console.js";
 import { bindControl, renderControl } from "./views/control.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
+import { bindPens, createPenActions, renderPens } from "./views/pens.js";
 import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { PICKABLE, bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
-const TABS = ["plot", "control", "settings", "console"];
+const TABS = ["plot", "control", "pens", "settings", "console"];
 const DRAWN_STATES = new Set(["running", "paused", "stopped", "interrupted", "failed", "cancelled"]);
 const LIVE_STATES = new Set(["running", "paused"]);
 
@@ -102,6 +103,7 @@ function render(state) {
     renderPreview(state);
     renderResume(state);
   } else if (state.tab === "control") renderControl(state);
+  else if (state.tab === "pens") renderPens(state);
   else if (state.tab === "settings") renderSettings(state);
   else renderConsole(state);
 }
@@ -173,6 +175,7 @@ function bind() {
   bindPlotters(actions);
   bindJobs(actions);
   bindControl(actions);
+  bindPens(createPenActions(store));
   bindSettings(actions);
   bindConsole(actions);
   bindResume(actions);

@@ -8,7 +8,7 @@ const HOLDABLE_STATES = new Set(["Run", "Jog"]);
 export function initialState() {
   return {
     view: "login",            // "login" | "app"
-    tab: "plot",              // "plot" | "control" | "settings" | "console"
+    tab: "plot",              // "plot" | "control" | "pens" | "settings" | "console"
     login: { busy: false, error: "" },
     socket: { status: "closed" },   // "open" | "connecting" | "closed"
     machine: null,            // the machine object of the selected plotter
@@ -24,6 +24,7 @@ export function initialState() {
     placement: { paper: "", landscape: false, margin: 10, fit: false, rotate: 0, scale: 1 },
     jog: { step: 10, feed: 3000 },
     settings: { list: null, edits: {}, busy: false, message: "", error: "" },
+    pens: { list: [], form: null, busy: false, error: "", message: "" },  // views/pens.js
     log: [],                  // { seq, direction, line }
     logSeq: 0,
     estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via }

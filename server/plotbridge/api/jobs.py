@@ -12,6 +12,7 @@ from plotbridge.api.deps import GUARD, Parts, upload_error
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
 from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, StartBody, upload_openapi
+from plotbridge.pens.model import parse_layer_pens
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
 router = APIRouter(prefix="/api", dependencies=GUARD)
@@ -38,6 +39,10 @@ async def upload(request: Request, c: Parts) -> Any:
             options, placement, start = parse_upload_fields(params)
         except ValueError as exc:
             return upload_error(422, str(exc))
+        try:
+            pens = parse_layer_pens(params["pens"]) if params.get("pens") else None
+        except ValueError as exc:
+            return upload_error(422, str(exc))
         after = params.get("after") or None
         if after is not None and after not in AFTER_JOB:
             return upload_error(422, f"after: one of {', '.join(AFTER_JOB)}, got {after!r}")
@@ -55,7 +60,7 @@ async def upload(request: Request, c: Parts) -> Any:
         job = await c.queue.create(kind=kind, source=source, filename=filename, name=name,
                                    options=options, placement=placement,
                                    target=params.get("plotter") or None,
-                                   after=after)  # fmt: skip
+                                   after=after, pens=pens)  # fmt: skip
     except UploadRefused as exc:
         return upload_error(exc.status, exc.message)
     finally:
@@ -79,7 +84,12 @@ async def get_job(job_id: str, c: Parts) -> dict[str, Any]:
 async def patch_job(job_id: str, body: PatchJobBody,
                     c: Parts) -> dict[str, Any]:  # fmt: skip
     placement = body.placement.model_dump() if body.placement else None
-    return (await c.queue.reimport(job_id, body.name, placement)).public()
+    job = c.queue.get(job_id)
+    if body.name is not None or placement is not None:
+        job = await c.queue.reimport(job_id, body.name, placement)
+    if body.pens is not None:
+        job = c.queue.set_pens(job_id, body.pens)
+    return job.public()
 
 
 @router.delete("/jobs/{job_id}", status_code=204)
@@ -91,9 +101,12 @@ async def delete_job(job_id: str, c: Parts) -> Response:
 @router.post("/jobs/{job_id}/start", response_model=Job)
 async def start_job(job_id: str, c: Parts, plotter: Target = None,
                     body: StartBody | None = None) -> dict[str, Any]:  # fmt: skip
-    """Start (or resume) a job; the body's `layers`/`start_layer` plot some layers only."""
+    """Start (or resume) a job; the body's `layers`/`start_layer` plot some layers only,
+    its `pens` name each layer's pen."""
     if body is not None:
         c.queue.select_layers(job_id, body.layers, body.start_layer)
+        if body.pens is not None:
+            c.queue.set_pens(job_id, body.pens)
     return c.queue.start(job_id, plotter).public()
 
 

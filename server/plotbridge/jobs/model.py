@@ -99,10 +99,11 @@ class Job(BaseModel):
     """Why a `waiting` job does not run yet."""
     after: AfterJob | None = None
     """What the plotter does once this job is done; None: the server's default."""
-    pen_change: dict[str, Any] | None = None
     plot_layers: list[int] | None = None
-    """The layers (1-based) a start plots, the others skipped; None: all (start options)."""
-    """In `pen_change`: {"layer" (1-based), "layers", "name", "colour", "message"}."""
+    """The 1-based numbers of the layers a start plots (the start's `layers`); None: all."""
+    pen_change: dict[str, Any] | None = None
+    """In `pen_change`: {"reason" ("layer" or "reink"), "layer" (1-based), "layers", "name",
+    "colour", "pen" (its name or None), "message"}."""
     # the server's own:
     kind: Literal["file", "pattern"] = Field("file", exclude=True)
     source: str = Field("", exclude=True)

@@ -19,6 +19,7 @@ from typing import Any
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
 from plotbridge.jobs.model import AfterJob, Job
+from plotbridge.pens import PenLibrary
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
 from plotbridge.plotter.link import CommandError, Link, LinkDown, LinkEvent
 from plotbridge.plotter.runner import Report, Runner
@@ -46,7 +47,8 @@ class Plotter:
     def __init__(self, name: str, link: Link, events: EventHub, jobs_dir: Path, *,
                  virtual: VirtualPlotter | None = None, work_area: WorkArea | None = None,
                  home_on_connect: bool = False, after_job: AfterJob = "none",
-                 park: tuple[float, float] = (0.0, 0.0)) -> None:  # fmt: skip
+                 park: tuple[float, float] = (0.0, 0.0),
+                 pens: PenLibrary | None = None) -> None:  # fmt: skip
         self.name = name
         self.link = link
         self.events = events
@@ -56,7 +58,7 @@ class Plotter:
         self.on_ready: Callable[[Plotter], None] = lambda _: None
         self.on_job: Report = lambda _job, _save: None
         self.runner = Runner(name, link, jobs_dir, self._job_changed, self._job_finished,
-                             after_job=after_job, park=park)  # fmt: skip
+                             after_job=after_job, park=park, pens=pens)  # fmt: skip
         self._task: asyncio.Task[None] | None = None
         self._homing: asyncio.Task[None] | None = None
         self._unsubscribe: Callable[[], None] | None = None

@@ -20,6 +20,7 @@ from pathlib import Path
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
+from plotbridge.pens import PenFeed, PenLibrary, servo_lines
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
 from plotbridge.program.reader import ProgramReader
@@ -46,6 +47,12 @@ Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
 
 
+def layer_at(job: Job, line: int) -> int:
+    """The 0-based index of the layer program line `line` belongs to (0 without layers)."""
+    return max((i for i, layer in enumerate(job.layers) if int(layer["first_line"]) <= line),
+               default=0)  # fmt: skip
+
+
 async def _until(lines: AsyncIterator[tuple[int, str]],
                  stop: int | None) -> AsyncIterator[tuple[int, str]]:  # fmt: skip
     """The lines before program line `stop` (all with None); the preamble (0) passes."""
@@ -59,8 +66,11 @@ async def _until(lines: AsyncIterator[tuple[int, str]],
 class Runner:
     def __init__(self, plotter: str, link: Link, jobs_dir: Path, report: Report,
                  finished: Callable[[Job], None], after_job: AfterJob = "none",
-                 park: tuple[float, float] = (0.0, 0.0)) -> None:  # fmt: skip
+                 park: tuple[float, float] = (0.0, 0.0),
+                 pens: PenLibrary | None = None) -> None:  # fmt: skip
         self.plotter = plotter
+        self.pens = pens
+        self._feed: PenFeed | None = None  # the streaming layer's pen (odometer, re-ink)
         self.after_job = after_job
         self.park = park
         self.busy: str | None = None
@@ -273,14 +283,8 @@ class Runner:
                     if not await self._pen_change(job, layer):
                         return  # stopped, cancelled or lost during the change
                     floor, preamble = start, await self._travel(program, start)
-                reader = ProgramReader(program, start, preamble)
-                self._motion, self._floor = reader.motion, floor  # motion: filled as it goes
-                start_time = time.time()
-                async with contextlib.aclosing(_until(reader.lines(), stop)) as lines:
-                    await self.link.stream(wire.compact_async(lines, self.link.settings),
-                                           self._on_ack)  # fmt: skip
-                state = await self._wait_done(start_time)
-                if not job.active:
+                state = await self._stream_layer(job, program, start, stop, preamble, floor)
+                if state is None:
                     return  # settled meanwhile (estop, cancel)
                 if state != "Idle":
                     break
@@ -313,6 +317,9 @@ class Runner:
                 with contextlib.suppress(Exception):
                     await self.halt()
         finally:
+            self._feed = None
+            if self.pens is not None:
+                self.pens.flush()
             self.link.poll_hz = self._idle_poll_hz
             if self.job is job:
                 self.job = None
@@ -338,22 +345,81 @@ class Runner:
         starts (the program's travel to it may lie before the `M0`, or in a skipped layer)."""
         return (await asyncio.to_thread(resume_preamble, program, ResumePoint(start)))[1]
 
+    async def _stream_layer(self, job: Job, program: Path, line: int, stop: int | None,
+                            preamble: list[str], floor: int) -> str | None:  # fmt: skip
+        """Stream the program from `line` to `stop` (not sent; None: the end) with the
+        layer's pen, pausing to re-ink where due; `floor`: the earliest line a resume may
+        need. The board's state once it stands (None: the job ended meanwhile: emergency
+        stop, cancel, link lost during a re-ink)."""
+        while True:
+            feed = self._feed = await self._load_pen(job, line)
+            reader = ProgramReader(program, line, preamble)
+            self._motion, self._floor = reader.motion, floor  # motion: filled as it goes
+            start_time = time.time()
+            async with contextlib.aclosing(_until(reader.lines(), stop)) as lines:
+                await self.link.stream(wire.compact_async(feed.lines(lines), self.link.settings),
+                                       self._on_ack)  # fmt: skip
+            state = await self._wait_done(start_time)
+            if not job.active:
+                return None
+            if state != "Idle" or feed.stopped_at is None:
+                return state
+            job.lines_done = feed.stopped_at  # due for re-inking, at a stroke's end
+            if not await self._wait_for_pen(job, self._reink_prompt(job, feed)):
+                return None
+            x, y = feed.position  # back where the pen went up, then on
+            line, preamble = feed.stopped_at + 1, [f"G0 X{x:.3f} Y{y:.3f}"]
+            floor = line
+
+    async def _load_pen(self, job: Job, line: int) -> PenFeed:
+        """The pen of the layer that `line` is in: its servo positions written to the
+        board ($60/$61, only those that differ), and its feed for the stream."""
+        pen = None
+        if self.pens is not None and job.layers:
+            pen = self.pens.layer_pen(job.layers[layer_at(job, line)])
+        if pen is not None:
+            for setting in servo_lines(pen, self.link.settings):
+                await self.link.command(setting)
+                log.info("job %s: pen %r: %s", job.id, pen.name, setting)
+        odometer = self.pens.odometer_mm(pen.id) if self.pens and pen else 0.0
+        return PenFeed(pen, odometer, self.pens.drawn if self.pens else lambda _p, _mm: None)
+
     async def _pen_change(self, job: Job, index: int) -> bool:
-        """Between layers: pen up, carriage parked, the job `pen_change` until it is
-        resumed (UI, REST, WebSocket, or the board's resume button). False when the job
-        ended meanwhile (emergency stop, cancel, link lost)."""
-        for line in self._park_lines():
-            await self.link.command(line, timeout=AFTER_JOB_S)
+        """Between layers: wait for the pen of layer `index` (0-based) to be loaded."""
+        return await self._wait_for_pen(job, self._layer_prompt(job, index))
+
+    def _layer_prompt(self, job: Job, index: int) -> dict[str, object]:
+        """What to load before layer `index` (0-based)."""
         layer = job.layers[index]
         name, colour = layer.get("name") or f"layer {index + 1}", layer.get("colour") or ""
-        message = (f"Layer {index + 1} of {len(job.layers)}, '{name}': load its pen"
-                   + (f" ({colour})" if colour else "") + ", then continue")  # fmt: skip
+        pen = self.pens.layer_pen(layer) if self.pens is not None else None
+        load = (f"load pen '{pen.name}'" if pen is not None
+                else "load its pen" + (f" ({colour})" if colour else ""))  # fmt: skip
+        return {"reason": "layer", "layer": index + 1, "layers": len(job.layers), "name": name,
+                "colour": colour, "pen": pen.name if pen else None,
+                "message": f"Layer {index + 1} of {len(job.layers)}, '{name}': {load}, "
+                           "then continue"}  # fmt: skip
+
+    def _reink_prompt(self, job: Job, feed: PenFeed) -> dict[str, object]:
+        """The pen went past a multiple of its re-ink interval."""
+        assert feed.pen is not None and feed.stopped_at is not None
+        prompt = self._layer_prompt(job, layer_at(job, feed.stopped_at))
+        metres = (self.pens.odometer_mm(feed.pen.id) if self.pens else 0.0) / 1000
+        prompt.update(reason="reink", message=f"Re-ink pen '{feed.pen.name}': {metres:.1f} m "
+                                              "drawn; continue when it is ready")  # fmt: skip
+        return prompt
+
+    async def _wait_for_pen(self, job: Job, prompt: dict[str, object]) -> bool:
+        """Pen up, carriage parked, the job `pen_change` with `prompt` until it is resumed
+        (UI, REST, WebSocket, or the board's resume button): between layers, or to re-ink.
+        False when the job ended meanwhile (emergency stop, cancel, link lost)."""
+        for line in self._park_lines():
+            await self.link.command(line, timeout=AFTER_JOB_S)
         job.state = "pen_change"
-        job.pen_change = {"layer": index + 1, "layers": len(job.layers), "name": name,
-                          "colour": colour, "message": message}  # fmt: skip
+        job.pen_change = prompt
         self._progress(job)
         self.report(job, True)
-        log.info("job %s: pen change before layer %d (%s)", job.id, index + 1, name)
+        log.info("job %s: %s", job.id, prompt["message"])
         self._pen_done.clear()
         await self._pen_done.wait()  # resumed, or the job ended (_finish)
         job.pen_change = None
@@ -409,6 +475,8 @@ class Runner:
         if line <= 0 or job is None:
             return
         job.lines_done = line
+        if self._feed is not None:
+            self._feed.acked(line)
         now = time.monotonic()
         save = now - self._last_save >= SAVE_INTERVAL
         if save or now - self._last_progress >= PROGRESS_INTERVAL:

@@ -108,23 +108,33 @@ class MachineState:
     pen_down: bool = False
 
 
+@dataclass
+class Tracker:
+    """Follows the program line by line: where the carriage goes and whether the pen is down."""
+
+    x: float = 0.0
+    y: float = 0.0
+    down: bool = False
+
+    def follow(self, command: Command) -> None:
+        if command.moves:
+            self.x = command.x if command.x is not None else self.x
+            self.y = command.y if command.y is not None else self.y
+        elif command.word == PEN_DOWN:
+            self.down = True
+        elif command.word == PEN_UP:
+            self.down = False
+
+
 def state_before(path: Path, line: int) -> MachineState:
     """The state in which program line `line` (1-based) starts (blocking)."""
-    x = y = 0.0
-    down = False
+    tracker = Tracker()
     with contextlib.closing(read_program(path)) as lines:
         for number, text in lines:
             if number >= line:
                 break
-            command = Command.parse(text)
-            if command.moves:
-                x = command.x if command.x is not None else x
-                y = command.y if command.y is not None else y
-            elif command.word == PEN_DOWN:
-                down = True
-            elif command.word == PEN_UP:
-                down = False
-    return MachineState(x, y, down)
+            tracker.follow(Command.parse(text))
+    return MachineState(tracker.x, tracker.y, tracker.down)
 
 
 class ProgramReader:

@@ -3,6 +3,7 @@
 import { $, el, setDisabled, setHidden, setText, syncList } from "../dom.js";
 import { bytes, duration, percent } from "../format.js";
 import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
+import { renderLayerPens } from "./pens.js";
 
 // The server resumes stopped and interrupted jobs from their resume line.
 const RESUMABLE = new Set(["paused", "interrupted", "stopped"]);
@@ -151,6 +152,7 @@ function renderQueue(state) {
       el("div", { className: "job-meta" }),
       el("div", { className: "job-progress" }, el("progress", { max: 1 }), el("span", { className: "pct" })),
       el("p", { className: "error job-error" }),
+      el("div", { className: "row wrap layer-pens" }),
       el("div", { className: "row wrap actions" })),
     (node, job) => {
       node.classList.toggle("selected", shown === job);
@@ -177,6 +179,7 @@ function renderQueue(state) {
       const err = node.querySelector(".job-error");
       setText(err, job.error ? (typeof job.error === "string" ? job.error : JSON.stringify(job.error)) : "");
       setHidden(err, !job.error);
+      renderLayerPens(node.querySelector(".layer-pens"), job, state.pens.list);
       const idx = waiting.indexOf(job);
       const buttons = jobButtons(job, idx, waiting.length, anyActive);
       const row = node.querySelector(".actions");
