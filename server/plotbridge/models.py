@@ -7,6 +7,7 @@ from typing import Annotated, Any, Literal
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field
 
 from plotbridge.importing.fields import openapi_fields
+from plotbridge.notify import check_urls
 from plotbridge.papers import PAPER_PATTERN
 
 
@@ -63,6 +64,30 @@ class Placement(Strict):
 class PatchJobBody(Strict):
     name: str | None = Field(None, min_length=1, max_length=200)
     placement: Placement | None = None
+
+
+class WebhooksBody(Strict):
+    urls: Annotated[list[Annotated[str, Field(max_length=2048)]], Field(max_length=16),
+                    AfterValidator(check_urls)]  # fmt: skip
+
+
+class Webhook(BaseModel):
+    url: str
+    source: Literal["option", "settings"]
+    queued: int
+    delivered: int
+    retries: int
+    dropped: int
+    refused: int
+    last_error: str | None
+
+
+class Webhooks(BaseModel):
+    urls: list[str]
+    """The URLs kept in the settings (PUT replaces them)."""
+    fixed: list[str]
+    """The URLs given with `plotbridge serve --webhook` (not editable here)."""
+    webhooks: list[Webhook]
 
 
 class Position(BaseModel):

@@ -11,6 +11,7 @@ from fastapi.responses import JSONResponse
 from plotbridge.auth import COOKIE, Auth
 from plotbridge.config import Config
 from plotbridge.events import EventHub
+from plotbridge.notify import Webhooks
 from plotbridge.queue import JobQueue
 from plotbridge.ws import Hub
 
@@ -22,6 +23,7 @@ class Components:
     events: EventHub
     queue: JobQueue
     clients: Hub  # the WebSocket fan-out
+    webhooks: Webhooks
 
 
 def components(request: Request) -> Components:
