@@ -40,7 +40,7 @@ Report = Callable[[Job, bool], None]
 
 def layer_pauses(job: Job) -> list[int]:
     """The program lines of the `M0`s between the job's layers (docs/INTERNALS.md, Layers)."""
-    return [int(layer["first_line"]) - 1 for layer in job.layers[1:]]
+    return [layer.first_line - 1 for layer in job.layers[1:]]
 
 
 async def _until(lines: AsyncIterator[tuple[int, str]],
@@ -92,6 +92,7 @@ class Runner:
         job.started_at, job.finished_at, job.safe_line = time.time(), None, line
         if not resumed:
             job.lines_done, job.progress, job.resume_line = 0, 0.0, None
+            job.follow_layers()
         self._floor = line
         self._motion = bytearray()
         self._mark = None
@@ -236,7 +237,8 @@ class Runner:
                 job.lines_done = pause  # the M0 itself is not sent: the server pauses instead
                 if not await self._pen_change(job, pause):
                     return  # stopped, cancelled or lost during the change
-                line, preamble = pause + 1, []
+                line = pause + 1  # from the park back to where the layer left off, pen up
+                preamble = await asyncio.to_thread(resume_preamble, program, ResumePoint(line))
             if state == "Idle":
                 job.lines_done = job.lines_total
                 after = self._after_lines(job)
@@ -292,9 +294,9 @@ class Runner:
         ended meanwhile (emergency stop, cancel, link lost)."""
         for line in self._park_lines():
             await self.link.command(line, timeout=AFTER_JOB_S)
-        index = next(i for i, layer in enumerate(job.layers) if layer["first_line"] - 1 == pause)
+        index = next(i for i, layer in enumerate(job.layers) if layer.first_line - 1 == pause)
         layer = job.layers[index]
-        name, colour = layer.get("name") or f"layer {index + 1}", layer.get("colour") or ""
+        name, colour = layer.name or f"layer {index + 1}", layer.colour
         message = (f"Layer {index + 1} of {len(job.layers)}, '{name}': load its pen"
                    + (f" ({colour})" if colour else "") + ", then continue")  # fmt: skip
         job.state = "pen_change"
@@ -400,6 +402,7 @@ class Runner:
     def _progress(self, job: Job) -> None:
         total = max(job.lines_total, 1)
         job.progress = round(min(job.lines_done / total, 1.0), 4)
+        job.follow_layers()
         try:
             job.eta_s = round(float(eta(job.timeline, job.estimate_s, job.lines_done)), 1)
         except Exception:
