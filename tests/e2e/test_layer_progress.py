@@ -8,29 +8,26 @@ from __future__ import annotations
 import pytest
 
 from tests.e2e.test_pen_change import wait_pen_change
-from tests.e2e.test_server import drawing
+from tests.e2e.test_server import drawing, submit
 
 pytestmark = pytest.mark.e2e
 
 SQUARE = ["G0 X20 Y80", "M3", "G1 X40 Y80 F3000", "G1 X40 Y100 F3000", "G1 X20 Y100 F3000",
           "G1 X20 Y80 F3000", "M5"]  # fmt: skip
-# three layers split at M0 (named by its message): six circles, a square, a smaller square
-PROGRAM = (drawing(circles=6) + "M0 red pen\n" + "\n".join(SQUARE) + "\nM0 blue pen\n"
+# three layers split at M0 (named by its message): two circles, a square, a smaller square
+PROGRAM = (drawing(circles=2, radius=8) + "M0 red pen\n" + "\n".join(SQUARE) + "\nM0 blue pen\n"
            + "\n".join(SQUARE).replace("X40", "X30").replace("Y100", "Y90") + "\n")  # fmt: skip
 
 
 def test_layers_carry_estimate_length_and_progress(server, plotter):
     server.home()
     plotter.clear()
-    response = server.client.post(
-        "/api/jobs", files={"file": ("layers.gcode", PROGRAM)}, data={"start": "true"}
-    )
-    assert response.status_code == 201, response.text
-    job = response.json()
+    job = submit(server, PROGRAM)
     layers = job["layers"]
     assert len(layers) == 3
-    assert sum(layer["estimate_s"] for layer in layers) == pytest.approx(job["estimate_s"],
-                                                                         rel=0.05, abs=1)
+    # the layers' times leave out only the travel between them and the pen changes
+    assert 0.8 * job["estimate_s"] < sum(layer["estimate_s"] for layer in layers) <= \
+        job["estimate_s"]
     assert sum(layer["pen_down_mm"] for layer in layers) == pytest.approx(
         job["stats"]["pen_down_mm"], rel=1e-3)  # fmt: skip
     assert layers[1]["pen_down_mm"] == pytest.approx(80, abs=0.01)  # the 20 mm square
@@ -64,7 +61,3 @@ def test_layers_carry_estimate_length_and_progress(server, plotter):
     assert [layer["progress"] for layer in done["layers"]] == [1, 1, 1]
     assert all(layer["lines_done"] == layer["last_line"] - layer["first_line"] + 1
                for layer in done["layers"])  # fmt: skip
-    # the store keeps them: the job list (read from memory) and a restart agree
-    server.restart()
-    kept = server.job(job["id"])
-    assert kept["layers"] == done["layers"]

@@ -100,11 +100,7 @@ def test_layered_job_events_arrive_once_in_order_after_a_500(plotter, tmp_path, 
         shown = server.client.get("/api/settings/webhooks").json()
         assert shown["fixed"] == [receiver.url] and shown["urls"] == []
         server.home()
-        response = server.client.post(
-            "/api/jobs", files={"file": ("layers.svg", THREE_LAYERS)}, data={"start": "true"}
-        )
-        assert response.status_code == 201, response.text
-        job = response.json()
+        job = submit(server, THREE_LAYERS)  # an SVG: the content tells, not the name
         for layer in (2, 3):
             wait_pen_change(server, job["id"], layer)
             assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
