@@ -10,11 +10,14 @@ import time
 
 import httpx
 import pytest
+from plotbridge.cli import webhooks_from_args
+from plotbridge.config import ConfigError
 from plotbridge.notify import check_url
 from plotbridge.notify.delivery import Delivery
 from plotbridge.notify.notices import NoticeWatcher
 
 from tests.unit.test_api import make_app, serving, settle
+from tests.unit.test_config import parse as serve_args
 
 # ---- notices ------------------------------------------------------------------------
 
@@ -206,6 +209,18 @@ async def test_an_event_dropped_while_retried_is_not_sent_again():
 def test_unusable_urls_are_refused_saying_why(url, why):
     with pytest.raises(ValueError, match=why):
         check_url(url)
+
+
+def test_serve_takes_webhook_options_and_refuses_bad_ones(monkeypatch, capsys):
+    monkeypatch.setenv("PLOTBRIDGE_WEBHOOKS", "http://a.test/1, http://a.test/1")
+    args = serve_args("--webhook", "https://b.test/2")
+    assert webhooks_from_args(args) == ("http://a.test/1", "https://b.test/2")
+    with pytest.raises(SystemExit):
+        serve_args("--webhook", "ftp://c.test/3")
+    assert "only http:// and https://" in capsys.readouterr().err
+    monkeypatch.setenv("PLOTBRIDGE_WEBHOOKS", "gopher://d.test/")
+    with pytest.raises(ConfigError, match=r"PLOTBRIDGE_WEBHOOKS.*only http"):
+        webhooks_from_args(serve_args())
 
 
 def test_http_and_https_urls_are_taken():

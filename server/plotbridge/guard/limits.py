@@ -15,7 +15,6 @@ ROUTES: tuple[tuple[str, re.Pattern[str], int], ...] = (
     ("POST", re.compile(r"/api/machine/(estop|unlock|home|pen|jog|motors)"), 1024),
     ("POST", re.compile(r"/api/machine/command"), 2048),
     ("PUT", re.compile(r"/api/machine/settings"), 16 * 1024),
-    ("PUT", re.compile(r"/api/settings/webhooks"), 64 * 1024),
     ("PATCH", re.compile(r"/api/jobs/[^/]+"), 4096),
     ("POST", re.compile(r"/api/jobs/[^/]+/(start|pause|resume|cancel|move)"), 1024),
 )
