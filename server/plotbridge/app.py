@@ -13,7 +13,7 @@ from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from plotbridge import __version__
-from plotbridge.api import jobs, pens, plotters, session, ws
+from plotbridge.api import jobs, notify, pens, plotters, session, ws
 from plotbridge.api.deps import Components, error
 from plotbridge.apidocs import mount_docs
 from plotbridge.auth import Auth
@@ -24,6 +24,7 @@ from plotbridge.guard.middleware import Guard
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.store import JobStore
 from plotbridge.models import ERROR_RESPONSES
+from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.link import Link
 from plotbridge.plotter.plotter import Plotter, WorkArea
@@ -51,6 +52,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     events = EventHub()
     clients = Hub()
     events.subscribe(clients.broadcast)
+    webhooks = Webhooks(list(config.webhooks), config.data_dir)
+    events.subscribe(webhooks.publish)
     config.jobs_dir.mkdir(parents=True, exist_ok=True)
     config.tmp_dir.mkdir(exist_ok=True)
     for leftover in config.tmp_dir.glob("upload-*"):
@@ -71,6 +74,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await webhooks.start()
         for plotter in units:
             plotter.start()
         try:
@@ -78,6 +82,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         finally:
             for plotter in units:
                 await plotter.stop()
+            await webhooks.close()
             importer.close()
             library.close()
             store.close()
@@ -91,7 +96,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     app.add_middleware(
         Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
     )
-    app.state.components = Components(config, auth, events, queue, clients, library)
+    app.state.components = Components(config, auth, events, queue, clients, library,
+                                      webhooks)
 
     @app.exception_handler(Refused)
     async def refused(_: Request, exc: Refused) -> JSONResponse:
@@ -114,7 +120,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         log.exception("unexpected error")  # a bug: bad input must never land here
         return error(500, f"internal error: {type(exc).__name__}: {exc}")
 
-    for router in (session.router, plotters.router, jobs.router, pens.router, ws.router):
+    for router in (session.router, plotters.router, jobs.router, pens.router, notify.router,
+                   ws.router):
         app.include_router(router)
     if config.web_dir is not None and config.web_dir.is_dir():
         app.mount("/", StaticFiles(directory=config.web_dir, html=True), name="web")

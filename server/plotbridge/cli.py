@@ -51,6 +51,16 @@ def _point(text: str) -> tuple[float, float]:
     return x, y
 
 
+def _webhook_url(text: str) -> str:
+    """An http(s) URL to post events to."""
+    from plotbridge.notify import check_url
+
+    try:
+        return check_url(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default=_env("HOST", "0.0.0.0"), help="address to listen on")
     parser.add_argument("--port", type=int, default=int(_env("PORT", 8000)), help="TCP port")
@@ -122,6 +132,12 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         help="park position in mm (default 0,0: the front left corner)",
     )  # fmt: skip
     parser.add_argument(
+        "--webhook", action="append", type=_webhook_url, metavar="URL",
+        default=[u for u in str(_env("WEBHOOKS", "")).split(",") if u.strip()],
+        help="POST job and plotter events as JSON to URL (repeatable; env PLOTBRIDGE_WEBHOOKS "
+             "comma-separated; more in the settings)",
+    )  # fmt: skip
+    parser.add_argument(
         "--zeroconf", action=argparse.BooleanOptionalAction,
         default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
         help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
@@ -160,6 +176,16 @@ def plotters_from_args(args: argparse.Namespace, data_dir: Path) -> list[Plotter
     return check_names(plotters, "the command line")
 
 
+def webhooks_from_args(args: argparse.Namespace) -> tuple[str, ...]:
+    """--webhook URLs (checked by argparse) and PLOTBRIDGE_WEBHOOKS' (checked here)."""
+    from plotbridge.notify import check_urls
+
+    try:
+        return tuple(check_urls(args.webhook))
+    except ValueError as exc:
+        raise ConfigError(f"--webhook / PLOTBRIDGE_WEBHOOKS: {exc}") from None
+
+
 def config_from_args(args: argparse.Namespace) -> Config:
     from plotbridge.importing.workers import Limits
 
@@ -179,6 +205,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         home_on_connect=args.home_on_connect,
         after_job=args.after_job,
         park=args.park,
+        webhooks=webhooks_from_args(args),
         log_level=args.log_level,
         zeroconf=args.zeroconf,
         web_dir=find_web_dir(),

@@ -119,6 +119,7 @@ class Config:
     home_on_connect: bool = False  # $H when a plotter connects in Alarm (it has switches)
     after_job: str = "none"  # park | home | none: the default "after the job" action
     park: tuple[float, float] = (0.0, 0.0)  # mm, where "park" leaves the carriage
+    webhooks: tuple[str, ...] = ()  # --webhook URLs (more in DATA_DIR/webhooks.json)
     web_dir: Path | None = None
     import_limits: Limits = field(default_factory=Limits)
 

@@ -14,6 +14,7 @@ from pydantic import (
 )
 
 from plotbridge.importing.fields import openapi_fields
+from plotbridge.notify import check_urls
 from plotbridge.papers import PAPER_PATTERN
 
 
@@ -131,6 +132,30 @@ class StartBody(Strict):
     layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1, max_length=1000)
     start_layer: int | None = Field(None, ge=1, description="plot from this layer on")
     pens: LayerPens | None = None
+
+
+class WebhooksBody(Strict):
+    urls: Annotated[list[Annotated[str, Field(max_length=2048)]], Field(max_length=16),
+                    AfterValidator(check_urls)]  # fmt: skip
+
+
+class Webhook(BaseModel):
+    url: str
+    source: Literal["option", "settings"]
+    queued: int
+    delivered: int
+    retries: int
+    dropped: int
+    refused: int
+    last_error: str | None
+
+
+class Webhooks(BaseModel):
+    urls: list[str]
+    """The URLs kept in the settings (PUT replaces them)."""
+    fixed: list[str]
+    """The URLs given with `plotbridge serve --webhook` (not editable here)."""
+    webhooks: list[Webhook]
 
 
 class Position(BaseModel):

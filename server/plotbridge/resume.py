@@ -15,7 +15,10 @@ import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from plotbridge.jobs.model import Layer
 
 from plotbridge.program.reader import PEN_DOWN, PEN_UP, Command, read_program, state_before
 
@@ -221,7 +224,7 @@ class PickError(ValueError):
     """A resume point that names nothing in the program (the message says what)."""
 
 
-def pick(program: Path, layers: list[dict[str, Any]], lines_total: int,
+def pick(program: Path, layers: list[Layer], lines_total: int,
          where: dict[str, Any], overlap: float = 0.0) -> ResumePoint:  # fmt: skip
     """Where to resume from `where`: {"x", "y"} (the nearest stroke vertex), {"line"}
     (its start) or {"layer"} (1-based; its first line), then `overlap` mm back along
@@ -230,7 +233,7 @@ def pick(program: Path, layers: list[dict[str, Any]], lines_total: int,
         layer = int(where["layer"])
         if not 1 <= layer <= max(len(layers), 1):
             raise PickError(f"layer {layer}: the job has {max(len(layers), 1)} layer(s)")
-        return ResumePoint(1 if layer == 1 else int(layers[layer - 1]["first_line"]))
+        return ResumePoint(1 if layer == 1 else layers[layer - 1].first_line)
     if "line" in where:
         line = int(where["line"])
         if not 1 <= line <= lines_total:
@@ -304,21 +307,21 @@ def resume_preamble(program: Path, point: ResumePoint) -> tuple[int, list[str]]:
 # ---- layers a job plots ------------------------------------------------------------
 
 
-def layer_bounds(layers: list[dict[str, Any]]) -> list[tuple[int, int | None]]:
+def layer_bounds(layers: list[Layer]) -> list[tuple[int, int | None]]:
     """(first line, the next layer's `M0` or None) of every layer; the first starts at 1."""
-    starts = [1] + [int(layer["first_line"]) for layer in layers[1:]]
-    stops: list[int | None] = [int(layer["first_line"]) - 1 for layer in layers[1:]]
+    starts = [1] + [layer.first_line for layer in layers[1:]]
+    stops: list[int | None] = [layer.first_line - 1 for layer in layers[1:]]
     return list(zip(starts, [*stops, None], strict=True))
 
 
-def first_line(layers: list[dict[str, Any]], plot: list[int] | None) -> int:
+def first_line(layers: list[Layer], plot: list[int] | None) -> int:
     """The line a job that plots layers `plot` (1-based; None: all) starts with."""
     if not layers or not plot:
         return 1
     return layer_bounds(layers)[min(plot) - 1][0]
 
 
-def layer_runs(layers: list[dict[str, Any]], plot: list[int] | None,
+def layer_runs(layers: list[Layer], plot: list[int] | None,
                line: int) -> list[tuple[int, int | None, int]]:  # fmt: skip
     """What to stream from `line` on: (first line, the line to stop before or None, layer
     index) for the rest of `line`'s layer, then each later layer in `plot` (None: all);

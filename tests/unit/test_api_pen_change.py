@@ -69,11 +69,11 @@ async def test_pen_change_parks_prompts_and_continues(tmp_path, monkeypatch):
         link.set_state("Idle", pins="S")  # the board's resume button
         await settle(lambda: queue.jobs[job["id"]].state == "done")
         m0s = {layer["first_line"] - 1 for layer in layers[1:]}
-        # after each change the way from the park position to the layer's start (line 0)
-        travels = [text for n, text in link.streamed if n == 0]
-        assert len([t for t in travels if t.startswith("G0")]) == 2, travels
-        mine = [n for n, _ in link.streamed if n][: len(program) - len(m0s)]
-        assert mine == [n for n in range(1, len(program) + 1) if n not in m0s]
+        back = 4  # after each change, pen up (M5 G21 G90) and back to where the layer ended
+        mine = link.streamed[: len(program) - len(m0s) + back * len(m0s)]
+        assert [n for n, _ in mine if n] == [n for n in range(1, len(program) + 1) if n not in m0s]
+        travels = [text for n, text in mine if n == 0]
+        assert travels[back - 1::back] == ["G0X5Y0", "G0X15Y0"], travels
         assert queue.jobs[job["id"]].pen_change is None
         await settle(lambda: queue.jobs[other["id"]].state == "pen_change")  # the next job
 

@@ -11,7 +11,7 @@ import pytest
 from plotbridge.importing import MachineProfile
 from plotbridge.motion import library
 from plotbridge.motion.estimate import Estimator, thin_timeline
-from plotbridge.motion.eta import eta
+from plotbridge.motion.eta import eta, share_done
 from plotbridge.motion.timing import GRBL_PLANNER_BLOCKS, stock_grbl
 
 # 1000 mm/s², 100 mm/s max rate, junction deviation 0.02 mm; lines reach the planner
@@ -181,3 +181,12 @@ def test_eta_interpolates():
     assert eta(timeline, 20.0, 15) == pytest.approx(10.0)
     assert eta(timeline, 20.0, 30) == 0.0
     assert eta([], 12.0, 3) == 12.0
+
+
+def test_share_done_weighs_a_stretch_of_lines_by_its_estimated_time():
+    timeline = [(10, 5.0), (20, 15.0), (30, 20.0)]
+    assert share_done(timeline, 11, 20, 10) == 0.0
+    assert share_done(timeline, 11, 20, 15) == pytest.approx(0.5)
+    assert share_done(timeline, 11, 30, 20) == pytest.approx(10 / 15)  # time, not lines
+    assert share_done(timeline, 11, 30, 30) == 1.0
+    assert share_done([], 1, 4, 1) == 0.25  # no timeline: by lines

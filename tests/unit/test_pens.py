@@ -147,21 +147,22 @@ async def test_library_refuses_duplicates_and_unknown_pens(tmp_path):
 
 async def test_layers_get_named_matched_or_kept_pens(tmp_path):
     from plotbridge.errors import Refused
+    from plotbridge.jobs.model import Layer
 
     library = PenLibrary(tmp_path / "db.sqlite", EventHub())
     red = await library.create(PenSpec(name="red marker", colour="#ff0000"))
     outline = await library.create(PenSpec(name="outline"))
-    layers = [{"name": "outline", "colour": "#000000"}, {"name": "b", "colour": "#ff0000"},
-              {"name": "c", "colour": "#00ff00"}]  # fmt: skip
+    layers = [Layer(name=name, colour=colour, first_line=1, last_line=1)
+              for name, colour in (("outline", "#000000"), ("b", "#ff0000"), ("c", "#00ff00"))]
     library.assign(layers)
-    assert [layer["pen"] for layer in layers] == [outline.id, red.id, None]
+    assert [layer.pen for layer in layers] == [outline.id, red.id, None]
     library.assign(layers, {"c": "RED MARKER", "1": None}, kept=layers)
-    assert [layer["pen"] for layer in layers] == [None, red.id, red.id]
+    assert [layer.pen for layer in layers] == [None, red.id, red.id]
     for wanted, word in (({"9": "outline"}, "no layer '9'"), ({"b": "blue"}, "no pen 'blue'")):
         with pytest.raises(Refused) as refused:
             library.assign(layers, wanted)
         assert refused.value.status == 422 and word in refused.value.detail
-    assert [layer["pen"] for layer in layers] == [None, red.id, red.id]  # nothing changed
+    assert [layer.pen for layer in layers] == [None, red.id, red.id]  # nothing changed
     library.close()
 
 
@@ -257,6 +258,6 @@ async def test_a_start_plots_only_the_chosen_layers(tmp_path, monkeypatch):
         await client.post(f"/api/jobs/{job['id']}/resume")
         await settle(lambda: queue.jobs[job["id"]].state == "done")
         layers = queue.jobs[job["id"]].layers
-        second = range(layers[1]["first_line"], layers[1]["last_line"] + 1)
+        second = range(layers[1].first_line, layers[1].last_line + 1)
         sent = [n for n, _ in link.streamed]
-        assert not set(second) & set(sent) and layers[2]["last_line"] in sent
+        assert not set(second) & set(sent) and layers[2].last_line in sent

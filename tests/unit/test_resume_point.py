@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import pytest
+from plotbridge.jobs.model import Layer
 from plotbridge.resume import (
     Mark,
     PickError,
@@ -24,7 +25,7 @@ PROGRAM = ["G21", "G90", "M5", "G0 X10 Y10", "M3", "G1 X20 Y10 F600", "G1 X20 Y2
            "G1 X10 Y20 F600", "M5", "G0 X50 Y10", "M3", "G2 X70 Y10 I10 J0 F600",
            # 13   14    15            16    17                 18
            "M5", "M0", "G0 X10 Y50", "M3", "G1 X30 Y50 F600", "M5"]  # fmt: skip
-LAYERS = [{"first_line": 4, "last_line": 13}, {"first_line": 15, "last_line": 18}]
+LAYERS = [Layer(name="a", first_line=4, last_line=13), Layer(name="b", first_line=15, last_line=18)]
 
 
 @pytest.fixture
@@ -99,7 +100,8 @@ def test_locate_on_an_arc_and_where_the_board_ran_out(program):
 
 
 def test_layer_runs_skip_layers_and_pause_only_between_plotted_ones():
-    three = [{"first_line": 4}, {"first_line": 10}, {"first_line": 20}]
+    three = [Layer(name=str(k), first_line=first, last_line=first)
+             for k, first in enumerate((4, 10, 20))]
     assert layer_runs(three, None, 1) == [(1, 9, 0), (10, 19, 1), (20, None, 2)]
     assert layer_runs(three, [1, 3], 1) == [(1, 9, 0), (20, None, 2)]
     assert layer_runs(three, [2, 3], 10) == [(10, 19, 1), (20, None, 2)]

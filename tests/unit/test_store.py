@@ -33,6 +33,21 @@ def test_wal_and_roundtrip_keeps_the_servers_own_fields(tmp_path):
     assert "safe_line" not in jobs[0].public() and "source" not in jobs[0].public()
 
 
+def test_layers_keep_their_progress_and_extra_keys(tmp_path):
+    layers = [{"name": "a", "colour": "#000000", "first_line": 1, "last_line": 10,
+               "pen_down_mm": 5.0, "estimate_s": 2.0, "ink": "fineliner"}]  # fmt: skip
+    running = job("a", "running", layers=layers, lines_done=5, timeline=[(10, 2.0)])
+    running.follow_layers()
+    store = open_store(tmp_path)
+    store.save(running, 0).result()
+    store.close()
+    (kept,) = open_store(tmp_path).load_all()
+    (layer,) = kept.layers
+    assert layer.lines_done == 5 and layer.progress == 0.5 and layer.pen_down_mm == 5.0
+    assert kept.public()["layers"] == running.public()["layers"]
+    assert kept.public()["layers"][0]["ink"] == "fineliner"  # a key the model does not name
+
+
 def test_order_and_delete(tmp_path):
     store = open_store(tmp_path)
     for index, name in enumerate("abc"):

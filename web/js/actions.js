@@ -3,6 +3,7 @@
 
 import { api, ApiError, uploadJob } from "./api.js";
 import { LOG_LIMIT } from "./views/console.js";
+import { askPermission, notifyJob } from "./notify.js";
 import { loadPens } from "./views/pens.js";
 import { buildGeometry } from "./preview-data.js";
 import { holdAction, previewJob } from "./store.js";
@@ -120,21 +121,13 @@ export function createActions(store, socket, estop) {
   }
 
   function upsertJob(job) {
-    const before = s.jobs.find((j) => sameId(j.id, job.id));
-    if (job.state === "pen_change" && (!before || before.state !== "pen_change")) notifyPenChange(job);
+    notifyJob(s.jobs.find((j) => sameId(j.id, job.id)), job);
     store.update((st) => {
       const i = st.jobs.findIndex((j) => sameId(j.id, job.id));
       if (i >= 0) st.jobs[i] = { ...st.jobs[i], ...job };
       else st.jobs.push(job);
     });
     ensurePreview();
-  }
-
-  /** A browser notification when a pen change is due and the page is in the background. */
-  function notifyPenChange(job) {
-    if (!document.hidden || typeof Notification === "undefined" || Notification.permission !== "granted") return;
-    const body = job.pen_change ? job.pen_change.message : `“${job.name}” waits for a pen change`;
-    new Notification("plotbridge: change the pen", { body, tag: `pen-${job.id}` });
   }
 
   async function loadJobs() {
@@ -458,10 +451,7 @@ export function createActions(store, socket, estop) {
           await loadJobs();
           return;
         }
-        if (verb === "start" && job.layers && job.layers.length > 1 && typeof Notification !== "undefined"
-            && Notification.permission === "default") {
-          Notification.requestPermission().catch(() => {}); // asked on the click: pen changes notify
-        }
+        if (verb === "start" || verb === "resume" || verb === "restart") askPermission(); // pen changes and job ends notify
         const updated = await api.post(`${path}/${verb}`);
         if (updated && updated.id !== undefined) upsertJob(updated);
         if (verb === "start" || verb === "restart") {

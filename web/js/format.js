@@ -15,6 +15,12 @@ export function mm(value, digits = 2) {
   return Number.isFinite(value) ? value.toFixed(digits) : "–";
 }
 
+/** A pen-down length: millimetres below a metre, metres above. */
+export function length(millimetres) {
+  if (!Number.isFinite(millimetres)) return "–";
+  return millimetres < 1000 ? `${Math.round(millimetres)} mm` : `${(millimetres / 1000).toFixed(2)} m`;
+}
+
 export function percent(fraction) {
   return Number.isFinite(fraction) ? `${Math.floor(Math.min(1, Math.max(0, fraction)) * 100)} %` : "–";
 }

@@ -11,6 +11,7 @@ from fastapi.responses import JSONResponse
 from plotbridge.auth import COOKIE, Auth
 from plotbridge.config import Config
 from plotbridge.events import EventHub
+from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
 from plotbridge.queue import JobQueue
 from plotbridge.ws import Hub
@@ -24,6 +25,7 @@ class Components:
     queue: JobQueue
     clients: Hub  # the WebSocket fan-out
     pens: PenLibrary
+    webhooks: Webhooks
 
 
 def components(request: Request) -> Components:

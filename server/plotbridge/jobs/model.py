@@ -12,6 +12,8 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic_core import to_jsonable_python
 
+from plotbridge.motion.eta import Timeline, share_done
+
 JobState = Literal[
     "queued", "waiting", "running", "paused", "pen_change", "done", "failed", "cancelled",
     "stopped", "interrupted",
@@ -39,6 +41,38 @@ class Bounds(BaseModel):
                 and self.max_x <= width + eps and self.max_y <= height + eps)
 
 
+class Layer(BaseModel):
+    """One layer of a job (docs/INTERNALS.md, "Layers"): what the import measured, and
+    how far the job's streaming has drawn it."""
+
+    model_config = ConfigDict(extra="allow")  # more about a layer may come with the import
+
+    name: str
+    colour: str = ""
+    first_line: int
+    """Its first program line (1-based); the line before is its `M0` (not the first layer)."""
+    last_line: int
+    strokes: int = 0
+    pen_down_mm: float = 0.0
+    estimate_s: float = 0.0
+    lines_done: int = 0
+    """Its lines acknowledged by the board, 0..lines_total."""
+    progress: float = 0.0
+    """The share of its estimated time drawn, 0..1."""
+    pen: int | None = None
+    """The pen library's id of the pen that draws it ("Pen library"), or None."""
+
+    @property
+    def lines_total(self) -> int:
+        return self.last_line - self.first_line + 1
+
+    def follow(self, lines_done: int, timeline: Timeline) -> None:
+        """Its progress when the job has `lines_done` lines acknowledged."""
+        self.lines_done = min(max(lines_done - self.first_line + 1, 0), self.lines_total)
+        self.progress = round(share_done(timeline, self.first_line, self.last_line,
+                                         lines_done), 4)  # fmt: skip
+
+
 class Imported(BaseModel):
     """What the importer tells about a program (worker process to server, plain types)."""
 
@@ -48,7 +82,7 @@ class Imported(BaseModel):
     bounds: Bounds
     stats: dict[str, float] = {}
     timeline: list[tuple[int, float]] = []
-    layers: list[dict[str, Any]] = []          # docs/INTERNALS.md, "Layers"
+    layers: list[Layer] = []                   # docs/INTERNALS.md, "Layers"
     warnings: list[dict[str, Any]] = []        # what the importer dropped or changed
     substitutions: list[dict[str, Any]] = []   # SVG text set in a substitute font
 
@@ -88,7 +122,7 @@ class Job(BaseModel):
     resume_line: int | None = None
     started_at: float | None = None
     finished_at: float | None = None
-    layers: list[dict[str, Any]] = []
+    layers: list[Layer] = []
     warnings: list[dict[str, Any]] = []
     substitutions: list[dict[str, Any]] = []
     plotter: str | None = None
@@ -127,9 +161,14 @@ class Job(BaseModel):
         self.bounds = result.bounds
         self.stats = result.stats
         self.timeline = result.timeline
-        self.layers = result.layers
+        self.layers = [layer.model_copy() for layer in result.layers]
         self.warnings = result.warnings
         self.substitutions = result.substitutions
+
+    def follow_layers(self) -> None:
+        """Each layer's progress from the job's acknowledged lines."""
+        for layer in self.layers:
+            layer.follow(self.lines_done, self.timeline)
 
     @property
     def active(self) -> bool:

@@ -12,12 +12,15 @@ import asyncio
 import logging
 import sqlite3
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
 from plotbridge.pens.model import Pen, PenPatch, PenSpec
 from plotbridge.pens.store import PenStore
+
+if TYPE_CHECKING:
+    from plotbridge.jobs.model import Layer
 
 log = logging.getLogger("plotbridge.pens")
 
@@ -171,15 +174,15 @@ class PenLibrary:
 
     # ---- layers and their pens ---------------------------------------------------------
 
-    def layer_pen(self, layer: dict[str, Any]) -> Pen | None:
+    def layer_pen(self, layer: Layer) -> Pen | None:
         """The pen a job layer names (None if none, or it was deleted since)."""
-        ref = layer.get("pen")
+        ref = layer.pen
         return self.find(ref) if isinstance(ref, int) else None
 
-    def default_pen(self, layer: dict[str, Any]) -> int | None:
+    def default_pen(self, layer: Layer) -> int | None:
         """The pen whose name is the layer's name, else whose colour is its colour."""
-        name = str(layer.get("name") or "").casefold()
-        colour = str(layer.get("colour") or "").casefold()
+        name = layer.name.casefold()
+        colour = layer.colour.casefold()
         for pen in self.pens.values():
             if name and pen.name.casefold() == name:
                 return pen.id
@@ -188,8 +191,8 @@ class PenLibrary:
                 return pen.id
         return None
 
-    def assign(self, layers: list[dict[str, Any]], wanted: dict[str, Any] | None = None,
-               kept: list[dict[str, Any]] | None = None) -> None:  # fmt: skip
+    def assign(self, layers: list[Layer], wanted: dict[str, Any] | None = None,
+               kept: list[Layer] | None = None) -> None:  # fmt: skip
         """Give every layer its `pen` (a pen id or None): the one `wanted` names for it
         (by 1-based number or layer name), else the one it had in `kept` (the layers
         before a re-import), else the default. A bad layer or pen is refused (422) before
@@ -200,11 +203,11 @@ class PenLibrary:
             chosen[index] = None if ref is None else self._pen_ref(ref, key).id
         for index, layer in enumerate(layers):
             if index in chosen:
-                layer["pen"] = chosen[index]
-            elif kept is not None and index < len(kept) and "pen" in kept[index]:
-                layer["pen"] = kept[index]["pen"]
+                layer.pen = chosen[index]
+            elif kept is not None and index < len(kept):
+                layer.pen = kept[index].pen
             else:
-                layer["pen"] = self.default_pen(layer)
+                layer.pen = self.default_pen(layer)
 
     def _pen_ref(self, ref: Any, key: str) -> Pen:
         pen = self.find(ref)
@@ -214,12 +217,12 @@ class PenLibrary:
         return pen
 
     @staticmethod
-    def _layer_index(layers: list[dict[str, Any]], key: str) -> int:
+    def _layer_index(layers: list[Layer], key: str) -> int:
         key = str(key).strip()
         if key.isdigit() and 1 <= int(key) <= len(layers):
             return int(key) - 1
         for index, layer in enumerate(layers):
-            if str(layer.get("name") or "").casefold() == key.casefold():
+            if layer.name.casefold() == key.casefold():
                 return index
-        names = ", ".join(f"{i + 1} {layer.get('name')!r}" for i, layer in enumerate(layers))
+        names = ", ".join(f"{i + 1} {layer.name!r}" for i, layer in enumerate(layers))
         raise Refused(422, f"pens: the job has no layer {key!r}; its layers: {names or 'none'}")

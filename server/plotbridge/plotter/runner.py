@@ -49,7 +49,7 @@ Report = Callable[[Job, bool], None]
 
 def layer_at(job: Job, line: int) -> int:
     """The 0-based index of the layer program line `line` belongs to (0 without layers)."""
-    return max((i for i, layer in enumerate(job.layers) if int(layer["first_line"]) <= line),
+    return max((i for i, layer in enumerate(job.layers) if layer.first_line <= line),
                default=0)  # fmt: skip
 
 
@@ -112,6 +112,7 @@ class Runner:
         job.started_at, job.finished_at, job.safe_line = time.time(), None, line
         if not resumed:
             job.lines_done, job.progress, job.resume_line = 0, 0.0, None
+            job.follow_layers()
         self._floor = line
         self._motion = bytearray()
         self._mark = None
@@ -391,7 +392,7 @@ class Runner:
     def _layer_prompt(self, job: Job, index: int) -> dict[str, object]:
         """What to load before layer `index` (0-based)."""
         layer = job.layers[index]
-        name, colour = layer.get("name") or f"layer {index + 1}", layer.get("colour") or ""
+        name, colour = layer.name or f"layer {index + 1}", layer.colour
         pen = self.pens.layer_pen(layer) if self.pens is not None else None
         load = (f"load pen '{pen.name}'" if pen is not None
                 else "load its pen" + (f" ({colour})" if colour else ""))  # fmt: skip
@@ -524,6 +525,7 @@ class Runner:
     def _progress(self, job: Job) -> None:
         total = max(job.lines_total, 1)
         job.progress = round(min(job.lines_done / total, 1.0), 4)
+        job.follow_layers()
         try:
             job.eta_s = round(float(eta(job.timeline, job.estimate_s, job.lines_done)), 1)
         except Exception:

@@ -1,7 +1,7 @@
 // Adding jobs (file, drop, pattern), upload progress and errors, placement, the queue.
 
-import { $, el, setDisabled, setHidden, setText, syncList } from "../dom.js";
-import { bytes, duration, percent } from "../format.js";
+import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
+import { bytes, duration, length, percent } from "../format.js";
 import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
 import { renderLayerPens } from "./pens.js";
 
@@ -30,6 +30,27 @@ export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
   }
   if (DELETABLE.has(job.state)) b.push({ verb: "delete", label: "Delete" });
   return b;
+}
+
+const COLOUR = /^#[0-9a-f]{3,8}$/i;
+
+/** A job's layers as the view shows them (none for a single layer: the job's own bar says
+ * it all): name, colour, progress and what it takes; `current` is the one being drawn
+ * (or whose pen is due). Pure. */
+export function layerRows(job) {
+  const layers = job.layers || [];
+  if (layers.length < 2) return [];
+  const active = ACTIVE_JOB_STATES.has(job.state);
+  const due = job.state === "pen_change" && job.pen_change ? job.pen_change.layer - 1 : -1;
+  const drawing = active && due < 0 ? layers.findIndex((l) => (l.progress || 0) < 1) : -1;
+  return layers.map((l, i) => ({
+    key: `${i}:${l.first_line}`,
+    name: l.name || `layer ${i + 1}`,
+    colour: COLOUR.test(l.colour || "") ? l.colour : "",
+    progress: l.progress || 0,
+    info: `${percent(l.progress || 0)} · est. ${duration(l.estimate_s)} · ${length(l.pen_down_mm)}`,
+    current: i === due || i === drawing,
+  }));
 }
 
 export function bindJobs(actions) {
@@ -151,6 +172,7 @@ function renderQueue(state) {
         el("span", { className: "badge" })),
       el("div", { className: "job-meta" }),
       el("div", { className: "job-progress" }, el("progress", { max: 1 }), el("span", { className: "pct" })),
+      el("ol", { className: "job-layers", "aria-label": "Layers" }),
       el("p", { className: "error job-error" }),
       el("div", { className: "row wrap layer-pens" }),
       el("div", { className: "row wrap actions" })),
@@ -176,6 +198,7 @@ function renderQueue(state) {
         const eta = job.state === "running" ? ` · ${duration(job.eta_s)} left` : "";
         setText(prog.querySelector(".pct"), `${percent(job.progress)} (${job.lines_done ?? 0}/${job.lines_total ?? "?"})${eta}`);
       }
+      renderLayers(node.querySelector(".job-layers"), job);
       const err = node.querySelector(".job-error");
       setText(err, job.error ? (typeof job.error === "string" ? job.error : JSON.stringify(job.error)) : "");
       setHidden(err, !job.error);
@@ -186,6 +209,26 @@ function renderQueue(state) {
       syncList(row, buttons, (b) => b.verb,
         (b) => el("button", { type: "button", "data-verb": b.verb, "aria-label": b.aria }, b.label),
         (btn, b) => setDisabled(btn, Boolean(b.disabled)));
+    });
+}
+
+function renderLayers(list, job) {
+  const rows = layerRows(job);
+  setHidden(list, rows.length === 0);
+  syncList(list, rows, (r) => r.key,
+    () => el("li", { className: "layer" },
+      el("span", { className: "swatch", "aria-hidden": "true" }),
+      el("span", { className: "layer-name" }),
+      el("progress", { max: 1 }),
+      el("span", { className: "layer-info" })),
+    (li, r) => {
+      li.querySelector(".swatch").style.backgroundColor = r.colour;
+      setText(li.querySelector(".layer-name"), r.name);
+      const bar = li.querySelector("progress");
+      bar.value = r.progress;
+      setAttr(bar, "aria-label", `${r.name}: ${percent(r.progress)}`);
+      setText(li.querySelector(".layer-info"), r.info);
+      setAttr(li, "aria-current", r.current ? "step" : null);
     });
 }
 

@@ -1,0 +1,126 @@
+"""One webhook URL's ordered, bounded queue and the task that posts it.
+
+`put` never waits (it runs inside the event hub's publish, also on the
+emergency stop's path): it appends the event's JSON to the queue, dropping the
+oldest one with a log line when the receiver has been down so long that
+`limit` events wait. The task posts the events one at a time in order; each
+event leaves the queue once its receiver answered 2xx (or refused it for
+good), so it is delivered once, in order. A receiver that errs (5xx, 408, 429,
+connection refused, timeout) gets the same event again after a delay doubling
+from `first_delay` to `max_delay`. A timed-out request may have arrived: every
+event carries an `id` for the receiver to recognise a repeat.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+from collections import deque
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
+from typing import Any
+
+log = logging.getLogger("plotbridge.notify")
+
+Post = Callable[[str, bytes, dict[str, str]], Awaitable[int]]
+"""Posts a body to a URL with headers; answers the HTTP status. Raises `OSError` or
+`httpx.TransportError` (refused, timed out, reset) when there is no answer."""
+
+RETRY_STATUS = frozenset({408, 425, 429})  # and every 5xx
+
+
+@dataclass
+class Pending:
+    event: str
+    body: bytes
+
+
+@dataclass
+class Figures:
+    """What the settings API shows per URL."""
+
+    delivered: int = 0
+    retries: int = 0
+    dropped: int = 0
+    refused: int = 0
+    last_error: str | None = None
+
+
+class Delivery:
+    def __init__(self, url: str, post: Post, *, limit: int = 100, first_delay: float = 0.5,
+                 max_delay: float = 60.0) -> None:  # fmt: skip
+        self.url = url
+        self._post = post
+        self.limit = limit
+        self.first_delay = first_delay
+        self.max_delay = max_delay
+        self.figures = Figures()
+        self._queue: deque[Pending] = deque()
+        self._wake = asyncio.Event()
+        self._task: asyncio.Task[None] | None = None
+
+    @property
+    def queued(self) -> int:
+        return len(self._queue)
+
+    def start(self) -> None:
+        self._task = asyncio.get_running_loop().create_task(self._run(), name="webhook")
+
+    async def close(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+            self._task = None
+
+    def put(self, event: str, body: dict[str, Any]) -> None:
+        """Queue one event (never waits)."""
+        if len(self._queue) >= self.limit:
+            lost = self._queue.popleft()
+            self.figures.dropped += 1
+            log.warning("webhook %s: %d events wait (receiver down?); dropped the oldest, "
+                        "a %s", self.url, self.limit, lost.event)  # fmt: skip
+        self._queue.append(Pending(event, json.dumps(body).encode()))
+        self._wake.set()
+
+    async def _run(self) -> None:
+        while True:
+            while not self._queue:
+                self._wake.clear()
+                await self._wake.wait()
+            pending = self._queue[0]
+            await self._deliver(pending)
+            if self._queue and self._queue[0] is pending:  # not dropped meanwhile
+                self._queue.popleft()
+
+    async def _deliver(self, pending: Pending) -> None:
+        """Post until the receiver takes it, refuses it for good, or the queue drops it."""
+        delay = self.first_delay
+        headers = {"Content-Type": "application/json", "X-Plotbridge-Event": pending.event}
+        while True:
+            try:
+                status = await self._post(self.url, pending.body, headers)
+                problem = None if status < 300 else f"answered HTTP {status}"
+            except asyncio.CancelledError:
+                raise
+            except Exception as exc:  # refused, timed out, reset, bad name: the receiver's side
+                status, problem = 0, f"{type(exc).__name__}: {exc}".rstrip(": ")
+            if problem is None:
+                self.figures.delivered += 1
+                self.figures.last_error = None
+                return
+            self.figures.last_error = problem
+            if status and status not in RETRY_STATUS and status < 500:
+                self.figures.refused += 1
+                log.warning("webhook %s %s to a %s; not sent again", self.url, problem,
+                            pending.event)  # fmt: skip
+                return
+            self.figures.retries += 1
+            log.warning("webhook %s %s to a %s; again in %.1f s", self.url, problem,
+                        pending.event, delay)  # fmt: skip
+            await asyncio.sleep(delay)
+            delay = min(delay * 2, self.max_delay)
+            if not self._queue or self._queue[0] is not pending:
+                return  # dropped while waiting (the queue overflowed)

@@ -1,0 +1,254 @@
+"""Notifications: which hub messages make which notices, and how one URL's queue
+delivers them (order, retries with backoff, bounds) to a fake receiver; the
+settings API for the URLs."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+
+import httpx
+import pytest
+from plotbridge.cli import webhooks_from_args
+from plotbridge.config import ConfigError
+from plotbridge.notify import check_url
+from plotbridge.notify.delivery import Delivery
+from plotbridge.notify.notices import NoticeWatcher
+
+from tests.unit.test_api import make_app, serving, settle
+from tests.unit.test_config import parse as serve_args
+
+# ---- notices ------------------------------------------------------------------------
+
+
+def job(state: str, **extra) -> dict:
+    return {"type": "job", "job": {"id": "j1", "name": "cat", "plotter": "p1",
+                                   "state": state, **extra}}  # fmt: skip
+
+
+def machine(state: str, connected: bool = True, alarm: int | None = None) -> dict:
+    return {"type": "machine", "plotter": "p1",
+            "machine": {"connected": connected, "state": state, "alarm": alarm}}  # fmt: skip
+
+
+def events(watcher: NoticeWatcher, *messages: dict) -> list[str]:
+    return [n.event for m in messages for n in watcher.feed(m)]
+
+
+def test_a_layered_job_tells_start_pen_changes_and_done_once_each():
+    watcher = NoticeWatcher()
+    change = {"layer": 2, "layers": 2, "message": "Layer 2 of 2, 'red': load its pen"}
+    told = events(watcher, job("queued"), job("running"), job("running", progress=0.3),
+                  job("pen_change", pen_change=change), job("pen_change"), job("running"),
+                  job("paused"), job("running"), job("done"), job("done"))  # fmt: skip
+    assert told == ["job_started", "pen_change", "job_done"]
+
+
+def test_notice_bodies_name_plotter_job_time_and_say_what_happened():
+    watcher = NoticeWatcher()
+    watcher.feed(job("running"))
+    change = {"layer": 2, "layers": 3, "message": "Layer 2 of 3, 'red': load its pen"}
+    (notice,) = watcher.feed(job("pen_change", pen_change=change))
+    body = notice.body()
+    assert body["event"] == "pen_change" and body["plotter"] == "p1"
+    assert body["job"] == {"id": "j1", "name": "cat", "state": "pen_change"}
+    assert body["message"] == "Job 'cat' on p1: Layer 2 of 3, 'red': load its pen"
+    assert body["details"]["layer"] == 2
+    assert abs(body["timestamp"] - time.time()) < 5 and body["time"].endswith("+00:00")
+    (later,) = watcher.feed(job("done"))
+    assert later.body()["id"] != body["id"]
+    json.dumps(body)  # plain JSON
+
+
+def test_failed_stopped_and_interrupted_jobs_are_told_with_the_reason():
+    watcher = NoticeWatcher()
+    told = [n.body() for m in (job("running"), job("failed", error="line 4: error:20"))
+            for n in watcher.feed(m)]  # fmt: skip
+    assert told[-1]["event"] == "job_failed" and "line 4: error:20" in told[-1]["message"]
+    for end in ("stopped", "cancelled", "interrupted"):
+        watcher = NoticeWatcher()
+        assert events(watcher, job("running"), job(end, error="why")) == ["job_started",
+                                                                          "job_stopped"]
+    # a waiting job cancelled never ran: nothing to tell
+    assert events(NoticeWatcher(), job("waiting"), job("cancelled")) == []
+    # resuming a stopped job starts it again
+    watcher = NoticeWatcher()
+    told = [n.message for m in (job("running"), job("stopped"), job("running"))
+            for n in watcher.feed(m)]  # fmt: skip
+    assert told[-1] == "Job 'cat' resumed on p1"
+
+
+def test_alarm_and_link_lost_name_the_plotter_and_its_job():
+    watcher = NoticeWatcher()
+    # the board coming up in Alarm (homing required) is no news
+    assert events(watcher, machine("Disconnected", False), machine("Alarm"), machine("Idle"),
+                  job("running"), machine("Run")) == ["job_started"]  # fmt: skip
+    (alarm,) = watcher.feed(machine("Alarm", alarm=2))
+    assert alarm.event == "alarm" and "ALARM:2" in alarm.message
+    assert alarm.job is not None and alarm.job.id == "j1"
+    assert events(watcher, machine("Alarm", alarm=2)) == []  # still the same alarm
+    assert events(watcher, machine("Idle"), job("interrupted")) == ["job_stopped"]
+    (lost,) = watcher.feed(machine("Disconnected", False))
+    assert lost.event == "link_lost" and lost.plotter == "p1"
+    assert lost.job is not None and lost.job.state == "interrupted"  # the job it cut off
+    assert events(watcher, machine("Disconnected", False)) == []
+
+
+# ---- one URL's delivery -------------------------------------------------------------
+
+
+class FakeReceiver:
+    """Answers from a script (a status, or an exception to raise), then 200."""
+
+    def __init__(self, *script: int | Exception) -> None:
+        self.script = list(script)
+        self.got: list[tuple[float, dict]] = []
+        self.hang = asyncio.Event()
+        self.hang.set()
+        self.calls = 0
+
+    async def post(self, url: str, body: bytes, headers: dict[str, str]) -> int:
+        self.calls += 1
+        await self.hang.wait()
+        self.got.append((time.monotonic(), json.loads(body)))
+        answer = self.script.pop(0) if self.script else 200
+        if isinstance(answer, Exception):
+            raise answer
+        return answer
+
+    def numbers(self) -> list[int]:
+        return [body["n"] for _, body in self.got]
+
+
+async def running(receiver: FakeReceiver, **options) -> Delivery:
+    delivery = Delivery("http://receiver.test/hook", receiver.post,
+                        **{"first_delay": 0.05, "max_delay": 0.2, **options})  # fmt: skip
+    delivery.start()
+    return delivery
+
+
+async def test_each_event_once_in_order():
+    receiver = FakeReceiver()
+    delivery = await running(receiver)
+    for n in range(20):
+        delivery.put("job_done", {"n": n})
+    await settle(lambda: delivery.figures.delivered == 20)
+    assert receiver.numbers() == list(range(20))
+    assert delivery.queued == 0 and delivery.figures.retries == 0
+    await delivery.close()
+
+
+async def test_errors_are_retried_with_growing_delays_and_order_kept():
+    receiver = FakeReceiver(500, httpx.ConnectError("refused"), httpx.ReadTimeout("slow"), 503)
+    delivery = await running(receiver)
+    delivery.put("job_started", {"n": 1})
+    delivery.put("job_done", {"n": 2})
+    await settle(lambda: delivery.figures.delivered == 2, within=5)
+    assert receiver.numbers() == [1, 1, 1, 1, 1, 2]  # the first again until taken, then on
+    gaps = [b[0] - a[0] for a, b in zip(receiver.got, receiver.got[1:5], strict=False)]
+    assert gaps[0] >= 0.05 and gaps[1] >= 0.1 and gaps[2] >= 0.2 and gaps[3] >= 0.2  # capped
+    assert delivery.figures.retries == 4 and delivery.figures.last_error is None
+    await delivery.close()
+
+
+async def test_a_receiver_refusing_an_event_for_good_is_not_asked_again():
+    receiver = FakeReceiver(404)
+    delivery = await running(receiver)
+    delivery.put("alarm", {"n": 1})
+    delivery.put("alarm", {"n": 2})
+    await settle(lambda: delivery.queued == 0)
+    assert receiver.numbers() == [1, 2]
+    assert delivery.figures.refused == 1 and delivery.figures.delivered == 1
+    await delivery.close()
+
+
+async def test_a_receiver_down_for_long_loses_the_oldest_events_only(caplog):
+    receiver = FakeReceiver()
+    receiver.hang.clear()  # the first post hangs
+    delivery = await running(receiver, limit=5)
+    delivery.put("job_done", {"n": 0})
+    await settle(lambda: receiver.calls == 1)
+    started = time.monotonic()
+    for n in range(1, 12):
+        delivery.put("job_done", {"n": n})
+    assert time.monotonic() - started < 0.05  # put never waits
+    assert delivery.queued == 5 and delivery.figures.dropped == 7
+    assert "dropped the oldest" in caplog.text
+    receiver.hang.set()
+    await settle(lambda: delivery.queued == 0)
+    # the post under way (0) was already sent; the five newest follow in order
+    assert receiver.numbers() == [0, 7, 8, 9, 10, 11]
+    await delivery.close()
+
+
+async def test_an_event_dropped_while_retried_is_not_sent_again():
+    receiver = FakeReceiver(*([500] * 3))
+    delivery = await running(receiver, limit=2, first_delay=0.1)
+    delivery.put("job_done", {"n": 0})
+    await settle(lambda: len(receiver.got) == 1)
+    delivery.put("job_done", {"n": 1})
+    delivery.put("job_done", {"n": 2})  # drops 0, which waits for its retry
+    await settle(lambda: delivery.queued == 0, within=5)
+    assert receiver.numbers()[0] == 0 and receiver.numbers()[1:] == [1, 1, 1, 2]
+    await delivery.close()
+
+
+# ---- URLs and the settings API --------------------------------------------------------
+
+
+@pytest.mark.parametrize("url, why", [
+    ("ftp://host/x", "only http:// and https://"),
+    ("file:///etc/passwd", "only http:// and https://"),
+    ("host:8000/hook", "only http:// and https://"),
+    ("http:///hook", "names no host"),
+    ("http://host:99999/", "out of range"),
+    ("http://ho st/", "spaces"),
+    ("", "empty"),
+])  # fmt: skip
+def test_unusable_urls_are_refused_saying_why(url, why):
+    with pytest.raises(ValueError, match=why):
+        check_url(url)
+
+
+def test_serve_takes_webhook_options_and_refuses_bad_ones(monkeypatch, capsys):
+    monkeypatch.setenv("PLOTBRIDGE_WEBHOOKS", "http://a.test/1, http://a.test/1")
+    args = serve_args("--webhook", "https://b.test/2")
+    assert webhooks_from_args(args) == ("http://a.test/1", "https://b.test/2")
+    with pytest.raises(SystemExit):
+        serve_args("--webhook", "ftp://c.test/3")
+    assert "only http:// and https://" in capsys.readouterr().err
+    monkeypatch.setenv("PLOTBRIDGE_WEBHOOKS", "gopher://d.test/")
+    with pytest.raises(ConfigError, match=r"PLOTBRIDGE_WEBHOOKS.*only http"):
+        webhooks_from_args(serve_args())
+
+
+def test_http_and_https_urls_are_taken():
+    for url in ("http://127.0.0.1:9000/hook", "https://ntfy.example/plots?x=1"):
+        assert check_url(url) == url
+
+
+async def test_settings_api_saves_checks_and_shows_the_urls(tmp_path):
+    app, _link = make_app(tmp_path, webhooks=("http://127.0.0.1:9/fixed",))
+    async with serving(app) as client:
+        shown = (await client.get("/api/settings/webhooks")).json()
+        assert shown["fixed"] == ["http://127.0.0.1:9/fixed"] and shown["urls"] == []
+        refused = await client.put("/api/settings/webhooks", json={"urls": ["ftp://x/"]})
+        assert refused.status_code == 422
+        assert "only http:// and https://" in refused.text
+        urls = ["http://127.0.0.1:9/a", "https://example.test/b"]
+        saved = await client.put("/api/settings/webhooks", json={"urls": urls})
+        assert saved.status_code == 200, saved.text
+        rows = saved.json()["webhooks"]
+        assert [(r["url"], r["source"]) for r in rows] == [
+            ("http://127.0.0.1:9/fixed", "option"), (urls[0], "settings"),
+            (urls[1], "settings")]  # fmt: skip
+        too_many = await client.put("/api/settings/webhooks",
+                                    json={"urls": [f"http://h/{n}" for n in range(17)]})
+        assert too_many.status_code == 422
+    kept = json.loads((tmp_path / "webhooks.json").read_text())
+    assert kept == {"urls": urls}
+    assert (tmp_path / "webhooks.json").stat().st_mode & 0o077 == 0
+    app, _link = make_app(tmp_path)  # a restart reads them back
+    async with serving(app) as client:
+        assert (await client.get("/api/settings/webhooks")).json()["urls"] == urls
