@@ -312,12 +312,12 @@ class JobQueue:
         await self._running_on(job_id).runner.cancel(job)
         return job
 
-    def estop_all(self, source: str) -> None:
+    def estop_all(self, source: str, origin: str | None = None) -> None:
         """Every plotter's reset byte first, then the bookkeeping."""
         for plotter in self.plotters.values():
             plotter.reset_now()
         for plotter in self.plotters.values():
-            plotter.stopped(source)
+            plotter.stopped(source, origin)
 
     def snapshot_messages(self) -> list[dict[str, Any]]:
         """What a new WebSocket client is sent first."""

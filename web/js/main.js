@@ -37,7 +37,12 @@ function renderPreview(state) {
   const entry = job && state.previews[job.id];
   const geom = entry && entry.geom ? entry.geom : null;
   preview.setGeometry(geom);
-  preview.setPaper(job ? paperRect(job.placement) : null);
+  // the paper where the placement puts it (its offset moves it), with its margins
+  const paper = job ? paperRect(job.placement) : null;
+  const place = (job && job.placement) || {};
+  preview.setPaper(paper && {
+    ...paper, x: paper.x + (place.dx || 0), y: paper.y + (place.dy || 0), margin: place.margin ?? 10,
+  });
   const m = state.machine;
   const pen = m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
   preview.setPen(pen);
@@ -113,10 +118,27 @@ setUnauthorizedHandler(() => {
   if (store.state.view === "app") actions.leaveApp();
 });
 
+/** Leaving the settings with unsaved edits asks first; true when the page may go on. */
+function mayLeaveSettings(next) {
+  const st = store.state;
+  const n = Object.keys(st.settings.edits).length;
+  if (st.tab !== "settings" || next === "settings" || n === 0) return true;
+  if (!window.confirm(`Discard ${n} unsaved setting change${n > 1 ? "s" : ""}?`)) return false;
+  store.update((s) => {
+    s.settings.edits = {};
+  });
+  return true;
+}
+
 function tabFromHash() {
-  const tab = location.hash.slice(1);
+  const hash = location.hash.slice(1);
+  const tab = TABS.includes(hash) ? hash : "plot";
+  if (!mayLeaveSettings(tab)) {
+    history.replaceState(null, "", "#settings");
+    return;
+  }
   store.update((st) => {
-    st.tab = TABS.includes(tab) ? tab : "plot";
+    st.tab = tab;
   });
 }
 
@@ -155,11 +177,17 @@ function bind() {
   $("#logout").addEventListener("click", () => actions.logout());
   for (const button of document.querySelectorAll(".tab")) {
     button.addEventListener("click", () => {
+      if (!mayLeaveSettings(button.dataset.tab)) return;
       history.replaceState(null, "", `#${button.dataset.tab}`);
       tabFromHash();
     });
   }
   window.addEventListener("hashchange", tabFromHash);
+  window.addEventListener("beforeunload", (e) => {
+    if (Object.keys(store.state.settings.edits).length === 0) return;
+    e.preventDefault(); // the browser asks whether to leave with unsaved settings
+    e.returnValue = "";
+  });
 
   $("#zoom-in").addEventListener("click", () => preview.zoomCenter(1.5));
   $("#zoom-out").addEventListener("click", () => preview.zoomCenter(1 / 1.5));
