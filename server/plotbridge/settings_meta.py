@@ -21,6 +21,10 @@ class SettingInfo(NamedTuple):
     description: str
 
 
+def _num(value: float) -> str:
+    return f"{value:.0f}" if value == int(value) else f"{value:g}"  # 1000000, not 1e+06
+
+
 class Range(NamedTuple):
     """What the firmware accepts: `low`..`high` (`low` itself excluded when `above`)."""
 
@@ -34,9 +38,9 @@ class Range(NamedTuple):
             return f"fixed at {self.low:g}"
         if self.kind == "bool":
             return "0 or 1"
-        low = f"more than {self.low:g}" if self.above else f"{self.low:g}"
+        low = f"more than {_num(self.low)}" if self.above else _num(self.low)
         sort = " (a whole number)" if self.kind in ("integer", "mask", "enum") else ""
-        return f"{low} to {self.high:g}{sort}"
+        return f"{low} to {_num(self.high)}{sort}"
 
     def public(self) -> dict[str, object]:
         return {"kind": self.kind, "min": self.low, "max": self.high,

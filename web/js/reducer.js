@@ -38,16 +38,13 @@ export function withPlacement(state) {
 }
 
 /** A machine report of the selected plotter. The stop panel goes when its condition
- * ends, whichever page ended it: the board left the Alarm the stop caused (homed or
- * unlocked). */
+ * ends, whichever page ended it: the board left the Alarm for Idle (homed or unlocked). */
 function withMachine(state, m) {
   const machineSeq = state.machineSeq + 1;
   const next = { ...state, machine: { ...m, seq: machineSeq }, machineSeq };
-  const e = state.estop;
-  if (e && estopConfirmed(next)) {
-    if (m.state === "Alarm") next.estop = e.sawAlarm ? e : { ...e, sawAlarm: true };
-    else if (e.sawAlarm && m.connected && m.state === "Idle") next.estop = null;
-  }
+  const was = state.machine;
+  const cleared = was && was.state === "Alarm" && m.connected && m.state === "Idle";
+  if (cleared && state.estop && estopConfirmed(next)) next.estop = null;
   return next;
 }
 

@@ -35,7 +35,7 @@ export function initialState() {
     settings: { list: null, edits: {}, busy: false, message: "", error: "" },
     log: [],                  // { seq, direction, line }
     logSeq: 0,
-    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via, remote, sawAlarm }
+    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via, remote }
     notice: null,             // { text, error }
   };
 }
