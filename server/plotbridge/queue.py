@@ -24,6 +24,7 @@ from plotbridge.events import EventHub
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job
 from plotbridge.jobs.store import JobStore
+from plotbridge.papers import orient
 from plotbridge.plotter.plotter import Plotter
 
 log = logging.getLogger("plotbridge.queue")
@@ -103,12 +104,15 @@ class JobQueue:
         """Import an upload (a file already on disk) or a pattern into a new queued job."""
         if target is not None:
             self.plotter(target)
+        placement, turned = self._oriented(placement)
+        options = {**options, **placement}
         job_id, kept, result = await self.importer.create(kind, source, filename, options)
         job = Job(id=job_id, name=name, kind=kind, source=kept, filename=filename,
                   options=options, placement=placement, target=target, after=after,
                   format=result.format, lines_total=result.lines_total,
                   estimate_s=result.estimate_s)  # fmt: skip
         job.imported(result)
+        job.warnings += turned
         self.jobs[job_id] = job
         await asyncio.wrap_future(self.store.save(job, len(self.jobs) - 1))
         self.events.publish({"type": "job", "job": job.public()})
@@ -122,18 +126,32 @@ class JobQueue:
         if job.state != "queued":
             raise Refused(409, f"job {job_id} is {job.state}; only a queued job can be changed")
         if placement is not None:
+            placement, turned = self._oriented({**job.placement, **placement})
             options = {**job.options, **placement}
             result = await self.importer.reimport(
                 job_id, job.kind, job.source, job.filename, options,
                 still_wanted=lambda: job.state == "queued",
             )  # fmt: skip
             job.imported(result)
+            job.warnings += turned
             job.options = options
-            job.placement = {**job.placement, **placement}
+            job.placement = placement
         if name is not None:
             job.name = name
         self._changed(job)
         return job
+
+    def _oriented(self, placement: dict[str, Any]) -> tuple[dict[str, Any], list[dict]]:
+        """A paper too large upright for the work area the import plans for, turned to
+        landscape by itself; the warning that says so (the job shows it)."""
+        settings = self.importer.settings()
+        width, height, paper = settings.get(130), settings.get(131), placement.get("paper")
+        if not (paper and width and height):
+            return placement, []
+        name, note = orient(paper, width, height)
+        if note is None:
+            return placement, []
+        return {**placement, "paper": name}, [{"line": None, "message": note}]
 
     def move(self, job_id: str, position: int) -> list[dict[str, Any]]:
         job = self.get(job_id)

@@ -10,7 +10,14 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import DESKTOP, PHONE, login, new_page, screenshot
-from tests.browser.test_ui_plot import SQUARE_SVG, circles_svg, job_row, upload, wait_job_state
+from tests.browser.test_ui_plot import (
+    SQUARE_SVG,
+    circles_svg,
+    job_id,
+    job_row,
+    upload,
+    wait_job_state,
+)  # fmt: skip
 
 pytestmark = pytest.mark.browser
 
@@ -161,6 +168,17 @@ def test_placement_form_shows_the_job_it_edits(desktop, server):
     assert abs(bounds["min_y"] - pos["position"]["y"]) < 0.6, (bounds, pos)
     assert placement_of(server, first)["rotate"] == 90
     screenshot(page, "desktop-placement-offset")
+
+    # A4 upright does not fit the 300 x 220 mm work area: landscape, and the page says so
+    job_row(page, "second.svg").locator(".name").click()
+    wait_text(page, "#preview-title", "second.svg")
+    page.select_option("#placement select[name=paper]", "A4")
+    page.wait_for_function(
+        "() => document.querySelector('#placement input[name=landscape]').checked"
+    )
+    wait_text(page, "#preview-info", "placed in landscape")
+    assert placement_of(server, job_id(page, "second.svg"))["paper"] == "A4-landscape"
+    assert page.evaluate("window.plotbridge.preview.paper.w") == 297
 
 
 def word_breaks(page, selector: str) -> dict:

@@ -723,7 +723,9 @@ def test_ws_stop_tells_every_client_which_page_stopped(sync_client):
         assert _next_of(one, "stopped")["origin"] == "page-one_1"
         one.send_json({"type": "estop", "page": "<script>" + "x" * 80})  # not an id: dropped
         assert _next_of(two, "stopped")["origin"] is None
-        rest = sync_client.post("/api/machine/estop", headers={"X-Plotbridge-Page": "rest-page"})
+        rest = sync_client.post(
+            "/api/machine/estop", headers={**AUTH, "X-Plotbridge-Page": "rest-page"}
+        )
         assert rest.status_code == 202
         assert _next_of(two, "stopped") == {
             "type": "stopped", "plotter": told["plotter"], "origin": "rest-page", "via": "REST"
@@ -800,6 +802,22 @@ async def test_patch_renames_and_reimports_queued_job(api):
     await settle(lambda: api.queue.jobs[job["id"]].state == "done")
     late = await api.client.patch(f"/api/jobs/{job['id']}", json={"name": "x"})
     assert late.status_code == 409
+
+
+async def test_placement_turns_paper_to_fit_and_a_patch_changes_only_what_it_names(api):
+    # the fake board's work area is 300 x 220 mm: A4 upright does not fit, on its side it does
+    job = (await upload(api.client, paper="A4", rotate="90", margin="5")).json()
+    assert job["placement"]["paper"] == "A4-landscape"
+    assert any("placed in landscape" in w["message"] for w in job["warnings"])
+    assert (await upload(api.client, paper="A5")).json()["placement"]["paper"] == "A5"
+    assert (await upload(api.client, paper="A3")).status_code == 201  # too large both ways:
+    # the importer refuses it (the fake one here does not place)
+    changed = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"dx": 5}})
+    placed = changed.json()["placement"]
+    assert (placed["paper"], placed["rotate"], placed["margin"], placed["dx"]) == (
+        "A4-landscape", 90, 5, 5)
+    cleared = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"paper": None}})
+    assert cleared.json()["placement"]["paper"] is None
 
 
 async def test_auto_start_runs_the_queue(tmp_path, monkeypatch):

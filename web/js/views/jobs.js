@@ -228,6 +228,9 @@ export function renderJobs(state) {
     const b = job.bounds;
     info.push(`drawing ${(b.max_x - b.min_x).toFixed(1)} × ${(b.max_y - b.min_y).toFixed(1)} mm at X ${b.min_x.toFixed(1)}, Y ${b.min_y.toFixed(1)}`);
   }
+  const warnings = (job && job.warnings) || []; // e.g. the paper turned to fit
+  info.push(...warnings.slice(0, 3).map((w) => w.message));
+  if (warnings.length > 3) info.push(`and ${warnings.length - 3} more warnings`);
   const preview = job && state.previews[job.id];
   if (preview && preview.error) info.push(`preview unavailable: ${preview.error}`);
   else if (preview && preview.geom) info.push(`${preview.geom.strokes.count.toLocaleString()} points`);
