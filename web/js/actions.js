@@ -323,7 +323,6 @@ export function createActions(store, socket, estop) {
       // socket is down, poll over REST so the page does not show a stale state (and
       // knows at once whether the server is unreachable).
       if (open !== wasOpen) resync();
-      if (open && pollTimer === null) return;
       clearInterval(pollTimer);
       pollTimer = open ? null : setInterval(resync, POLL_MS);
     },

@@ -37,12 +37,10 @@ function renderPreview(state) {
   const entry = job && state.previews[job.id];
   const geom = entry && entry.geom ? entry.geom : null;
   preview.setGeometry(geom);
-  // the paper where the placement puts it (its offset moves it), with its margins
+  // the paper the placement centres on, with its margins dashed (an offset moves the
+  // drawing on it: the preview shows when that leaves the margins)
   const paper = job ? paperRect(job.placement) : null;
-  const place = (job && job.placement) || {};
-  preview.setPaper(paper && {
-    ...paper, x: paper.x + (place.dx || 0), y: paper.y + (place.dy || 0), margin: place.margin ?? 10,
-  });
+  preview.setPaper(paper && { ...paper, margin: job.placement.margin ?? 10 });
   const m = state.machine;
   const pen = m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
   preview.setPen(pen);
