@@ -85,6 +85,7 @@ def test_stop_shows_on_every_page_and_goes_with_its_cause(two_pages, server, plo
     for page in (here, there):
         page.wait_for_function(f"() => ({BADGE})() === 'connection lost'", timeout=20_000)
         assert page.locator("#sum-pos").text_content() == ""
+        assert page.evaluate("window.plotbridge.preview.pen") is None  # no stale carriage
         page.locator("#banners .banner", has_text="does not answer").wait_for()
     screenshot(here, "desktop-connection-lost")
     server.start()

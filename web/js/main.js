@@ -42,7 +42,7 @@ function renderPreview(state) {
   const paper = job ? paperRect(job.placement) : null;
   preview.setPaper(paper && { ...paper, margin: job.placement.margin ?? 10 });
   const m = state.machine;
-  const pen = m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
+  const pen = !state.serverLost && m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
   preview.setPen(pen);
   let done = 0;
   let tail = null;

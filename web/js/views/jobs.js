@@ -115,7 +115,7 @@ function renderPlacement(state) {
   setDisabled(f.margin, !p.paper);
   const job = previewJob(state);
   const m = state.machine;
-  setDisabled($("#place-here"), !(job && job.bounds && m && m.connected && m.position));
+  setDisabled($("#place-here"), state.serverLost || !(job && job.bounds && m && m.connected && m.position));
   setText($("#place-target"), job && job.state === "queued"
     ? `Applies to new uploads and to the queued job “${job.name}”.`
     : "Applies to new uploads.");
