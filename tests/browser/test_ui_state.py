@@ -229,8 +229,9 @@ def board_setting(server, number: int) -> float:
     return next(s["value"] for s in settings if s["id"] == number)
 
 
-def test_settings_ranges_switches_sticky_save_and_leave_guard(phone, server):
+def test_settings_ranges_switches_sticky_save_try_and_leave_guard(phone, server):
     page, _ = phone
+    server.home()  # the pen moves ("Try it") only out of Alarm
     page.goto(f"{server.url}/login?token={server.token}")
     page.wait_for_selector("#app:not([hidden])")
     page.click(".tab[data-tab=settings]")
@@ -273,8 +274,18 @@ def test_settings_ranges_switches_sticky_save_and_leave_guard(phone, server):
     wait_text(page, "#command-error", "500 to 2500")
     assert board_setting(server, 61) == 2100
 
-    # leaving with unsaved edits asks: in the app, and when the page would unload
+    # "Try it" saves a pen position and moves the servo there
     page.click(".tab[data-tab=settings]")
+    page.fill("#setting-61", "2200")
+    row61.locator("button[data-try]").click()
+    wait_text(page, "#settings-message", "Pen moved down")
+    assert board_setting(server, 61) == 2200
+    server.wait_machine(lambda m: m["pen"] == "down", timeout=10)
+    row60 = page.locator("#settings-body tr", has=page.locator("#setting-60"))
+    row60.locator("button[data-try]").click()
+    server.wait_machine(lambda m: m["pen"] == "up", timeout=10)
+
+    # leaving with unsaved edits asks: in the app, and when the page would unload
     page.fill("#setting-62", "200")
     answers = iter([False, True])
     asked = []

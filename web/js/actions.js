@@ -566,6 +566,34 @@ export function createActions(store, socket, estop) {
       });
     },
 
+    /** "Try it" for a pen position ($60 up, $61 down): the value (as edited) is written
+     * (the server checks its range) and the pen moved there, so the servo shows it live. */
+    async tryPen(id) {
+      const entry = (s.settings.list || []).find((x) => String(x.id) === id);
+      const value = Number(id in s.settings.edits ? s.settings.edits[id] : entry && entry.value);
+      store.update((st) => {
+        st.settings.busy = true;
+        st.settings.error = "";
+      });
+      try {
+        await api.put(machinePath("settings"), { settings: { [id]: value } });
+        await api.post(machinePath("pen"), { down: id === "61" });
+        store.update((st) => {
+          if (entry) entry.value = value;
+          delete st.settings.edits[id];
+          st.settings.message = `Pen moved ${id === "61" ? "down" : "up"} with $${id}=${value} (saved).`;
+        });
+      } catch (err) {
+        store.update((st) => {
+          st.settings.error = `Try $${id}: ${err.message}`;
+        });
+      } finally {
+        store.update((st) => {
+          st.settings.busy = false;
+        });
+      }
+    },
+
     async saveSettings() {
       const edits = s.settings.edits;
       const body = {};

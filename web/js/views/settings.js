@@ -8,6 +8,7 @@ const SERVER_LABELS = {
   data_dir: "Data directory", upload_limit: "Upload limit", auto_start: "Start jobs automatically",
 };
 
+const PEN_POSITIONS = new Set([60, 61]); // pen-up and pen-down servo pulses: "Try it"
 const MASK_BITS = ["X", "Y"]; // bit 0, bit 1 of the mask settings (settings_meta.MASK_BITS)
 
 /** A row's value as the board takes it: the number typed, 0/1 for a switch, the sum of
@@ -30,6 +31,10 @@ export function bindSettings(actions) {
   };
   body.addEventListener("input", edited);
   body.addEventListener("change", edited);
+  body.addEventListener("click", (e) => {
+    const button = e.target.closest("button[data-try]");
+    if (button) actions.tryPen(button.dataset.try);
+  });
   $("#settings-save").addEventListener("click", () => actions.saveSettings());
   $("#settings-reload").addEventListener("click", () => actions.loadSettings(true));
 }
@@ -40,6 +45,7 @@ export function renderSettings(state) {
   setText($("#settings-error"), st.error);
   const changed = Object.keys(st.edits).length;
   setDisabled($("#settings-save"), st.busy || changed === 0);
+  for (const button of document.querySelectorAll("#settings-body button[data-try]")) setDisabled(button, st.busy);
   $("#settings-save").textContent = changed ? `Save ${changed} change${changed > 1 ? "s" : ""}` : "Save changes";
   syncList($("#settings-body"), st.list || [], (s) => s.id, createRow,
     (row, s) => {
@@ -82,7 +88,9 @@ function createRow(s) {
   return el("tr", { "data-kind": kind },
     el("td", { className: "mono" }, `$${s.id}`),
     el("td", {}, label, el("div", { className: "hint desc" })),
-    el("td", { className: "value" }, value, el("span", { className: "unit" }), el("span", { className: "range hint" })));
+    el("td", { className: "value" }, value, el("span", { className: "unit" }), el("span", { className: "range hint" }),
+      PEN_POSITIONS.has(s.id) ? el("button", { type: "button", className: "small", "data-try": s.id,
+        title: "Save this value and move the pen there" }, "Try it") : null));
 }
 
 function showValue(row, kind, value) {
