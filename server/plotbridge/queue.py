@@ -22,8 +22,9 @@ from typing import Any
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
 from plotbridge.jobs.imports import Importer
-from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job
+from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job, Layer
 from plotbridge.jobs.store import JobStore
+from plotbridge.papers import orient
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.plotter import HOMING_S, Plotter
 from plotbridge.resume import PickError, ResumePoint, first_line, pick
@@ -111,6 +112,8 @@ class JobQueue:
         `pens` names pens for some of its layers (the others get their default pen)."""
         if target is not None:
             self.plotter(target)
+        placement, turned = self._oriented(placement)
+        options = {**options, **placement}
         job_id, kept, result = await self.importer.create(kind, source, filename, options)
         job = Job(id=job_id, name=name, kind=kind, source=kept, filename=filename,
                   options=options, placement=placement, target=target, after=after,
@@ -122,6 +125,7 @@ class JobQueue:
         except Refused:
             await self.importer.delete(job_id)
             raise
+        job.warnings += turned
         self.jobs[job_id] = job
         await asyncio.wrap_future(self.store.save(job, len(self.jobs) - 1))
         self.events.publish({"type": "job", "job": job.public()})
@@ -135,6 +139,7 @@ class JobQueue:
         if job.state != "queued":
             raise Refused(409, f"job {job_id} is {job.state}; only a queued job can be changed")
         if placement is not None:
+            placement, turned = self._oriented({**job.placement, **placement})
             options = {**job.options, **placement}
             result = await self.importer.reimport(
                 job_id, job.kind, job.source, job.filename, options,
@@ -143,8 +148,9 @@ class JobQueue:
             kept = job.layers
             job.imported(result)
             self._assign_pens(job, None, kept)
+            job.warnings += turned
             job.options = options
-            job.placement = {**job.placement, **placement}
+            job.placement = placement
         if name is not None:
             job.name = name
         self._changed(job)
@@ -160,11 +166,22 @@ class JobQueue:
         return job
 
     def _assign_pens(self, job: Job, wanted: dict[str, Any] | None,
-                     kept: list[dict[str, Any]] | None = None) -> None:  # fmt: skip
+                     kept: list[Layer] | None = None) -> None:  # fmt: skip
         if self.pens is not None:
             self.pens.assign(job.layers, wanted, kept)
         elif wanted:
             raise Refused(409, "this server has no pen library")
+    def _oriented(self, placement: dict[str, Any]) -> tuple[dict[str, Any], list[dict]]:
+        """A paper too large upright for the work area the import plans for, turned to
+        landscape by itself; the warning that says so (the job shows it)."""
+        settings = self.importer.settings()
+        width, height, paper = settings.get(130), settings.get(131), placement.get("paper")
+        if not (paper and width and height):
+            return placement, []
+        name, note = orient(paper, width, height)
+        if note is None:
+            return placement, []
+        return {**placement, "paper": name}, [{"line": None, "message": note}]
 
     def move(self, job_id: str, position: int) -> list[dict[str, Any]]:
         job = self.get(job_id)
@@ -405,12 +422,12 @@ class JobQueue:
         await self._running_on(job_id).runner.cancel(job)
         return job
 
-    def estop_all(self, source: str) -> None:
+    def estop_all(self, source: str, origin: str | None = None) -> None:
         """Every plotter's reset byte first, then the bookkeeping."""
         for plotter in self.plotters.values():
             plotter.reset_now()
         for plotter in self.plotters.values():
-            plotter.stopped(source)
+            plotter.stopped(source, origin)
 
     def snapshot_messages(self) -> list[dict[str, Any]]:
         """What a new WebSocket client is sent first."""

@@ -1,18 +1,50 @@
-"""Names, units and descriptions of the board's `$` settings, for the UI.
+"""Names, units, descriptions and allowed values of the board's `$` settings.
 
 GRBL's standard numbers plus our plotter extras at 60+ (docs/INTERNALS.md).
 Settings a board reports that are not listed here are shown by number only.
+The ranges are our firmware's own checks (`settings_set` in firmware/src/settings.c),
+so the server can refuse a value with its range before the board answers a bare
+`error:3`; `check` applies them.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Literal, NamedTuple
+
+Kind = Literal["number", "integer", "bool", "mask", "enum", "fixed"]
+FLOAT_MAX = 1.0e6  # the firmware refuses larger floats (step counts would overflow)
 
 
 class SettingInfo(NamedTuple):
     name: str
     unit: str
     description: str
+
+
+def _num(value: float) -> str:
+    return f"{value:.0f}" if value == int(value) else f"{value:g}"  # 1000000, not 1e+06
+
+
+class Range(NamedTuple):
+    """What the firmware accepts: `low`..`high` (`low` itself excluded when `above`)."""
+
+    kind: Kind
+    low: float
+    high: float
+    above: bool = False  # the value must be more than `low` (a zero would divide by zero)
+
+    def describe(self) -> str:
+        if self.kind == "fixed":
+            return f"fixed at {self.low:g}"
+        if self.kind == "bool":
+            return "0 or 1"
+        low = f"more than {_num(self.low)}" if self.above else _num(self.low)
+        sort = " (a whole number)" if self.kind in ("integer", "mask", "enum") else ""
+        return f"{low} to {_num(self.high)}{sort}"
+
+    def public(self) -> dict[str, object]:
+        return {"kind": self.kind, "min": self.low, "max": self.high,
+                "min_exclusive": self.above, "text": self.describe()}  # fmt: skip
 
 
 SETTINGS: dict[int, SettingInfo] = {
@@ -51,6 +83,9 @@ SETTINGS: dict[int, SettingInfo] = {
     61: SettingInfo("Pen-down servo pulse", "µs", "Servo pulse width that lowers the pen."),
     62: SettingInfo("Pen settle time", "ms", "Pause after each pen move before motion resumes."),
     63: SettingInfo("Kinematics", "enum", "0 cartesian, 1 CoreXY."),
+    64: SettingInfo("Pen lowering time", "ms",
+                    "Servo time from pen-up to pen-down (0: at once; slower leaves no dot)."),
+    65: SettingInfo("Pen raising time", "ms", "Servo time from pen-down to pen-up (0: at once)."),
     100: SettingInfo("X steps per mm", "steps/mm", "Motor steps for one mm of X travel."),
     101: SettingInfo("Y steps per mm", "steps/mm", "Motor steps for one mm of Y travel."),
     102: SettingInfo("Z steps per mm", "steps/mm", "Motor steps for one mm of Z travel."),
@@ -65,3 +100,50 @@ SETTINGS: dict[int, SettingInfo] = {
     132: SettingInfo("Z maximum travel", "mm", "Z travel."),
 }
 
+
+def _ranges() -> dict[int, Range]:
+    out: dict[int, Range] = {}
+    for n in (11, 12, 24, 25, 110, 111, 120, 121, 130, 131):
+        out[n] = Range("number", 0, FLOAT_MAX, above=True)
+    out[27] = Range("number", 0, FLOAT_MAX)  # a zero pull-off is allowed
+    out[100] = out[101] = Range("number", 0, 2000, above=True)
+    out[0] = Range("integer", 3, 12)  # the pulse must fit well inside a 40 kHz period
+    out[1] = Range("integer", 0, 255)
+    for n in (2, 3, 5, 10, 23):
+        out[n] = Range("mask", 0, 3)
+    for n in (4, 13, 20, 21, 22):
+        out[n] = Range("bool", 0, 1)
+    out[63] = Range("enum", 0, 1)
+    out[60] = out[61] = Range("integer", 500, 2500)  # servo pulse widths
+    out[26] = out[62] = out[64] = out[65] = Range("integer", 0, 10000)
+    for n, fixed in ((6, 0), (31, 0), (32, 0), (30, 1000), (102, 100), (122, 100),
+                     (112, 1000), (132, 10)):  # fmt: skip
+        out[n] = Range("fixed", fixed, fixed)
+    return out
+
+
+RANGES: dict[int, Range] = _ranges()
+MASK_BITS = ("X", "Y")  # bit 0, bit 1 of every mask setting
+
+
+def check(number: int, value: float, settings: dict[int, float]) -> str | None:
+    """Why the firmware would refuse `$number=value` (the board's other `settings`,
+    with the values written in the same batch), or None when it accepts it."""
+    limits = RANGES.get(number)
+    if limits is None:
+        return None
+    where = f"${number}={value:g}"
+    if limits.kind == "fixed":
+        if abs(value - limits.low) < 0.001:
+            return None
+        return f"{where}: ${number} is {limits.describe()} on this firmware"
+    if value != value:
+        return f"{where}: not a number"
+    if limits.kind != "number" and not float(value).is_integer():
+        return f"{where}: ${number} takes a whole number, {limits.describe()}"
+    below = value <= limits.low if limits.above else value < limits.low
+    if below or value > limits.high:
+        return f"{where} is out of range: ${number} takes {limits.describe()}"
+    if number == 20 and value and not settings.get(22):
+        return f"{where}: soft limits need homing; set $22=1 first (or in the same save)"
+    return None

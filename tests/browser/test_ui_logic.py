@@ -22,6 +22,7 @@ def run(page, body: str):
               ...(await import('/js/preview-data.js')),
               ...(await import('/js/store.js')),
               ...(await import('/js/actions.js')),
+              ...(await import('/js/reducer.js')),
               ...(await import('/js/views/machine.js')),
               ...(await import('/js/views/jobs.js')),
               ...(await import('/js/views/control.js')),
@@ -83,11 +84,15 @@ def test_paper_rect_and_placement_fields(modules):
     assert got[0] == {"x": 0, "y": 0, "w": 297, "h": 210}
     assert got[1] is None
     assert got[2] == {"x": 0, "y": 0, "w": 215.9, "h": 279.4}
-    assert got[3] == {"paper": "A4-landscape", "margin": 5, "fit": True, "rotate": 90, "scale": 2}
-    assert got[4] == {
-        "paper": "A4", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2
+    assert got[3] == {
+        "paper": "A4-landscape", "margin": 5, "fit": True, "rotate": 90, "scale": 2,
+        "dx": None, "dy": None,
     }
-    assert "paper" not in got[5]
+    assert got[4] == {
+        "paper": "A4", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2,
+        "dx": None, "dy": None,
+    }
+    assert got[5]["paper"] is None  # the work area: sent as null, so a PATCH clears it
 
 
 def test_upload_errors_by_line(modules):
@@ -210,3 +215,102 @@ def test_hold_button_follows_the_selected_plotter(modules):
         return out;
     """)
     assert got == [None, None, "hold", "continue", None, "hold", "continue", None]
+
+
+def test_reducer_stop_from_another_page_and_its_end(modules):
+    got = run(modules, """
+        let s = {...m.initialState(), pageId: 'me', socket: {status: 'open'}};
+        const before = s;
+        s = m.reduce(s, {type: 'machine', plotter: 'p', machine: {connected: true, state: 'Run'}});
+        const out = [before.machine, s.machine.seq, s.plotter];
+        out.push(m.reduce(s, {type: 'stopped', plotter: 'p', origin: 'me'}).estop);  // ours
+        s = m.reduce(s, {type: 'stopped', plotter: 'p', origin: 'other'});
+        out.push(s.estop.remote, m.estopConfirmed(s));         // still moving: not yet
+        const report = (state) =>
+            ({type: 'machine', plotter: 'p', machine: {connected: true, state}});
+        s = m.reduce(s, report('Alarm'));
+        out.push(m.estopConfirmed(s), Boolean(s.estop));
+        s = m.reduce(s, report('Idle'));
+        out.push(s.estop);                                      // unlocked somewhere: gone
+        s = m.reduce(s, {type: 'stopped', plotter: 'q', origin: 'other'});
+        out.push(s.estop);                                      // another plotter's stop
+        s = m.reduce(s, {type: 'stopped', plotter: 'p', origin: null});
+        out.push(s.estop.remote);
+        s = m.reduce(s, {type: 'job', job: {id: 'j', state: 'running'}});
+        out.push(s.estop);                                      // a job started: gone
+        return out;
+    """)
+    assert got[0] is None and got[1] == 1 and got[2] == "p"
+    assert got[3] is None
+    assert got[4:6] == ["browser", False]
+    assert got[6:8] == [True, True]
+    assert got[8] is None and got[9] is None
+    assert got[10] == "client"
+    assert got[11] is None
+
+
+def test_reducer_jobs_and_the_shown_job(modules):
+    got = run(modules, """
+        let s = m.initialState();
+        const name = (st) => (m.previewJob(st) || {}).id ?? null;
+        const out = [];
+        const jobs = [{id: 'old', state: 'done'}, {id: 'q', state: 'queued'}];
+        s = m.reduce(s, {type: 'jobs', jobs});
+        out.push(name(s));                        // never the unrelated finished job
+        s = m.reduce(s, {type: 'job', job: {id: 's', state: 'stopped'}});
+        out.push(name(s));                        // a stopped job needs attention
+        s = m.reduce(s, {type: 'job', job: {id: 'q', state: 'running'}});
+        out.push(name(s));
+        s = {...s, selectedJobId: 'old'};
+        out.push(name(s));                        // the selected one wins
+        s = m.reduce(s, {type: 'job_deleted', id: 'old'});
+        s = m.reduce(s, {type: 'queue', order: ['s', 'q']});
+        out.push(s.jobs.map((j) => j.id), name(s));
+        s = m.reduce(s, {type: 'jobs', jobs: [{id: 'd', state: 'done'}]});
+        out.push(name(s));
+        return out;
+    """)
+    assert got == [
+        "q", "s", "q", "old", ["s", "q"], "q", None,
+    ]
+
+
+def test_reducer_placement_form_follows_its_job(modules):
+    got = run(modules, """
+        const job = (id, placement) => ({id, state: 'queued', placement});
+        let s = m.initialState();
+        s = m.reduce(s, {type: 'jobs', jobs: [job('a', {paper: 'A5-landscape', margin: 5, fit: true,
+                                                            rotate: 90, scale: 2, dx: 3, dy: 4})]});
+        const out = [s.placement];
+        s = {...s, placement: {...s.placement, rotate: 180}, placementDirty: true};  // typing
+        s = m.reduce(s, {type: 'job', job: {id: 'a', progress: 0}});
+        out.push(s.placement.rotate);              // an edit in progress is kept
+        s = {...s, placementDirty: false};
+        s = m.reduce(s, {type: 'job', job: job('a', {paper: null, margin: 5, rotate: 270})});
+        out.push([s.placement.paper, s.placement.rotate, s.placement.scale, s.placement.dx]);
+        s = m.reduce(s, {type: 'job', job: job('b', {scale: 3})});
+        s = {...s, selectedJobId: 'b'};
+        s = m.withPlacement(s);
+        out.push([s.placement.scale, s.placement.rotate, s.placementJob]);
+        return out;
+    """)
+    assert got[0] == {
+        "paper": "A5", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2,
+        "dx": 3, "dy": 4,
+    }
+    assert got[1] == 180
+    assert got[2] == ["", 270, 1, 0]
+    assert got[3] == [3, 0, "b"]
+
+
+def test_header_says_connection_lost(modules):
+    got = run(modules, """
+        const s = m.initialState();
+        s.machine = {connected: true, state: 'Run', position: {x: 1, y: 2}, pen: 'down'};
+        s.jobs = [{id: 'j', name: 'n', state: 'running', progress: 0.5, eta_s: 120}];
+        const live = m.headerSummary(s);
+        s.serverLost = true;
+        return [live, m.headerSummary(s)];
+    """)
+    assert got[0]["state"] == "Run" and "left" in got[0]["job"] and got[0]["pos"]
+    assert got[1] == {"state": "connection lost", "badge": "Lost", "pos": "", "pen": "", "job": ""}

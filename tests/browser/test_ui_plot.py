@@ -338,7 +338,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     page.click("#estop-close")
     bad = b"G21\nG90\nG1 X10 Y10 F1000\nG1 X10 E9\nFOO 12\nG1 X10 Y10 Q\n"
     upload(page, "bad.gcode", bad, "text/plain")
-    item = page.locator("#uploads li.upload.failed", has_text="bad.gcode")
+    item = page.locator("#upload-errors li.upload.failed", has_text="bad.gcode")
     item.wait_for()
     lines = item.locator(".errors li .line").all_text_contents()
     assert "line 4" in lines and "line 5" in lines, lines
@@ -419,7 +419,9 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
         "(b) => JSON.stringify(window.plotbridge.preview.geom?.bounds) !== JSON.stringify(b)",
         arg=before,
     )
-    assert page.evaluate("window.plotbridge.preview.paper") == {"x": 0, "y": 0, "w": 148, "h": 210}
+    assert page.evaluate("window.plotbridge.preview.paper") == {
+        "x": 0, "y": 0, "w": 148, "h": 210, "margin": 10
+    }
     b = page.evaluate("window.plotbridge.preview.geom.bounds")
     assert 9 < b["minX"] and b["maxX"] < 139 and 9 < b["minY"] and b["maxY"] < 201, b
     screenshot(page, "desktop-placement")

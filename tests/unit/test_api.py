@@ -580,6 +580,32 @@ async def test_settings_have_metadata(api):
     assert bad.status_code == 422
 
 
+async def test_settings_out_of_range_are_refused_before_the_board(api):
+    api.link.settings.update({60: 1000.0, 61: 2000.0, 2: 0.0, 20: 0.0, 22: 0.0, 30: 1000.0})
+    by_id = {s["id"]: s for s in (await api.client.get("/api/machine/settings")).json()["settings"]}
+    assert by_id[61]["range"] == {"kind": "integer", "min": 500, "max": 2500,
+                                  "min_exclusive": False, "text": "500 to 2500 (a whole number)"}
+    assert by_id[2]["range"]["kind"] == "mask" and by_id[22]["range"]["kind"] == "bool"
+    assert by_id[110]["range"]["min_exclusive"] is True and by_id[999]["range"] is None
+    sent = len(api.link.commands)
+    for body, reason in (
+        ({"61": 3000, "110": 5000}, "$61=3000 is out of range: $61 takes 500 to 2500"),
+        ({"2": 4}, "$2 takes 0 to 3"), ({"0": 2.5}, "whole number"),
+        ({"110": 0}, "more than 0"), ({"30": 2000}, "fixed at 1000"),
+        ({"20": 1}, "soft limits need homing"),
+    ):  # fmt: skip
+        refused = await api.client.put("/api/machine/settings", json={"settings": body})
+        assert refused.status_code == 422 and reason in refused.json()["detail"], refused.text
+    answer = await api.client.post("/api/machine/command", json={"line": "$61=3000"})
+    assert answer.status_code == 422 and "500 to 2500" in answer.json()["detail"]
+    assert len(api.link.commands) == sent  # nothing reached the board
+    ok = await api.client.put("/api/machine/settings", json={"settings": {"22": 1, "20": 1}})
+    assert ok.status_code == 200 and api.link.commands[-2:] == ["$22=1", "$20=1"]
+    assert (await api.client.post("/api/machine/command", json={"line": "$61=2100"})).is_success
+    del api.link.settings[60]  # not our firmware (no pen servo): its own limits apply
+    assert (await api.client.post("/api/machine/command", json={"line": "$61=3000"})).is_success
+
+
 async def test_sim_trace_is_404_without_virtual_plotter(api):
     response = await api.client.get("/api/sim/trace")
     assert response.status_code == 404 and "virtual" in response.json()["detail"]
@@ -688,6 +714,24 @@ def test_ws_estop_is_not_held_back_by_a_slow_command(sync_client):
     assert sent[:2] == ["G4 P10", "G0 X0"] and len(sent) == 17
 
 
+def test_ws_stop_tells_every_client_which_page_stopped(sync_client):
+    with (sync_client.websocket_connect(f"/api/ws?token={TOKEN}") as one,
+          sync_client.websocket_connect(f"/api/ws?token={TOKEN}") as two):  # fmt: skip
+        one.send_json({"type": "estop", "page": "page-one_1"})
+        told = _next_of(two, "stopped")
+        assert told["origin"] == "page-one_1" and told["via"] == "WebSocket"
+        assert _next_of(one, "stopped")["origin"] == "page-one_1"
+        one.send_json({"type": "estop", "page": "<script>" + "x" * 80})  # not an id: dropped
+        assert _next_of(two, "stopped")["origin"] is None
+        rest = sync_client.post(
+            "/api/machine/estop", headers={**AUTH, "X-Plotbridge-Page": "rest-page"}
+        )
+        assert rest.status_code == 202
+        assert _next_of(two, "stopped") == {
+            "type": "stopped", "plotter": told["plotter"], "origin": "rest-page", "via": "REST"
+        }  # the page's own id, nothing of the session or the token
+
+
 def _next_of(ws, kind: str) -> dict:
     for _ in range(20):
         message = ws.receive_json()
@@ -758,6 +802,22 @@ async def test_patch_renames_and_reimports_queued_job(api):
     await settle(lambda: api.queue.jobs[job["id"]].state == "done")
     late = await api.client.patch(f"/api/jobs/{job['id']}", json={"name": "x"})
     assert late.status_code == 409
+
+
+async def test_placement_turns_paper_to_fit_and_a_patch_changes_only_what_it_names(api):
+    # the fake board's work area is 300 x 220 mm: A4 upright does not fit, on its side it does
+    job = (await upload(api.client, paper="A4", rotate="90", margin="5")).json()
+    assert job["placement"]["paper"] == "A4-landscape"
+    assert any("placed in landscape" in w["message"] for w in job["warnings"])
+    assert (await upload(api.client, paper="A5")).json()["placement"]["paper"] == "A5"
+    assert (await upload(api.client, paper="A3")).status_code == 201  # too large both ways:
+    # the importer refuses it (the fake one here does not place)
+    changed = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"dx": 5}})
+    placed = changed.json()["placement"]
+    assert (placed["paper"], placed["rotate"], placed["margin"], placed["dx"]) == (
+        "A4-landscape", 90, 5, 5)
+    cleared = await api.client.patch(f"/api/jobs/{job['id']}", json={"placement": {"paper": None}})
+    assert cleared.json()["placement"]["paper"] is None
 
 
 async def test_auto_start_runs_the_queue(tmp_path, monkeypatch):

@@ -6,40 +6,26 @@ import { LOG_LIMIT } from "./views/console.js";
 import { askPermission, notifyJob } from "./notify.js";
 import { loadPens } from "./views/pens.js";
 import { buildGeometry } from "./preview-data.js";
+import { reduce, withPlacement } from "./reducer.js";
 import { holdAction, previewJob } from "./store.js";
 
 const POLL_MS = 2000; // REST polling while the WebSocket is down
+const SELECTED_KEY = "plotbridge.selectedJob"; // this tab's selected job (sessionStorage)
 const asList = (data, key) => (Array.isArray(data) ? data : (data && data[key]) || []);
 const sameId = (a, b) => String(a) === String(b);
 
 /** The API's placement fields from the form's state. */
 export function placementFields(p) {
-  const out = { margin: p.margin, fit: p.fit, rotate: p.rotate, scale: p.scale };
-  if (p.paper) out.paper = p.landscape ? `${p.paper}-landscape` : p.paper;
+  const out = { margin: p.margin, fit: p.fit, rotate: p.rotate, scale: p.scale, dx: p.dx, dy: p.dy };
+  out.paper = !p.paper ? null : p.landscape ? `${p.paper}-landscape` : p.paper; // null: the work area
   return out;
 }
 
 /** Placement as upload form fields. */
 function appendPlacement(form, placement) {
-  for (const [k, v] of Object.entries(placementFields(placement))) form.append(k, String(v));
-}
-
-/** The form's state from a job's placement. */
-export function placementFromJob(placement, fallback) {
-  if (!placement) return fallback;
-  let paper = placement.paper || "";
-  let landscape = false;
-  if (paper.endsWith("-landscape")) {
-    paper = paper.slice(0, -"-landscape".length);
-    landscape = true;
+  for (const [k, v] of Object.entries(placementFields(placement))) {
+    if (v !== null) form.append(k, String(v));
   }
-  return {
-    paper, landscape,
-    margin: placement.margin ?? fallback.margin,
-    fit: placement.fit ?? fallback.fit,
-    rotate: placement.rotate ?? fallback.rotate,
-    scale: placement.scale ?? fallback.scale,
-  };
 }
 
 /** The upload form's import options (pen dialect, fills, font) as form fields. */
@@ -70,15 +56,50 @@ function uploadMessage(err) {
   return `Failed: ${err.message}`;
 }
 
+/** A random id for this page: it tells this page's stops from other browsers'. */
+function newPageId() {
+  const bytes = crypto.getRandomValues(new Uint8Array(12));
+  return Array.from(bytes, (b) => b.toString(16).padStart(2, "0")).join("");
+}
+
+function storedSelection() {
+  try {
+    return sessionStorage.getItem(SELECTED_KEY);
+  } catch {
+    return null;
+  }
+}
+
 export function createActions(store, socket, estop) {
   const s = store.state;
+  s.pageId = newPageId();
+  s.selectedJobId = storedSelection();
   let uploadSeq = 0;
-  let machineSeq = 0;
   let placementTimer = null;
   let pollTimer = null;
 
+  /** Apply an incoming message (or a REST answer shaped as one) through the reducer. */
+  function apply(msg) {
+    store.update((st) => {
+      Object.assign(st, reduce(st, msg));
+    });
+  }
+
+  /** Over REST: the machine and the jobs. A network failure while the socket is down
+   * means the server is unreachable: the header says so instead of stale values. */
   function resync() {
-    api.get(machinePath()).then(setMachine).catch(() => {});
+    api.get(machinePath()).then((m) => {
+      store.update((st) => {
+        st.serverLost = false;
+      });
+      setMachine(m);
+    }, (err) => {
+      if (err.status === 0 && s.socket.status !== "open") {
+        store.update((st) => {
+          st.serverLost = true;
+        });
+      }
+    });
     loadJobs().catch(() => {});
   }
 
@@ -92,26 +113,15 @@ export function createActions(store, socket, estop) {
     st[field] = "";
   });
 
-  function setMachine(m) {
+  /** A machine report: kept per plotter; the selected one (the first by default) is shown. */
+  function onMachine(msg) {
     const wasConnected = Boolean(s.machine && s.machine.connected);
-    store.update((st) => {
-      st.machine = { ...m, seq: ++machineSeq };
-    });
+    apply(msg);
     // the board's settings (and the work area) are read again when it (re)connects
-    if (m.connected && !wasConnected && s.view === "app") loadSettings();
+    if (s.machine && s.machine.connected && !wasConnected && s.view === "app") loadSettings();
   }
 
-  /** A machine report: kept per plotter; the selected one (the first by default) is shown. */
-  function onMachine(name, m) {
-    if (name) {
-      store.update((st) => {
-        if (!st.plotterOrder.includes(name)) st.plotterOrder.push(name);
-        st.plotters[name] = m;
-        if (!st.plotter) st.plotter = name;
-      });
-    }
-    if (!name || name === s.plotter) setMachine(m);
-  }
+  const setMachine = (m) => onMachine({ type: "machine", machine: m });
 
   /** A board verb's path: the selected plotter's when there are several. */
   function machinePath(verb = "") {
@@ -122,19 +132,12 @@ export function createActions(store, socket, estop) {
 
   function upsertJob(job) {
     notifyJob(s.jobs.find((j) => sameId(j.id, job.id)), job);
-    store.update((st) => {
-      const i = st.jobs.findIndex((j) => sameId(j.id, job.id));
-      if (i >= 0) st.jobs[i] = { ...st.jobs[i], ...job };
-      else st.jobs.push(job);
-    });
+    apply({ type: "job", job });
     ensurePreview();
   }
 
   async function loadJobs() {
-    const jobs = asList(await api.get("/api/jobs"), "jobs");
-    store.update((st) => {
-      st.jobs = jobs;
-    });
+    apply({ type: "jobs", jobs: asList(await api.get("/api/jobs"), "jobs") });
     ensurePreview();
   }
 
@@ -200,6 +203,19 @@ export function createActions(store, socket, estop) {
       });
       return false;
     }
+  }
+
+  /** Select a job: its preview and placement show, also after a reload of this tab. */
+  function select(id) {
+    try {
+      sessionStorage.setItem(SELECTED_KEY, String(id));
+    } catch {
+      // storage may be off: the selection then lasts until a reload
+    }
+    store.update((st) => {
+      st.selectedJobId = id;
+      Object.assign(st, withPlacement(st));
+    });
   }
 
   /** Home and unlock clear the stopped state: the panel goes once they succeed. */
@@ -270,31 +286,12 @@ export function createActions(store, socket, estop) {
     // ---- WebSocket ----
 
     onSocketMessage(msg) {
-      const body = (key) => (msg[key] && typeof msg[key] === "object" ? msg[key] : msg);
-      if (msg.type === "machine") onMachine(msg.plotter, body("machine"));
-      else if (msg.type === "job") upsertJob(body("job"));
-      else if (msg.type === "jobs" && Array.isArray(msg.jobs)) {
-        store.update((st) => {
-          st.jobs = msg.jobs;
-        });
+      if (msg.type === "machine") onMachine(msg);
+      else if (msg.type === "job") upsertJob(msg.job && typeof msg.job === "object" ? msg.job : msg);
+      else if (["jobs", "job_deleted", "queue", "stopped", "pens"].includes(msg.type)) {
+        apply(msg);
         ensurePreview();
-      } else if (msg.type === "job_deleted") {
-        store.update((st) => {
-          st.jobs = st.jobs.filter((j) => !sameId(j.id, msg.id));
-        });
-      } else if (msg.type === "queue" && Array.isArray(msg.order)) {
-        store.update((st) => {
-          const rank = new Map(msg.order.map((id, i) => [String(id), i]));
-          const at = (j) => rank.get(String(j.id)) ?? -1;
-          st.jobs = [...st.jobs].sort((a, b) => at(a) - at(b));
-        });
-      }
-      else if (msg.type === "pens" && Array.isArray(msg.pens)) {
-        store.update((st) => {
-          st.pens.list = msg.pens;
-        });
-      }
-      else if (msg.type === "log") actions.appendLog(msg.direction || "rx", msg.line ?? "");
+      } else if (msg.type === "log") actions.appendLog(msg.direction || "rx", msg.line ?? "");
       else if (msg.type === "ack" && msg.command === "estop") estop.onSocketAck();
       else if (msg.type === "error") {
         store.update((st) => {
@@ -312,13 +309,15 @@ export function createActions(store, socket, estop) {
         return;
       }
       const wasOpen = s.socket.status === "open";
+      const open = status.status === "open";
       store.update((st) => {
         st.socket = status;
+        if (open) st.serverLost = false;
       });
-      const open = status.status === "open";
       // Resynchronize after a reconnect: messages may have been missed. While the
-      // socket is down, poll over REST so the page does not show a stale state.
-      if (open && !wasOpen) resync();
+      // socket is down, poll over REST so the page does not show a stale state (and
+      // knows at once whether the server is unreachable).
+      if (open !== wasOpen) resync();
       clearInterval(pollTimer);
       pollTimer = open ? null : setInterval(resync, POLL_MS);
     },
@@ -348,10 +347,10 @@ export function createActions(store, socket, estop) {
       });
       uploadJob(form, progress).then(
         (job) => {
-          store.update((st) => {
+          store.update(() => {
             Object.assign(record, { status: "done", message: "added to the queue" });
-            st.selectedJobId = job.id;
           });
+          select(job.id);
           upsertJob(job);
           setTimeout(() => actions.dismissUpload(id), 4000);
         },
@@ -373,10 +372,10 @@ export function createActions(store, socket, estop) {
       appendPlacement(form, s.placement);
       try {
         const job = await uploadJob(form, () => {});
-        store.update((st) => {
+        store.update(() => {
           Object.assign(record, { status: "done", message: "added to the queue" });
-          st.selectedJobId = job.id;
         });
+        select(job.id);
         upsertJob(job);
         setTimeout(() => actions.dismissUpload(id), 4000);
       } catch (err) {
@@ -392,40 +391,66 @@ export function createActions(store, socket, estop) {
       });
     },
 
+    clearFailedUploads() {
+      store.update((st) => {
+        st.uploads = st.uploads.filter((u) => u.status !== "failed");
+      });
+    },
+
     selectJob(id) {
       const job = s.jobs.find((j) => sameId(j.id, id));
       if (!job) return;
+      select(job.id);
       store.update((st) => {
-        st.selectedJobId = job.id;
-        st.placement = placementFromJob(job.placement, st.placement);
         st.placementError = "";
       });
       ensurePreview();
     },
 
-    placementChanged(placement) {
+    placementChanged(patch) {
       store.update((st) => {
-        st.placement = placement;
+        st.placement = { ...st.placement, ...patch }; // only the fields edited
+        st.placementDirty = true;
       });
       clearTimeout(placementTimer);
       placementTimer = setTimeout(actions.applyPlacement, 300);
     },
 
-    /** Re-import the shown queued job with the form's placement, then reload its preview. */
+    /** The offset that puts the drawing's lower-left corner where the pen is now. */
+    placeHere() {
+      const job = previewJob(s);
+      const m = s.machine;
+      if (!job || !job.bounds || !m || !m.position) return;
+      const p = s.placement;
+      const round = (v) => Math.round(v * 100) / 100;
+      actions.placementChanged({
+        dx: round(p.dx + m.position.x - job.bounds.min_x), dy: round(p.dy + m.position.y - job.bounds.min_y),
+      });
+    },
+
+    /** Re-import the shown queued job with the form's placement, then reload its preview.
+     * A refused change puts back what the job really has (and says why). */
     async applyPlacement() {
       const job = previewJob(s);
       if (!job || job.state !== "queued") return;
+      const sent = s.placement;
       try {
         const updated = await api.patch(`/api/jobs/${encodeURIComponent(job.id)}`, {
-          placement: placementFields(s.placement),
+          placement: placementFields(sent),
         });
         clear("placementError");
+        store.update((st) => {
+          if (st.placement === sent) st.placementDirty = false; // not edited meanwhile
+        });
         if (updated && updated.id !== undefined) upsertJob(updated);
         else await loadJobs();
       } catch (err) {
         const errors = uploadErrors(err);
         store.update((st) => {
           st.placementError = errors.length ? errors.map((e) => e.message).join("; ") : err.message;
+          st.placementDirty = false;
+          st.placementKey = null;
+          Object.assign(st, withPlacement(st));
         });
       }
     },
@@ -455,8 +480,8 @@ export function createActions(store, socket, estop) {
         const updated = await api.post(`${path}/${verb}`);
         if (updated && updated.id !== undefined) upsertJob(updated);
         if (verb === "start" || verb === "restart") {
+          select(job.id);
           store.update((st) => {
-            st.selectedJobId = job.id;
             st.estop = null;
           });
         }
@@ -508,7 +533,10 @@ export function createActions(store, socket, estop) {
     selectPlotter(name) {
       store.update((st) => {
         st.plotter = name;
-        if (st.plotters[name]) st.machine = { ...st.plotters[name], seq: ++machineSeq };
+        if (st.plotters[name]) {
+          st.machineSeq += 1;
+          st.machine = { ...st.plotters[name], seq: st.machineSeq };
+        }
       });
       loadSettings();
     },
@@ -565,6 +593,34 @@ export function createActions(store, socket, estop) {
         if (original && String(original.value) === value) delete st.settings.edits[id];
         else st.settings.edits[id] = value;
       });
+    },
+
+    /** "Try it" for a pen position ($60 up, $61 down): the value (as edited) is written
+     * (the server checks its range) and the pen moved there, so the servo shows it live. */
+    async tryPen(id) {
+      const entry = (s.settings.list || []).find((x) => String(x.id) === id);
+      const value = Number(id in s.settings.edits ? s.settings.edits[id] : entry && entry.value);
+      store.update((st) => {
+        st.settings.busy = true;
+        st.settings.error = "";
+      });
+      try {
+        await api.put(machinePath("settings"), { settings: { [id]: value } });
+        await api.post(machinePath("pen"), { down: id === "61" });
+        store.update((st) => {
+          if (entry) entry.value = value;
+          delete st.settings.edits[id];
+          st.settings.message = `Pen moved ${id === "61" ? "down" : "up"} with $${id}=${value} (saved).`;
+        });
+      } catch (err) {
+        store.update((st) => {
+          st.settings.error = `Try $${id}: ${err.message}`;
+        });
+      } finally {
+        store.update((st) => {
+          st.settings.busy = false;
+        });
+      }
     },
 
     async saveSettings() {

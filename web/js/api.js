@@ -28,9 +28,9 @@ export function setUnauthorizedHandler(fn) {
   onUnauthorized = fn;
 }
 
-async function request(method, path, body) {
+async function request(method, path, body, headers = {}) {
   // X-Plotbridge: a header no form or no-cors fetch from another origin can send (CSRF).
-  const init = { method, credentials: "same-origin", headers: { "X-Plotbridge": "1" } };
+  const init = { method, credentials: "same-origin", headers: { ...headers, "X-Plotbridge": "1" } };
   if (body !== undefined) {
     init.headers["Content-Type"] = "application/json";
     init.body = JSON.stringify(body);
@@ -57,7 +57,7 @@ async function request(method, path, body) {
 
 export const api = {
   get: (path) => request("GET", path),
-  post: (path, body) => request("POST", path, body ?? {}),
+  post: (path, body, headers) => request("POST", path, body ?? {}, headers),
   put: (path, body) => request("PUT", path, body),
   patch: (path, body) => request("PATCH", path, body),
   del: (path) => request("DELETE", path),

@@ -19,7 +19,8 @@ export function createEstop({ socket, store }) {
   function viaRest(record) {
     record.rest = true;
     api
-      .post(store.state.plotterOrder.length > 1 ? "/api/estop" : "/api/machine/estop")
+      .post(store.state.plotterOrder.length > 1 ? "/api/estop" : "/api/machine/estop", {},
+        { "X-Plotbridge-Page": store.state.pageId })
       .then(() => acknowledge(record, "rest"))
       .catch((err) => {
         if (store.state.estop !== record || record.acked) return;
@@ -34,7 +35,8 @@ export function createEstop({ socket, store }) {
       // Send before touching anything else on the page.
       // With several plotters the big STOP stops them all (each card has its own).
       const all = store.state.plotterOrder.length > 1;
-      const sentOnSocket = socket.send(all ? { type: "estop", all: true } : { type: "estop" });
+      const page = store.state.pageId; // the other pages say it came from elsewhere
+      const sentOnSocket = socket.send(all ? { type: "estop", all: true, page } : { type: "estop", page });
       const state = store.state;
       const machine = state.machine;
       const record = {

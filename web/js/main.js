@@ -39,9 +39,12 @@ function renderPreview(state) {
   const entry = job && state.previews[job.id];
   const geom = entry && entry.geom ? entry.geom : null;
   preview.setGeometry(geom);
-  preview.setPaper(job ? paperRect(job.placement) : null);
+  // the paper the placement centres on, with its margins dashed (an offset moves the
+  // drawing on it: the preview shows when that leaves the margins)
+  const paper = job ? paperRect(job.placement) : null;
+  preview.setPaper(paper && { ...paper, margin: job.placement.margin ?? 10 });
   const m = state.machine;
-  const pen = m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
+  const pen = !state.serverLost && m && m.connected && m.position ? { x: m.position.x, y: m.position.y, down: m.pen === "down" } : null;
   preview.setPen(pen);
   const pick = state.resumePick;
   preview.setPicked(job && pick && pick.jobId === job.id ? pick : null);
@@ -119,10 +122,27 @@ setUnauthorizedHandler(() => {
   if (store.state.view === "app") actions.leaveApp();
 });
 
+/** Leaving the settings with unsaved edits asks first; true when the page may go on. */
+function mayLeaveSettings(next) {
+  const st = store.state;
+  const n = Object.keys(st.settings.edits).length;
+  if (st.tab !== "settings" || next === "settings" || n === 0) return true;
+  if (!window.confirm(`Discard ${n} unsaved setting change${n > 1 ? "s" : ""}?`)) return false;
+  store.update((s) => {
+    s.settings.edits = {};
+  });
+  return true;
+}
+
 function tabFromHash() {
-  const tab = location.hash.slice(1);
+  const hash = location.hash.slice(1);
+  const tab = TABS.includes(hash) ? hash : "plot";
+  if (!mayLeaveSettings(tab)) {
+    history.replaceState(null, "", "#settings");
+    return;
+  }
   store.update((st) => {
-    st.tab = TABS.includes(tab) ? tab : "plot";
+    st.tab = tab;
   });
 }
 
@@ -161,11 +181,17 @@ function bind() {
   $("#logout").addEventListener("click", () => actions.logout());
   for (const button of document.querySelectorAll(".tab")) {
     button.addEventListener("click", () => {
+      if (!mayLeaveSettings(button.dataset.tab)) return;
       history.replaceState(null, "", `#${button.dataset.tab}`);
       tabFromHash();
     });
   }
   window.addEventListener("hashchange", tabFromHash);
+  window.addEventListener("beforeunload", (e) => {
+    if (Object.keys(store.state.settings.edits).length === 0) return;
+    e.preventDefault(); // the browser asks whether to leave with unsaved settings
+    e.returnValue = "";
+  });
 
   $("#zoom-in").addEventListener("click", () => preview.zoomCenter(1.5));
   $("#zoom-out").addEventListener("click", () => preview.zoomCenter(1 / 1.5));

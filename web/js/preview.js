@@ -327,6 +327,12 @@ export class PreviewCanvas {
         ctx.strokeStyle = edge;
         ctx.strokeRect(...rect(r));
       }
+      const p = this.paper; // the margins, dashed inside the paper
+      if (p && p.margin > 0 && p.w > 2 * p.margin && p.h > 2 * p.margin) {
+        ctx.setLineDash([4 * dpr, 4 * dpr]);
+        ctx.strokeRect(...rect({ x: p.x + p.margin, y: p.y + p.margin, w: p.w - 2 * p.margin, h: p.h - 2 * p.margin }));
+        ctx.setLineDash([]);
+      }
       ctx.lineWidth = LINE_PX;
     }];
     const g = this.geom;

@@ -3,6 +3,9 @@
 
 export const MOVING_STATES = new Set(["Run", "Jog", "Home"]);
 export const ACTIVE_JOB_STATES = new Set(["running", "paused", "pen_change"]);
+// A job in one of these wants the user's eyes: its preview is shown unless one is selected.
+const ATTENTION_STATES = new Set(["stopped", "interrupted"]);
+export const DEFAULT_PLACEMENT = { paper: "", landscape: false, margin: 10, fit: false, rotate: 0, scale: 1, dx: 0, dy: 0 };
 const HOLDABLE_STATES = new Set(["Run", "Jog"]);
 
 export function initialState() {
@@ -11,7 +14,10 @@ export function initialState() {
     tab: "plot",              // "plot" | "control" | "pens" | "settings" | "console"
     login: { busy: false, error: "" },
     socket: { status: "closed" },   // "open" | "connecting" | "closed"
+    serverLost: false,        // the socket is down and REST cannot reach the server either
+    pageId: "",               // this page's random id: tells our stops from other browsers'
     machine: null,            // the machine object of the selected plotter
+    machineSeq: 0,            // counts machine reports (machine.seq)
     plotters: {},             // plotter name -> its machine object
     plotterOrder: [],         // plotter names, the server's order (the first is the default)
     plotter: null,            // the selected plotter's name
@@ -21,13 +27,16 @@ export function initialState() {
     previews: {},             // job id -> { version, data } (the /preview body)
     patterns: [],
     uploads: [],              // { id, name, loaded, total, status, message, errors }
-    placement: { paper: "", landscape: false, margin: 10, fit: false, rotate: 0, scale: 1 },
+    placement: { ...DEFAULT_PLACEMENT }, // the form: the shown job's, or the user's edit
+    placementJob: null,       // the job whose placement the form shows
+    placementKey: null,       // and that placement (JSON)
+    placementDirty: false,    // an edit not yet applied: the form keeps it
     jog: { step: 10, feed: 3000 },
     settings: { list: null, edits: {}, busy: false, message: "", error: "" },
     pens: { list: [], form: null, busy: false, error: "", message: "" },  // views/pens.js
     log: [],                  // { seq, direction, line }
     logSeq: 0,
-    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via }
+    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via, remote }
     notice: null,             // { text, error }
     resumePick: null,         // { jobId, x, y }: the stroke vertex picked to resume from
     resumeOverlap: 1,         // mm back along the stroke from the picked point
@@ -57,10 +66,14 @@ export function createStore(state, render) {
   };
 }
 
-/** The job whose preview is shown: the selected one, else the running one, else the first. */
+/** The job whose preview is shown: the selected one, else the running (or paused) one,
+ * else the last stopped or interrupted one, else the first waiting; never an unrelated
+ * finished job. */
 export function previewJob(state) {
-  const byId = state.jobs.find((j) => j.id === state.selectedJobId);
-  return byId ?? state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state)) ?? state.jobs[0] ?? null;
+  const byId = state.jobs.find((j) => String(j.id) === String(state.selectedJobId));
+  return byId ?? state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state))
+    ?? state.jobs.findLast((j) => ATTENTION_STATES.has(j.state))
+    ?? state.jobs.find((j) => j.state === "queued" || j.state === "waiting") ?? null;
 }
 
 export function jobActive(state) {

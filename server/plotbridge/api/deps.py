@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Annotated, Any
 
@@ -45,6 +46,15 @@ async def authenticated(request: Request) -> None:  # async: no thread-pool hop
 
 
 GUARD = [Depends(authenticated)]
+
+PAGE_HEADER = "X-Plotbridge-Page"  # the stopping page's id (REST); the WebSocket's "page"
+_PAGE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
+
+
+def page_id(value: object) -> str | None:
+    """A page's self-chosen random id as given, or None when absent or malformed: it
+    is echoed to every client, so nothing else (no session, no token) goes out."""
+    return value if isinstance(value, str) and _PAGE_ID.fullmatch(value) else None
 
 
 def error(status: int, detail: Any) -> JSONResponse:

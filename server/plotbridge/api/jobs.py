@@ -83,7 +83,8 @@ async def get_job(job_id: str, c: Parts) -> dict[str, Any]:
 @router.patch("/jobs/{job_id}", response_model=Job)
 async def patch_job(job_id: str, body: PatchJobBody,
                     c: Parts) -> dict[str, Any]:  # fmt: skip
-    placement = body.placement.model_dump() if body.placement else None
+    # only the fields sent: the others keep what the job has (never reset to defaults)
+    placement = body.placement.model_dump(exclude_unset=True) if body.placement else None
     job = c.queue.get(job_id)
     if body.name is not None or placement is not None:
         job = await c.queue.reimport(job_id, body.name, placement)

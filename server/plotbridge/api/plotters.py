@@ -11,9 +11,9 @@ import logging
 from collections.abc import Callable
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Depends, Path
+from fastapi import APIRouter, Depends, Path, Request
 
-from plotbridge.api.deps import GUARD, Parts
+from plotbridge.api.deps import GUARD, PAGE_HEADER, Parts, page_id
 from plotbridge.models import CommandBody, JogBody, Machine, MotorsBody, PenBody, SettingsBody
 from plotbridge.plotter.plotter import Plotter
 
@@ -36,8 +36,9 @@ async def plotters(c: Parts) -> list[dict[str, Any]]:
 
 
 @router.post("/api/estop", status_code=202)
-async def estop_all(c: Parts) -> dict[str, Any]:
-    c.queue.estop_all("REST, all plotters")  # synchronous, before any await
+async def estop_all(c: Parts, request: Request) -> dict[str, Any]:
+    # synchronous, before any await
+    c.queue.estop_all("REST, all plotters", page_id(request.headers.get(PAGE_HEADER)))
     return {"status": "stopped", "plotters": list(c.queue.plotters)}
 
 
@@ -51,8 +52,8 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
         return plotter.machine()
 
     @routes.post("/machine/estop", status_code=202)
-    async def estop(plotter: Board) -> dict[str, Any]:
-        plotter.estop("REST")  # synchronous, before any await
+    async def estop(plotter: Board, request: Request) -> dict[str, Any]:
+        plotter.estop("REST", page_id(request.headers.get(PAGE_HEADER)))  # before any await
         return {"status": "stopped", "machine": plotter.machine()}
 
     @routes.post("/machine/hold")

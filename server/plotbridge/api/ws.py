@@ -11,7 +11,7 @@ from typing import Any
 from fastapi import APIRouter, WebSocket
 from pydantic import ValidationError
 
-from plotbridge.api.deps import Components
+from plotbridge.api.deps import Components, page_id
 from plotbridge.errors import Refused
 from plotbridge.models import JogBody, ResumeBody
 from plotbridge.ws import Client
@@ -86,16 +86,17 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
 def _estop(c: Components, body: dict[str, Any] | None) -> None:
     """`{"type": "estop"}` stops the first plotter (or the named one), `"all": true` all."""
     body = body or {}
+    origin = page_id(body.get("page"))
     if body.get("all") is True:
-        c.queue.estop_all("WebSocket, all plotters")
+        c.queue.estop_all("WebSocket, all plotters", origin)
         return
     name = body.get("plotter")
     try:
         plotter = c.queue.plotter(name if isinstance(name, str) else None)
     except Refused:  # a stop must never be lost: a wrong name stops them all
-        c.queue.estop_all(f"WebSocket, unknown plotter {name!r}")
+        c.queue.estop_all(f"WebSocket, unknown plotter {name!r}", origin)
         return
-    plotter.estop("WebSocket")
+    plotter.estop("WebSocket", origin)
 
 
 async def _board_commands(c: Components, client: Client, waiting: asyncio.Queue[Command]) -> None:

@@ -10,12 +10,14 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import re
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from plotbridge import settings_meta
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
 from plotbridge.jobs.model import AfterJob, Job
@@ -23,7 +25,6 @@ from plotbridge.pens import PenLibrary
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
 from plotbridge.plotter.link import CommandError, Link, LinkDown, LinkEvent
 from plotbridge.plotter.runner import Report, Runner
-from plotbridge.settings_meta import SETTINGS
 from plotbridge.virtual import VirtualPlotter
 
 log = logging.getLogger("plotbridge.plotter")
@@ -32,6 +33,7 @@ MACHINE_INTERVAL = 0.1  # s between machine reports while moving (the contract a
 HOMING_S = 120.0  # s a homing cycle may take on the largest work area
 CONSOLE_FORBIDDEN = "?!~\x18\r\n"  # realtime bytes and line ends: not in a console line
 CONSOLE_REALTIME = {"?": "status report", "!": "feed hold", "~": "cycle start"}
+SETTING_LINE = re.compile(r"\$(\d+)\s*=\s*(\S+)")  # a console line writing one setting
 
 
 @dataclass(frozen=True)
@@ -152,10 +154,11 @@ class Plotter:
 
     # ---- stop ---------------------------------------------------------------------------
 
-    def estop(self, source: str) -> None:
-        """Emergency stop: the reset byte goes out first, before any other work."""
+    def estop(self, source: str, origin: str | None = None) -> None:
+        """Emergency stop: the reset byte goes out first, before any other work.
+        `origin`: the page that pressed it (its own random id), told to every client."""
         self.reset_now()
-        self.stopped(source)
+        self.stopped(source, origin)
 
     def realtime(self, byte: bytes) -> None:
         """A feed hold (`!`) of a moving board, or cycle start (`~`) of a held one, for a
@@ -174,11 +177,14 @@ class Plotter:
         """The emergency stop's soft reset byte, written at once."""
         self.link.estop()
 
-    def stopped(self, source: str) -> None:
-        """The emergency stop's bookkeeping: the job is `stopped`, the clients told."""
+    def stopped(self, source: str, origin: str | None = None) -> None:
+        """The emergency stop's bookkeeping: the job is `stopped`, the clients told who
+        stopped it (every page shows the stop; the others say it came from elsewhere)."""
         log.warning("EMERGENCY STOP of %s (%s)", self.name, source)
         self.runner.stopped()
         self._send_machine(force=True)
+        self.events.publish({"type": "stopped", "plotter": self.name, "origin": origin,
+                             "via": source})  # fmt: skip
 
     # ---- board verbs (while no job runs) -------------------------------------------------
 
@@ -247,21 +253,44 @@ class Plotter:
         line = line.strip()
         if not line or any(ch in line for ch in CONSOLE_FORBIDDEN) or not line.isprintable():
             raise Refused(422, "one printable G-code or $ line, without realtime characters")
+        if written := SETTING_LINE.fullmatch(line):
+            with contextlib.suppress(ValueError):  # not a number: the board says so itself
+                self.check_settings({int(written[1]): float(written[2])})
         return [*await self.send("send commands", line, wait=30), "ok"]
 
+    @property
+    def checks_ranges(self) -> bool:
+        """Whether the board is ours, whose ranges settings_meta knows: it has the pen
+        servo settings ($60). Stock GRBL keeps its own (other) limits."""
+        return 60 in self.link.settings
+
     def settings(self) -> list[dict[str, Any]]:
-        """The board's settings with their names, units and descriptions where known."""
+        """The board's settings with their names, units, descriptions and ranges."""
         view = []
         for number in sorted(self.link.settings):
-            meta = SETTINGS.get(number)
+            meta = settings_meta.SETTINGS.get(number)
+            limits = settings_meta.RANGES.get(number) if self.checks_ranges else None
             view.append({
                 "id": number, "value": self.link.settings[number],
                 "name": meta.name if meta else None, "unit": meta.unit if meta else None,
                 "description": meta.description if meta else None,
+                "range": limits.public() if limits else None,
             })  # fmt: skip
         return view
 
+    def check_settings(self, values: dict[int, float]) -> None:
+        """Refuses (422, every reason with its range) values the board would refuse,
+        before any of them is written."""
+        if not self.checks_ranges:
+            return
+        after = {**self.link.settings, **values}
+        reasons = [why for number, value in values.items()
+                   if (why := settings_meta.check(number, value, after))]  # fmt: skip
+        if reasons:
+            raise Refused(422, "; ".join(reasons))
+
     async def write_settings(self, values: dict[int, float]) -> list[str]:
+        self.check_settings(values)
         responses: list[str] = []
         for number, value in values.items():
             text = f"{value:g}" if value != int(value) else str(int(value))

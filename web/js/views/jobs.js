@@ -82,33 +82,40 @@ export function bindJobs(actions) {
   });
   const form = $("#placement");
   form.addEventListener("submit", (e) => e.preventDefault());
-  form.addEventListener("change", () => actions.placementChanged(readPlacement(form)));
+  // Only the field edited changes: the others keep what the job has.
+  const changed = (e) => {
+    const patch = placementField(e.target);
+    if (patch) actions.placementChanged(patch);
+  };
+  form.addEventListener("change", changed);
   form.addEventListener("input", (e) => {
-    if (e.target.type === "number") actions.placementChanged(readPlacement(form));
+    if (e.target.type === "number") changed(e);
   });
+  $("#place-here").addEventListener("click", () => actions.placeHere());
   $("#queue").addEventListener("click", (e) => {
     const button = e.target.closest("button[data-verb]");
     const row = e.target.closest("li[data-key]");
     if (button) actions.jobVerb(row.dataset.key, button.dataset.verb);
     else if (row) actions.selectJob(row.dataset.key);
   });
-  $("#uploads").addEventListener("click", (e) => {
-    const button = e.target.closest("button[data-dismiss]");
-    if (button) actions.dismissUpload(button.dataset.dismiss);
-  });
+  for (const list of [$("#uploads"), $("#upload-errors")]) {
+    list.addEventListener("click", (e) => {
+      const button = e.target.closest("button[data-dismiss]");
+      if (button) actions.dismissUpload(button.dataset.dismiss);
+    });
+  }
+  $("#upload-clear").addEventListener("click", () => actions.clearFailedUploads());
 }
 
-function readPlacement(form) {
-  const f = form.elements;
-  const num = (v, fallback) => (Number.isFinite(parseFloat(v)) ? parseFloat(v) : fallback);
-  return {
-    paper: f.paper.value,
-    landscape: f.landscape.checked,
-    margin: num(f.margin.value, 10),
-    fit: f.fit.checked,
-    rotate: parseInt(f.rotate.value, 10) || 0,
-    scale: num(f.scale.value, 1),
-  };
+/** One edited placement field as a patch of the form's state; null while a number is
+ * half typed. */
+function placementField(input) {
+  const name = input.name;
+  if (input.type === "checkbox") return { [name]: input.checked };
+  if (name === "paper") return { paper: input.value };
+  if (name === "rotate") return { rotate: parseInt(input.value, 10) || 0 };
+  const value = parseFloat(input.value);
+  return Number.isFinite(value) ? { [name]: value } : null;
 }
 
 function renderPlacement(state) {
@@ -124,16 +131,28 @@ function renderPlacement(state) {
   put(f.fit, p.fit, "checked");
   put(f.rotate, String(p.rotate));
   put(f.scale, String(p.scale));
+  put(f.dx, String(p.dx));
+  put(f.dy, String(p.dy));
   setDisabled(f.landscape, !p.paper);
   setDisabled(f.margin, !p.paper);
   const job = previewJob(state);
+  const m = state.machine;
+  setDisabled($("#place-here"), state.serverLost || !(job && job.bounds && m && m.connected && m.position));
   setText($("#place-target"), job && job.state === "queued"
     ? `Applies to new uploads and to the queued job “${job.name}”.`
     : "Applies to new uploads.");
 }
 
 function renderUploads(state) {
-  syncList($("#uploads"), state.uploads, (u) => u.id,
+  const failed = state.uploads.filter((u) => u.status === "failed");
+  setHidden($("#upload-failed"), failed.length === 0);
+  setText($("#upload-failed-title"), `${failed.length} upload${failed.length === 1 ? "" : "s"} refused`);
+  renderUploadList($("#upload-errors"), failed);
+  renderUploadList($("#uploads"), state.uploads.filter((u) => u.status !== "failed"));
+}
+
+function renderUploadList(list, uploads) {
+  syncList(list, uploads, (u) => u.id,
     () => el("li", { className: "upload" },
       el("div", { className: "upload-head" }, el("span", { className: "name" }), el("span", { className: "status" }),
         el("button", { type: "button", className: "link small", "aria-label": "Dismiss" }, "✕")),
@@ -195,7 +214,7 @@ function renderQueue(state) {
       setHidden(prog, !showProgress);
       if (showProgress) {
         prog.querySelector("progress").value = job.progress || 0;
-        const eta = job.state === "running" ? ` · ${duration(job.eta_s)} left` : "";
+        const eta = job.state === "running" && !state.serverLost ? ` · ${duration(job.eta_s)} left` : "";
         setText(prog.querySelector(".pct"), `${percent(job.progress)} (${job.lines_done ?? 0}/${job.lines_total ?? "?"})${eta}`);
       }
       renderLayers(node.querySelector(".job-layers"), job);
@@ -255,6 +274,9 @@ export function renderJobs(state) {
     const b = job.bounds;
     info.push(`drawing ${(b.max_x - b.min_x).toFixed(1)} × ${(b.max_y - b.min_y).toFixed(1)} mm at X ${b.min_x.toFixed(1)}, Y ${b.min_y.toFixed(1)}`);
   }
+  const warnings = (job && job.warnings) || []; // e.g. the paper turned to fit
+  info.push(...warnings.slice(0, 3).map((w) => w.message));
+  if (warnings.length > 3) info.push(`and ${warnings.length - 3} more warnings`);
   const preview = job && state.previews[job.id];
   if (preview && preview.error) info.push(`preview unavailable: ${preview.error}`);
   else if (preview && preview.geom) info.push(`${preview.geom.strokes.count.toLocaleString()} points`);

@@ -1,13 +1,27 @@
 // Header summary, the machine panel, the banners and the emergency-stop panel.
 
 import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
-import { ALARMS, mm } from "../format.js";
-import { estopConfirmed, holdAction } from "../store.js";
+import { ALARMS, duration, mm, percent } from "../format.js";
+import { ACTIVE_JOB_STATES, estopConfirmed, holdAction } from "../store.js";
 
 function machineLabel(m) {
   if (!m) return "…";
   if (!m.connected) return "Disconnected";
   return m.state || "Unknown";
+}
+
+/** The header's summary. While the server is unreachable it says so instead of the last
+ * state, position and ETA it heard (they may be long out of date). Pure. */
+export function headerSummary(state) {
+  if (state.serverLost) return { state: "connection lost", badge: "Lost", pos: "", pen: "", job: "" };
+  const m = state.machine;
+  const label = machineLabel(m);
+  const job = state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state));
+  const eta = job && job.state === "running" && job.eta_s ? ` · ${duration(job.eta_s)} left` : "";
+  return {
+    state: label, badge: label, pos: positionText(m), pen: m ? `pen ${m.pen}` : "",
+    job: job ? `${job.name} ${percent(job.progress)}${eta}` : "",
+  };
 }
 
 function positionText(m) {
@@ -20,10 +34,12 @@ export function bannersFor(state) {
   const out = [];
   if (state.socket.status !== "open") {
     out.push({
-      key: "socket", level: "warn",
-      text: state.socket.status === "connecting"
-        ? "Connecting to the server for live updates…"
-        : "Lost the live connection to the server. Reconnecting automatically.",
+      key: "socket", level: state.serverLost ? "error" : "warn",
+      text: state.serverLost
+        ? "Lost the live connection to the server: it does not answer. Reconnecting automatically."
+        : state.socket.status === "connecting"
+          ? "Connecting to the server for live updates…"
+          : "Lost the live connection to the server. Reconnecting automatically.",
       actions: [{ label: "Reconnect now", action: "reconnect" }],
     });
   }
@@ -87,11 +103,13 @@ export function bindMachine(actions) {
 export function renderMachine(state) {
   const m = state.machine;
   const label = machineLabel(m);
+  const sum = headerSummary(state);
   const badge = $("#sum-state");
-  setText(badge, label);
-  setAttr(badge, "data-state", label);
-  setText($("#sum-pos"), positionText(m));
-  setText($("#sum-pen"), m ? `pen ${m.pen}` : "");
+  setText(badge, sum.state);
+  setAttr(badge, "data-state", sum.badge);
+  setText($("#sum-pos"), sum.pos);
+  setText($("#sum-pen"), sum.pen);
+  setText($("#sum-job"), sum.job);
 
   setText($("#m-conn"), !m ? "…" : m.connected ? "connected" : "not connected");
   setText($("#m-state"), label + (m && m.alarm ? ` (alarm ${m.alarm})` : ""));
@@ -146,7 +164,7 @@ function renderEstop(state) {
     setText($("#estop-title"), "Stopping…");
     setText($("#estop-text"), "Emergency stop sent; waiting for the machine to confirm.");
   } else {
-    setText($("#estop-title"), "Machine stopped");
+    setText($("#estop-title"), e.remote ? `Machine stopped from another ${e.remote}` : "Machine stopped");
     setText($("#estop-text"), m && m.state === "Alarm"
       ? "Motion was cut, so the position may be lost. Home the machine (recommended), or unlock it to continue from here. The stopped job can be resumed from the queue."
       : "Everything queued was dropped. You can start a job again, or home the machine first.");
