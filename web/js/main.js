@@ -16,7 +16,7 @@ import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
 const TABS = ["plot", "control", "settings", "console"];
-const DRAWN_STATES = new Set(["running", "paused", "stopped", "interrupted", "failed", "cancelled"]);
+const DRAWN_STATES = new Set(["running", "paused", "pen_change", "stopped", "interrupted", "failed", "cancelled"]);
 const LIVE_STATES = new Set(["running", "paused"]);
 
 let preview = null;
