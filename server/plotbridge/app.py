@@ -56,7 +56,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         leftover.unlink(missing_ok=True)
     store = JobStore(config.db_path, first_plotter=boards[0].name)
     importer = Importer(config.jobs_dir, settings=lambda: boards[0].link.settings,
-                        limits=config.import_limits)  # fmt: skip
+                        limits=config.import_limits,
+                        firmware=lambda: boards[0].link.status.firmware)  # fmt: skip
     importer.clean()
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
                      work_area=b.work_area, home_on_connect=config.home_on_connect,

@@ -455,7 +455,7 @@ class SvgReader:
     def _shape(self, elem: Element, tag: str, ctx: Ctx) -> None:
         stroke = self._visible_stroke(ctx)
         fill_colour = self._visible_fill(ctx)
-        fills = self.fills.fill_for(ctx.chain + ((ctx.layer,) if ctx.layer else ()), fill_colour)
+        fills = self.fills.fill_for(((ctx.layer,) if ctx.layer else ()) + ctx.chain, fill_colour)
         mode = fills.mode
         if stroke is None and (fill_colour is None or mode == "none"):
             if fill_colour is not None:
