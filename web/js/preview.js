@@ -341,10 +341,12 @@ export class PreviewCanvas {
     });
     if (g) {
       chunkSteps(g.travel, this.travelBoxes, (from, to) => [[from, to, COLORS.travel]]);
-      // strokes still to draw in their layer's colour, the drawn part in one colour
-      chunkSteps(g.strokes, this.boxes, (from, to, c) => (c < doneChunks
-        ? [[from, to, COLORS.done]]
-        : colourRunsIn(g.colours, from, to)));
+      // strokes still to draw in their layer's colour, the drawn part in one colour; the
+      // partially drawn chunk is drawn per frame (renderDynamic), not here
+      chunkSteps(g.strokes, this.boxes, (from, to, c) => {
+        if (c === doneChunks) return [];
+        return c < doneChunks ? [[from, to, COLORS.done]] : colourRunsIn(g.colours, from, to);
+      });
     }
     return { key, view: { ...this.view }, canvas, ctx, steps, next: 0 };
   }
@@ -365,7 +367,16 @@ export class PreviewCanvas {
     const ctx = this.ctx;
     const t = this.deviceTransform(dpr);
     ctx.setTransform(1, 0, 0, 1, 0, 0);
-    if (this.geom && this.done > doneChunks * CHUNK) {
+    const first = doneChunks * CHUNK;
+    const end = this.geom ? Math.min(this.geom.strokes.count, first + CHUNK) : 0;
+    ctx.lineWidth = LINE_PX;
+    for (const [from, to, colour] of end > this.done ? colourRunsIn(this.geom.colours, Math.max(first, this.done), end) : []) {
+      const path = new Path2D(); // the partially drawn chunk's part still to draw
+      appendPath(path, this.geom.strokes, from, to, t, MIN_PX);
+      ctx.strokeStyle = colour;
+      ctx.stroke(path);
+    }
+    if (this.geom && this.done > first) {
       const path = new Path2D();
       appendPath(path, this.geom.strokes, doneChunks * CHUNK, this.done, t, 0);
       if (this.tail) path.lineTo(t.a * this.tail.x + t.e, t.f - t.a * this.tail.y);
