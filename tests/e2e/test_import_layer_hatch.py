@@ -1,7 +1,8 @@
 """End to end through a real server and the virtual plotter: an SVG in two Inkscape
 layers and a fill colour outside them, uploaded with a hatch of its own per layer and per
-colour (`layer_fill`); each layer is plotted between pen changes as the import said,
-with its own spacing and angle; a bad entry is refused naming it."""
+colour (`layer_fill`), moved by a re-import that keeps them; each layer is plotted
+between pen changes as the import said, with its own spacing and angle; a bad entry is
+refused naming it."""
 
 from __future__ import annotations
 
@@ -59,9 +60,19 @@ def test_hatch_per_layer_and_colour_plots_layer_by_layer(server, plotter):
     server.home()
     plotter.clear()
     response = server.client.post("/api/jobs", files={"file": ("h.svg", SVG)},
-                                  data={"layer_fill": json.dumps(LAYER_FILL), "start": "true"})
+                                  data={"layer_fill": json.dumps(LAYER_FILL)})
     assert response.status_code == 201, response.text
-    job = response.json()
+    uploaded = response.json()
+    # moved by a re-import: the job keeps its layers' own fills
+    moved = server.client.patch(f"/api/jobs/{uploaded['id']}",
+                                json={"placement": {"dx": 5, "dy": 5}})
+    assert moved.status_code == 200, moved.text
+    job = moved.json()
+    assert job["bounds"]["min_x"] == pytest.approx(uploaded["bounds"]["min_x"] + 5)
+    def ink(j: dict) -> list:
+        return [(lay["name"], lay["strokes"], lay["pen_down_mm"]) for lay in j["layers"]]
+    assert ink(job) == ink(uploaded)
+    assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
     # the orange rectangle has no entry and the import's fill is none: not drawn
     assert [lay["name"] for lay in job["layers"]] == ["rows", "columns", "#008000"]
     data = preview(server, job["id"])
