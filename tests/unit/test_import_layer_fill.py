@@ -106,6 +106,9 @@ def test_a_group_id_inside_a_layer_wins_over_the_layer(tmp_path):
     ('{"A": {"fill": "solid"}}', "fill: expected one of none, outline, hatch"),
     ('{"A": {"hatch_cross": "maybe"}}', "hatch_cross: expected true or false"),
     ('{" ": {}}', "name is empty"),
+    ("[" * 50_000 + "]" * 50_000, "longer than 65536 characters"),
+    ("[" * 30_000 + "]" * 30_000, "nested too deeply"),
+    (json.dumps({f"L{n}": {} for n in range(300)}), "at most 256 layers"),
 ])
 def test_bad_values_are_refused_naming_the_entry(raw, words):
     with pytest.raises(ValueError) as e:

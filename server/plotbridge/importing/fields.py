@@ -32,6 +32,7 @@ FIELDS: dict[str, tuple[str, Any, str]] = {
 # per layer or per colour (the `layer_fill` field): these keys, checked as above
 LAYER_FILL_KEYS = ("fill", "hatch_spacing", "hatch_angle", "hatch_cross")
 MAX_LAYER_FILLS = 256
+MAX_LAYER_FILL_CHARS = 64 * 1024
 
 
 def _value(key: str, raw: Any) -> Any:
@@ -62,8 +63,12 @@ def _value(key: str, raw: Any) -> Any:
 def layer_fills(raw: str) -> dict[str, dict[str, Any]]:
     """The `layer_fill` field: a JSON object from layer, group or fill colour to its own
     fill settings; ValueError names the entry and the setting that is wrong."""
+    if len(raw) > MAX_LAYER_FILL_CHARS:
+        raise ValueError(f"layer_fill: longer than {MAX_LAYER_FILL_CHARS} characters")
     try:
         table = json.loads(raw) if raw.strip() else {}
+    except RecursionError:
+        raise ValueError("layer_fill: nested too deeply") from None
     except ValueError as e:
         raise ValueError(f"layer_fill: not JSON ({e})") from None
     if not isinstance(table, dict):
