@@ -60,7 +60,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         leftover.unlink(missing_ok=True)
     store = JobStore(config.db_path, first_plotter=boards[0].name)
     importer = Importer(config.jobs_dir, settings=lambda: boards[0].link.settings,
-                        limits=config.import_limits)  # fmt: skip
+                        limits=config.import_limits,
+                        firmware=lambda: boards[0].link.status.firmware)  # fmt: skip
     importer.clean()
     library = PenLibrary(config.db_path, events)
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,

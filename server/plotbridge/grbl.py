@@ -214,6 +214,13 @@ def version_from_feedback(text: str) -> str | None:
     return version or None
 
 
+def build_of(version: str | None) -> str | None:
+    """The build part of a `$I` version ("1.1h.20190825" -> "20190825"; our firmware's
+    "1.1h.plotbridge" -> "plotbridge"), None when only the banner's "1.1h" is known."""
+    parts = (version or "").split(".", 2)
+    return parts[2] if len(parts) == 3 and parts[2] else None
+
+
 def buffers_from_feedback(text: str) -> tuple[int, int] | None:
     """(planner blocks, receive-buffer bytes) from `$I`'s `[OPT:V,15,128]`, else None."""
     if not text.startswith("OPT:"):

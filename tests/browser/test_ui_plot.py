@@ -88,14 +88,15 @@ def assert_stop_on_screen(page, viewport: dict[str, int]) -> None:
 
 
 def preview_pixels(page) -> dict[str, int]:
-    """Count canvas pixels in the 'to draw' (blue) and 'drawn' (orange) colours."""
+    """Count canvas pixels in the 'to draw' (the strokes' own colour: black here, blue
+    where none is known) and 'drawn' (orange) colours."""
     return page.evaluate("""() => {
         const c = document.querySelector('#preview');
         const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
         let todo = 0, done = 0;
         for (let i = 0; i < d.length; i += 4) {
             const [r, g, b] = [d[i], d[i + 1], d[i + 2]];
-            if (b > 120 && r < 110 && b - r > 60) todo++;
+            if ((b > 120 && r < 110 && b - r > 60) || Math.max(r, g, b) < 90) todo++;
             else if (r > 180 && g > 60 && g < 150 && b < 90) done++;
         }
         return {todo, done};

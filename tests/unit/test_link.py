@@ -229,11 +229,15 @@ async def test_connect_probes_reads_settings_and_never_resets():
         assert any(e.kind == "connected" for e in link.events)
 
 
-async def test_connect_with_banner_skips_build_info():
+async def test_connect_with_banner_asks_for_the_build():
+    # The banner's "1.1h" does not tell stock GRBL from our firmware; `$I` does (the
+    # estimate's motion model depends on it), and a later banner keeps what it told.
     board = FakeBoard(banner_on_connect=True)
     async with running(board) as link:
-        assert link.status.firmware == "1.1h"
-        assert board.lines == ["$$"]
+        assert link.status.firmware == "1.1h.20190825"
+        assert board.lines == ["$I", "$$"]
+        link._on_banner("1.1h")
+        assert link.status.firmware == "1.1h.20190825"
 
 
 async def test_no_grbl_board_is_retried_not_fatal():

@@ -18,7 +18,7 @@ import { PICKABLE, bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
 const TABS = ["plot", "control", "pens", "settings", "console"];
-const DRAWN_STATES = new Set(["running", "paused", "stopped", "interrupted", "failed", "cancelled"]);
+const DRAWN_STATES = new Set(["running", "paused", "pen_change", "stopped", "interrupted", "failed", "cancelled"]);
 const LIVE_STATES = new Set(["running", "paused"]);
 
 let preview = null;

@@ -35,12 +35,47 @@ function flatten(list) {
   return { coords, starts, count: total };
 }
 
-/** Geometry for drawing: strokes, travel, bounds, and the per-stroke program line map. */
+/**
+ * The program lines [pen-down, pen-up] of each stroke, from the preview's `lines`
+ * (the importer writes them), or null for a preview without them or that does not match.
+ */
+function strokeLines(preview, nStrokes) {
+  const spans = preview && preview.lines;
+  if (!Array.isArray(spans) || spans.length !== nStrokes) return null;
+  const first = new Float64Array(nStrokes);
+  const last = new Float64Array(nStrokes);
+  for (let s = 0; s < nStrokes; s++) {
+    const span = spans[s];
+    if (!Array.isArray(span) || !(span[1] >= span[0])) return null;
+    first[s] = span[0];
+    last[s] = span[1];
+  }
+  return { first, last };
+}
+
+/**
+ * Runs of consecutive strokes of one colour: [{from, to (point indices), colour}];
+ * colour null where the preview names none.
+ */
+function colourRuns(preview, strokes) {
+  const colours = Array.isArray(preview && preview.colours) ? preview.colours : [];
+  const runs = [];
+  const nStrokes = strokes.starts.length - 1;
+  for (let s = 0; s < nStrokes; s++) {
+    const c = typeof colours[s] === "string" ? colours[s] : null;
+    const last = runs[runs.length - 1];
+    if (last && last.colour === c) last.to = strokes.starts[s + 1];
+    else runs.push({ from: strokes.starts[s], to: strokes.starts[s + 1], colour: c });
+  }
+  return runs;
+}
+
+/** Geometry for drawing: strokes, travel, bounds, colours and the program line map. */
 export function buildGeometry(preview) {
   const strokes = flatten(preview && preview.strokes);
   const travel = flatten(preview && preview.travel);
-  // The normalized program (docs/INTERNALS.md) spends G0 + M3 + (n-1) G1 + M5 on an
-  // n-point stroke after a 3-line header: cumulative line counts per stroke.
+  // Without the importer's line spans: the normalized program (docs/INTERNALS.md) spends
+  // G0 + M3 + (n-1) G1 + M5 on an n-point stroke after a 3-line header.
   const nStrokes = strokes.starts.length - 1;
   const lineEnd = new Float64Array(nStrokes);
   let line = 3;
@@ -48,7 +83,10 @@ export function buildGeometry(preview) {
     line += strokes.starts[s + 1] - strokes.starts[s] + 2;
     lineEnd[s] = line;
   }
-  return { strokes, travel, lineEnd, expectedLines: line + 1, bounds: boundsOf(strokes) };
+  return {
+    strokes, travel, lineEnd, expectedLines: line + 1, bounds: boundsOf(strokes),
+    lines: strokeLines(preview, nStrokes), colours: colourRuns(preview, strokes),
+  };
 }
 
 function boundsOf(...sets) {
@@ -65,24 +103,41 @@ function boundsOf(...sets) {
   return Number.isFinite(minX) ? { minX, minY, maxX, maxY } : null;
 }
 
+/** The first stroke whose value in `ends` (ascending) is above `line`. */
+function strokeAfter(ends, line) {
+  let lo = 0, hi = ends.length;
+  while (lo < hi) {
+    const mid = (lo + hi) >> 1;
+    if (ends[mid] <= line) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
 /**
  * How many stroke points are drawn after `linesDone` of `linesTotal` program lines:
- * exact for programs laid out as the normalized dialect, proportional otherwise.
+ * exact at every stroke's ends with the importer's line spans (whatever lines come
+ * between strokes, such as the M0 between layers), proportional inside a stroke;
+ * without them, laid out as the normalized dialect, proportional otherwise.
  * Returns a global point index: every point below it has been reached.
  */
 export function pointsDone(geom, linesDone, linesTotal) {
-  const { strokes, lineEnd, expectedLines } = geom;
+  const { strokes, lineEnd, expectedLines, lines } = geom;
   const nStrokes = lineEnd.length;
   if (!nStrokes || !linesTotal || linesDone <= 0) return 0;
   if (linesDone >= linesTotal) return strokes.count;
-  const line = linesDone * (expectedLines / linesTotal);
-  // first stroke whose last line is beyond `line`
-  let lo = 0, hi = nStrokes;
-  while (lo < hi) {
-    const mid = (lo + hi) >> 1;
-    if (lineEnd[mid] <= line) lo = mid + 1;
-    else hi = mid;
+  if (lines) {
+    const s = strokeAfter(lines.last, linesDone);
+    if (s >= nStrokes) return strokes.count;
+    const n = strokes.starts[s + 1] - strokes.starts[s];
+    if (linesDone < lines.first[s]) return strokes.starts[s];
+    // The pen-down line reaches point 0; the G1/G2/G3 lines after it share the rest.
+    const moves = Math.max(1, lines.last[s] - lines.first[s] - 1);
+    const reached = Math.floor(((linesDone - lines.first[s]) / moves) * (n - 1));
+    return strokes.starts[s] + 1 + Math.min(n - 1, reached);
   }
+  const line = linesDone * (expectedLines / linesTotal);
+  const lo = strokeAfter(lineEnd, line);
   if (lo >= nStrokes) return strokes.count;
   const strokeFirstLine = lo === 0 ? 3 : lineEnd[lo - 1];
   const n = strokes.starts[lo + 1] - strokes.starts[lo];

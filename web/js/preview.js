@@ -90,6 +90,16 @@ function appendPath(path, set, from, to, t, minPx) {
   }
 }
 
+/** The colour runs of `runs` (buildGeometry's) inside points [from, to). */
+function colourRunsIn(runs, from, to) {
+  const out = [];
+  for (const run of runs) {
+    if (run.to <= from || run.from >= to) continue;
+    out.push([Math.max(from, run.from), Math.min(to, run.to), run.colour || COLORS.todo]);
+  }
+  return out.length ? out : [[from, to, COLORS.todo]];
+}
+
 /** An offscreen layer; read back every build step, so kept in memory, not on a GPU. */
 function layerCanvas() {
   const canvas = document.createElement("canvas");
@@ -336,18 +346,26 @@ export class PreviewCanvas {
       ctx.lineWidth = LINE_PX;
     }];
     const g = this.geom;
-    const chunkSteps = (set, boxes, colorOf) => boxes.forEach((box, c) => {
+    // runsOf(from, to): [[from, to, colour], ...] covering the chunk's points
+    const chunkSteps = (set, boxes, runsOf) => boxes.forEach((box, c) => {
       if (!visible(box)) return;
       steps.push(() => {
-        const path = new Path2D();
-        appendPath(path, set, c * CHUNK, Math.min(set.count, (c + 1) * CHUNK), t, MIN_PX);
-        ctx.strokeStyle = colorOf(c);
-        ctx.stroke(path);
+        for (const [from, to, colour] of runsOf(c * CHUNK, Math.min(set.count, (c + 1) * CHUNK), c)) {
+          const path = new Path2D();
+          appendPath(path, set, from, to, t, MIN_PX);
+          ctx.strokeStyle = colour;
+          ctx.stroke(path);
+        }
       });
     });
     if (g) {
-      chunkSteps(g.travel, this.travelBoxes, () => COLORS.travel);
-      chunkSteps(g.strokes, this.boxes, (c) => (c < doneChunks ? COLORS.done : COLORS.todo));
+      chunkSteps(g.travel, this.travelBoxes, (from, to) => [[from, to, COLORS.travel]]);
+      // strokes still to draw in their layer's colour, the drawn part in one colour; the
+      // partially drawn chunk is drawn per frame (renderDynamic), not here
+      chunkSteps(g.strokes, this.boxes, (from, to, c) => {
+        if (c === doneChunks) return [];
+        return c < doneChunks ? [[from, to, COLORS.done]] : colourRunsIn(g.colours, from, to);
+      });
     }
     return { key, view: { ...this.view }, canvas, ctx, steps, next: 0 };
   }
@@ -368,7 +386,16 @@ export class PreviewCanvas {
     const ctx = this.ctx;
     const t = this.deviceTransform(dpr);
     ctx.setTransform(1, 0, 0, 1, 0, 0);
-    if (this.geom && this.done > doneChunks * CHUNK) {
+    const first = doneChunks * CHUNK;
+    const end = this.geom ? Math.min(this.geom.strokes.count, first + CHUNK) : 0;
+    ctx.lineWidth = LINE_PX;
+    for (const [from, to, colour] of end > this.done ? colourRunsIn(this.geom.colours, Math.max(first, this.done), end) : []) {
+      const path = new Path2D(); // the partially drawn chunk's part still to draw
+      appendPath(path, this.geom.strokes, from, to, t, MIN_PX);
+      ctx.strokeStyle = colour;
+      ctx.stroke(path);
+    }
+    if (this.geom && this.done > first) {
       const path = new Path2D();
       appendPath(path, this.geom.strokes, doneChunks * CHUNK, this.done, t, 0);
       if (this.tail) path.lineTo(t.a * this.tail.x + t.e, t.f - t.a * this.tail.y);

@@ -66,6 +66,9 @@ class ImportOptions:
     hatch_spacing: float = 0.5   # mm between hatch lines (the default pen's width)
     hatch_angle: float = 45.0    # degrees, counter-clockwise on the page
     hatch_cross: bool = False    # a second hatch at right angles
+    # per layer, group or fill colour: {name: {fill, hatch_spacing, hatch_angle,
+    # hatch_cross}} overriding the four above (fillplan.py; fields.layer_fills checks it)
+    layer_fill: dict[str, dict] | None = None
     font: str = "futural"        # single-stroke font for SVG text (svgtext.FONTS)
     clip_to_page: bool = True    # SVG: drop what lies outside the document's page
 

@@ -24,12 +24,18 @@ class PreviewBuilder:
         self.strokes: list[np.ndarray] = []
         self.colour: str | None = None   # of the strokes drawn from now on (their layer's)
         self.colours: list[str | None] = []
+        # Program lines of each stroke: its pen-down line and its pen-up line, so the
+        # web preview maps progress onto strokes exactly, whatever lies between them
+        # (M0 between layers, dwells, travel).
+        self.lines: list[tuple[int, int]] = []
+        self._pen_lines = (0, 0)   # (pen-down line, pen-up line) of the current stroke
         self.travel: list[tuple[float, float, float, float]] = []
         self.points = 0
         self._raw: list[tuple[float, float]] = []
         # Raw pieces waiting for the next batch: (points, continues into the next piece,
-        # colour).
-        self._pending: list[tuple[list[tuple[float, float]], bool, str | None]] = []
+        # colour, program lines).
+        self._pending: list[tuple[list[tuple[float, float]], bool, str | None,
+                                  tuple[int, int]]] = []
         self._pending_points = 0
         self._open: np.ndarray | None = None   # simplified start of a stroke still going
         self._travel_from: tuple[float, float] | None = None
@@ -59,13 +65,22 @@ class PreviewBuilder:
         self._travel_from = None
         self.points += 2
 
+    def pen_down(self, line: int) -> None:
+        """The pen goes down at program line `line`: a new stroke starts."""
+        self.end_stroke()
+        self._pen_lines = (line, line)
+
+    def pen_up(self, line: int) -> None:
+        """The pen goes up at program line `line`: the stroke's last line."""
+        self._pen_lines = (self._pen_lines[0], line)
+
     def end_stroke(self) -> None:
         if self._raw:
             self._queue(continues=False)
             self._raw = []
 
     def _queue(self, continues: bool) -> None:
-        self._pending.append((self._raw, continues, self.colour))
+        self._pending.append((self._raw, continues, self.colour, self._pen_lines))
         self._pending_points += len(self._raw)
         if self._pending_points >= _BATCH:
             self._simplify_pending()
@@ -73,13 +88,13 @@ class PreviewBuilder:
     def _simplify_pending(self) -> None:
         if not self._pending:
             return
-        sizes = [len(p) for p, _, _ in self._pending]
-        pts = np.array([q for p, _, _ in self._pending for q in p], dtype=float)
+        sizes = [len(p[0]) for p in self._pending]
+        pts = np.array([q for p in self._pending for q in p[0]], dtype=float)
         ends = np.cumsum(sizes)
         fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
         keep = simplify_mask(pts, self.tolerance, fixed)
-        for (_, continues, colour), lo, hi in zip(self._pending, ends - np.array(sizes), ends,
-                                                  strict=True):
+        for (_, continues, colour, lines), lo, hi in zip(self._pending, ends - np.array(sizes),
+                                                         ends, strict=True):
             piece = pts[lo:hi][keep[lo:hi]]
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])
@@ -89,6 +104,7 @@ class PreviewBuilder:
             else:
                 self.strokes.append(piece)
                 self.colours.append(colour)
+                self.lines.append(lines)
                 self.points += len(piece)
         self._pending, self._pending_points = [], 0
         self._fit()
@@ -114,6 +130,7 @@ class PreviewBuilder:
         return {
             "strokes": [np.round(s, 3).tolist() for s in self.strokes],
             "colours": self.colours,
+            "lines": [list(span) for span in self.lines],
             "travel": [[[round(a, 3), round(b, 3)], [round(c, 3), round(d, 3)]]
                        for a, b, c, d in self.travel],
             "bounds": bounds,

@@ -144,9 +144,10 @@ class ProgramWriter:
             self._outside = None
         self._write("M3" if down else "M5")
         if down:
-            self.preview.end_stroke()
+            self.preview.pen_down(self.line)
             self._grow(self.x, self.y, self.x, self.y)
         else:
+            self.preview.pen_up(self.line)
             self.pen_lifts += 1
         self.planner.stop(self.line, self.profile.pen_settle_s)
 

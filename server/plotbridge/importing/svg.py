@@ -13,6 +13,7 @@ plotter's away from the operator: the page is flipped so the drawing reads the s
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
 from xml.etree.ElementTree import Element
@@ -24,6 +25,7 @@ from shapely.geometry.base import BaseGeometry
 
 from . import curves, fill, svgtext
 from .curves import Affine, compose
+from .fillplan import FillPlan, named_colour
 from .models import ErrorLog, ImportFailed, ImportOptions
 from .ops import Layer
 from .svgstyle import (
@@ -110,6 +112,7 @@ class SvgReader:
             ident = el.get("id")
             if ident is not None and ident not in self.ids:
                 self.ids[ident] = el
+        self.fills = FillPlan(options)
         self.tol_mm = max(min(options.tolerance, 0.05) / 2, 0.005)
         self.layers: dict[str, Layer] = {}
         self.found_names: set[str] = set()
@@ -452,7 +455,8 @@ class SvgReader:
     def _shape(self, elem: Element, tag: str, ctx: Ctx) -> None:
         stroke = self._visible_stroke(ctx)
         fill_colour = self._visible_fill(ctx)
-        mode = self.options.fill
+        fills = self.fills.fill_for(((ctx.layer,) if ctx.layer else ()) + ctx.chain, fill_colour)
+        mode = fills.mode
         if stroke is None and (fill_colour is None or mode == "none"):
             if fill_colour is not None:
                 self.filled_only += 1
@@ -473,9 +477,8 @@ class SvgReader:
                                              for p, c in page if len(p) > 1])
             elif mode == "hatch":
                 area = fill.region([p for p, _ in page], ctx.style.get("fill-rule", "nonzero"))
-                spacing = self.options.hatch_spacing
-                self.emit(ctx, fill_colour, fill.hatch(area, spacing, self.options.hatch_angle,
-                                                       self.options.hatch_cross))
+                self.emit(ctx, fill_colour, fill.hatch(area, fills.spacing, fills.angle,
+                                                       fills.cross))
 
     def _selected(self, ctx: Ctx, colour: str | None) -> bool:
         layers = self.options.layers
@@ -483,16 +486,7 @@ class SvgReader:
             return True
         if any(name in layers for name in ctx.chain):
             return True
-        if colour is None:
-            return False
-        from .svgstyle import _colour
-        for name in layers:
-            c = _colour(name)
-            # svgelements reads any unknown name as black: only a black spelling is black
-            black = name.strip().lower() in ("black", "#000", "#000000")
-            if c is not None and c[0] == colour and (c[0] != "#000000" or black):
-                return True
-        return False
+        return colour is not None and any(named_colour(name) == colour for name in layers)
 
     def emit(self, ctx: Ctx, colour: str, lines: list[np.ndarray]) -> None:
         lines = [ln for ln in lines if len(ln) > 1 and np.isfinite(ln).all()]
@@ -545,34 +539,60 @@ class SvgReader:
 
     def _text(self, elem: Element, ctx: Ctx) -> None:
         font = self.options.font
-        runs: list[tuple[str, Ctx, dict]] = []   # (text, ctx, positioning attributes)
+        runs: list[tuple[str, Ctx]] = []
+        # (first run, end run, position lists) of each element, descendants first
+        marks: list[tuple[int, int, dict[str, list[float]]]] = []
         preserve = elem.get("{http://www.w3.org/XML/1998/namespace}space") == "preserve"
 
-        def collect(node: Element, nctx: Ctx, first: bool) -> None:
-            pos = {k: node.get(k) for k in ("x", "y", "dx", "dy") if node.get(k)}
+        def collect(node: Element, nctx: Ctx) -> None:
+            first = len(runs)
             if node.text:
-                runs.append((svgtext.collapse(node.text, preserve), nctx, pos))
-                pos = {}
-            elif pos:
-                runs.append(("", nctx, pos))
+                runs.append((svgtext.collapse(node.text, preserve), nctx))
             for child in node:
                 ctag = local(child.tag)
                 if ctag == "tspan":
                     cstyle, cown = cascade(child, ctag, nctx.style, self.sheet)
                     if cown.get("display", "").strip() != "none":
-                        collect(child, replace(nctx, style=cstyle), False)
+                        collect(child, replace(nctx, style=cstyle))
                 elif ctag == "textPath":
                     self._text_path(child, nctx, font, preserve)
                 if child.tail:
-                    runs.append((svgtext.collapse(child.tail, preserve), nctx, {}))
+                    runs.append((svgtext.collapse(child.tail, preserve), nctx))
+            lists = self._positions(node, nctx)
+            if lists:
+                marks.append((first, len(runs), lists))
 
-        collect(elem, ctx, True)
+        collect(elem, ctx)
         if runs and not preserve:   # leading and trailing white space of the element
-            t, c, p = runs[0]
-            runs[0] = (t.lstrip(), c, p)
-            t, c, p = runs[-1]
-            runs[-1] = (t.rstrip(), c, p)
-        self._set_runs(elem, runs, ctx, font)
+            runs[0] = (runs[0][0].lstrip(), runs[0][1])
+            runs[-1] = (runs[-1][0].rstrip(), runs[-1][1])
+        chars: list[svgtext.Char] = []
+        starts = []
+        for n, (text, rctx) in enumerate(runs):
+            starts.append(len(chars))
+            size, letter, word = self._metrics(rctx)
+            anchor = rctx.style.get("text-anchor", "start").strip()
+            chars.extend(svgtext.Char(ch, n, size, letter, word, anchor) for ch in text)
+        starts.append(len(chars))
+        for first, end, lists in marks:
+            lo, hi = starts[first], starts[end]
+            for key, values in lists.items():
+                for c, v in zip(chars[lo:hi], values, strict=False):
+                    if getattr(c, key) is None:   # a descendant's own value wins
+                        setattr(c, key, v)
+        for n, strokes in sorted(svgtext.layout(font, chars).items()):
+            self._emit_text(elem, runs[n][1], runs[n][0], strokes)
+
+    def _positions(self, node: Element, ctx: Ctx) -> dict[str, list[float]]:
+        """The x, y, dx and dy lists of a text or tspan, in user units."""
+        size = length(ctx.style.get("font-size"), 16.0, default=16.0)
+        out = {}
+        for key, ref in (("x", ctx.vw), ("y", ctx.vh), ("dx", ctx.vw), ("dy", ctx.vh)):
+            raw = node.get(key)
+            if raw and raw.strip():
+                out[key] = [length(v, ref, font=size) for v in re.split(r"[\s,]+", raw.strip())
+                            if v]
+        return out
 
     def _metrics(self, ctx: Ctx) -> tuple[float, float, float]:
         size = length(ctx.style.get("font-size"), 16.0, default=16.0)
@@ -580,35 +600,6 @@ class SvgReader:
             v = ctx.style.get(key, "normal").strip()
             return 0.0 if v == "normal" else length(v, size, font=size)
         return size, spacing("letter-spacing"), spacing("word-spacing")
-
-    def _set_runs(self, elem: Element, runs: list[tuple[str, Ctx, dict]], ctx: Ctx,
-                  font: str) -> None:
-        x = y = 0.0
-        chunks: list[list] = []     # [anchor, start x, [(text, ctx, x, y)]]
-        for text, rctx, pos in runs:
-            size, letter, word = self._metrics(rctx)
-            if "x" in pos or "y" in pos or not chunks:
-                xs, ys = numbers(pos.get("x")), numbers(pos.get("y"))
-                x = length(str(xs[0]), ctx.vw) if xs else x
-                y = length(str(ys[0]), ctx.vh) if ys else y
-                chunks.append([rctx.style.get("text-anchor", "start").strip(), x, []])
-            dxs, dys = numbers(pos.get("dx")), numbers(pos.get("dy"))
-            x += dxs[0] if dxs else 0.0
-            y += dys[0] if dys else 0.0
-            if text:
-                chunks[-1][2].append((text, rctx, x, y))
-                x += svgtext.advance(font, text, size, letter, word)
-        for anchor, _, pieces in chunks:
-            if not pieces:
-                continue
-            first = pieces[0][2]
-            last_text, lctx, lx, _ = pieces[-1]
-            end = lx + svgtext.advance(font, last_text, *self._metrics(lctx))
-            shift = {"middle": -(end - first) / 2, "end": -(end - first)}.get(anchor, 0.0)
-            for text, rctx, px, py in pieces:
-                size, letter, word = self._metrics(rctx)
-                strokes, _ = svgtext.place(font, text, px + shift, py, size, letter, word)
-                self._emit_text(elem, rctx, text, strokes)
 
     def _emit_text(self, elem: Element, ctx: Ctx, text: str,
                    strokes: list[np.ndarray]) -> None:
@@ -659,6 +650,7 @@ def read_svg(source: Path, options: ImportOptions, errors: ErrorLog) -> list[Lay
         raise ImportFailed.one(422, f"font must be one of {', '.join(svgtext.FONTS)}")
     reader = SvgReader(root, options, errors)
     layers = reader.read()
+    reader.fills.warn_unused(errors)
     for note in reader.substitutions:
         errors.warn(None, f"text '{note['text']}' in {note['element']}: font "
                           f"'{note['font'] or 'unspecified'}' set in the single-stroke font "

@@ -56,21 +56,60 @@ def advance(font: str, text: str, size: float, letter: float, word: float) -> fl
     return sum(glyph(font, ch).width * k + letter + (word if ch == " " else 0.0) for ch in text)
 
 
-def place(font: str, text: str, x: float, y: float, size: float, letter: float,
-          word: float) -> tuple[list[np.ndarray], float]:
-    """Glyph strokes of `text` with its baseline starting at (x, y) in user units (y down);
-    and the x after it."""
-    k = size / EM_UNITS
+def _glyph_at(g: Glyph, x: float, y: float, k: float) -> list[np.ndarray]:
     out = []
-    for ch in text:
-        g = glyph(font, ch)
-        for s in g.strokes:
-            pts = np.empty_like(s)
-            pts[:, 0] = x + (s[:, 0] - g.left) * k
-            pts[:, 1] = y + (s[:, 1] - BASELINE) * k
-            out.append(pts)
-        x += g.width * k + letter + (word if ch == " " else 0.0)
-    return out, x
+    for s in g.strokes:
+        pts = np.empty_like(s)
+        pts[:, 0] = x + (s[:, 0] - g.left) * k
+        pts[:, 1] = y + (s[:, 1] - BASELINE) * k
+        out.append(pts)
+    return out
+
+
+@dataclass
+class Char:
+    """One addressable character of a `<text>` with what positions it: absolute x/y and
+    relative dx/dy (None where no list gives it one), and its run's metrics."""
+
+    ch: str
+    run: int            # index of the text run (one style) it belongs to
+    size: float
+    letter: float
+    word: float
+    anchor: str         # text-anchor, used when the character starts a text chunk
+    x: float | None = None
+    y: float | None = None
+    dx: float | None = None
+    dy: float | None = None
+
+
+def layout(font: str, chars: list[Char]) -> dict[int, list[np.ndarray]]:
+    """Glyph strokes (user units, y down) by run, each glyph where SVG puts it: an
+    absolute x or y starts a new text chunk there, dx/dy shift the glyph and all after
+    it, and each chunk is shifted by its anchor."""
+    x = y = 0.0
+    chunks: list[tuple[str, list[tuple[Char, Glyph, float, float]]]] = []
+    for c in chars:
+        if c.x is not None or c.y is not None or not chunks:
+            x = c.x if c.x is not None else x
+            y = c.y if c.y is not None else y
+            chunks.append((c.anchor, []))
+        x += c.dx or 0.0
+        y += c.dy or 0.0
+        g = glyph(font, c.ch)
+        chunks[-1][1].append((c, g, x, y))
+        x += g.width * c.size / EM_UNITS + c.letter + (c.word if c.ch == " " else 0.0)
+    out: dict[int, list[np.ndarray]] = {}
+    for anchor, placed in chunks:
+        if not placed:
+            continue
+        last, lg, lx, _ = placed[-1]
+        end = lx + lg.width * last.size / EM_UNITS + last.letter
+        width = end - placed[0][2]
+        shift = {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
+        for c, g, px, py in placed:
+            out.setdefault(c.run, []).extend(_glyph_at(g, px + shift, py, c.size / EM_UNITS))
+    return out
 
 
 def along(font: str, text: str, path: np.ndarray, offset: float, size: float,

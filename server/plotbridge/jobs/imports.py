@@ -20,16 +20,19 @@ from plotbridge.importing.workers import ImportLimit, ImportService, Limits
 from plotbridge.jobs.model import Imported
 
 
-def run_import(kind: str, source: str, filename: str, dest: str, options: dict, settings: dict):
-    """Worker-process entry: import one upload or pattern; never raises.
+def run_import(kind: str, source: str, filename: str, dest: str, options: dict, settings: dict,
+               firmware: str | None = None):
+    """Worker-process entry: import one upload or pattern; never raises. The estimate
+    models the board `firmware` (its `$I` version) names: stock GRBL or ours.
 
     Returns ("ok", Imported fields) or ("failed", status, errors), in plain Python
     types: unpickling the importer's own classes would load its modules into the server.
     """
     from plotbridge import importing
+    from plotbridge.motion.timing import profile_for
 
     try:
-        profile = importing.MachineProfile.from_settings(settings)
+        profile = profile_for(settings, firmware)
         opts = importing.ImportOptions(**options)
         if kind == "pattern":
             result = importing.import_pattern(source, Path(dest), opts, profile)
@@ -51,9 +54,11 @@ def patterns() -> dict[str, str]:
 
 class Importer:
     def __init__(self, jobs_dir: Path, settings: Callable[[], dict[int, float]],
-                 limits: Limits | None = None) -> None:  # fmt: skip
+                 limits: Limits | None = None,
+                 firmware: Callable[[], str | None] = lambda: None) -> None:  # fmt: skip
         self.jobs_dir = jobs_dir
         self.settings = settings  # the board settings the import plans for
+        self.firmware = firmware  # the board's `$I` version: selects the estimate's model
         self.workers = ImportService(limits)  # supervised, limited (importing/workers.py)
         self._patterns: dict[str, str] | None = None
 
@@ -124,7 +129,7 @@ class Importer:
             await self.workers.check_room(self.jobs_dir, size)
             outcome = await self.workers.call(run_import, kind, source, filename, str(dest),
                                               options, dict(self.settings()),
-                                              size=size)  # fmt: skip
+                                              self.firmware(), size=size)  # fmt: skip
             if outcome[0] == "ok":
                 await self.workers.check_job(dest)
         except ImportLimit as exc:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from ..grbl import build_of
 from ..importing.models import MachineProfile
 
 RX_SIZE = 128               # GRBL's receive buffer; both boards use it
@@ -31,3 +32,12 @@ def stock_grbl(settings: dict[int, float], baud: int = 115200) -> MachineProfile
     motion library, configured with GRBL's planner depth and line time."""
     return replace(MachineProfile.from_settings(settings), planner_blocks=GRBL_PLANNER_BLOCKS,
                    plan_block_s=GRBL_LINE_S, baud=baud)
+
+
+def profile_for(settings: dict[int, float], firmware: str | None) -> MachineProfile:
+    """The estimate's profile for a board with these $ settings and this `$I` version:
+    stock GRBL's when the build is not ours, our firmware's when it is or is unknown."""
+    build = build_of(firmware)
+    if build is not None and build.lower() != "plotbridge":
+        return stock_grbl(settings)
+    return MachineProfile.from_settings(settings)

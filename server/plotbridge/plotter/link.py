@@ -35,6 +35,7 @@ from plotbridge.grbl import (
     Status,
     alarm_message,
     buffers_from_feedback,
+    build_of,
     classify,
     cost,
     error_message,
@@ -565,7 +566,8 @@ class Link:
         self._emit_status()
 
     def _on_banner(self, version: str) -> None:
-        self.status.firmware = version
+        if not (self.status.firmware or "").startswith(version + "."):   # keep the build
+            self.status.firmware = version
         self._alive.set()
         expected = not self._settled.is_set()
         self._settled.set()
@@ -665,7 +667,7 @@ class Link:
             self._write(STATUS_QUERY, urgent=True)
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._alive.wait(), 0.5)
-        if self.status.firmware is None:
+        if build_of(self.status.firmware) is None:   # the banner tells no build
             try:
                 await self._exchange_or_lost("$I", 2.0)
             except (CommandError, TimeoutError) as exc:
