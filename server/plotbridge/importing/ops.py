@@ -5,6 +5,9 @@ An op is a tuple whose first item is its kind and whose second is the source lin
 
 - ``(PEN, line, down)``
 - ``(MOVE, line, x, y, feed)``: feed in mm/min, ``None`` for a rapid (G0)
+- ``(MOVES, line, xs, ys, feeds)``: MOVE ops of consecutive source lines from `line`
+  on (or of no line, None) as numpy arrays, feeds NaN for rapids: G-code's common
+  lines and long strokes travel as these, so that the writer takes them in bulk
 - ``(ARC, line, x, y, i, j, feed, cw)``: centre offset (i, j) from the start point
 - ``(DWELL, line, seconds)``
 - ``(LAYER, line, name, colour)``: what follows is a new layer (a pen change before it)
@@ -18,7 +21,7 @@ import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
-PEN, MOVE, ARC, DWELL, LAYER = 0, 1, 2, 3, 4
+PEN, MOVE, ARC, DWELL, LAYER, MOVES = 0, 1, 2, 3, 4, 5
 
 Stroke = list[tuple[float, float]]
 # Colours for layers whose source names none (G-code tool changes, coordinates).
@@ -80,6 +83,18 @@ def arc_extent(sx: float, sy: float, x: float, y: float, i: float, j: float,
     return min(xs), min(ys), max(xs), max(ys)
 
 
+def single_moves(ops: Iterable[tuple]) -> Iterator[tuple]:
+    """The ops with each MOVES op as its MOVE ops, for readers that take one at a time."""
+    for op in ops:
+        if op[0] != MOVES:
+            yield op
+            continue
+        line = op[1]
+        for k, (x, y, f) in enumerate(zip(op[2].tolist(), op[3].tolist(), op[4].tolist(),
+                                          strict=True)):
+            yield (MOVE, None if line is None else line + k, x, y, None if f != f else f)
+
+
 def layers_to_ops(layers: Iterable[Layer], feed: float) -> Iterator[tuple]:
     """Each layer's marker, then pen-up travel to each stroke's start and pen down along it."""
     for layer in layers:
@@ -108,7 +123,7 @@ def ops_to_layers(ops: Iterable[tuple], tolerance: float) -> tuple[list[Layer], 
     x = y = 0.0
     down = False
     feed = 0.0
-    for op in ops:
+    for op in single_moves(ops):
         kind = op[0]
         if kind == LAYER:
             if layers[-1].strokes:
