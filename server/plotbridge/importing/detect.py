@@ -88,7 +88,7 @@ def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
             yield n, line.rstrip("\n")
 
 
-def line_chunks(path: Path, encoding: str, size: int = _CHUNK) -> Iterator[tuple[int, str]]:
+def line_chunks(path: Path, encoding: str, size: int = 1 << 18) -> Iterator[tuple[int, str]]:
     """(1-based number of the first line, text of whole lines each ending with a newline),
     about `size` characters at a time, streamed."""
     first = 1

@@ -13,6 +13,7 @@ from collections.abc import Iterable, Iterator
 
 import numpy as np
 
+from ..native.gcodescan import LINE, OTHER, scan
 from .fields import PEN_DIALECTS as UPLOAD_DIALECTS
 from .models import ErrorLog, ImportOptions
 from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PEN
@@ -30,15 +31,6 @@ _CONSOLE = ("$", "?", "~", "!")
 _BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
 _WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
 _COMMENT = re.compile(r"\([^)]*\)|;.*")
-# The common line, read without the general parser: G0/G1 X Y [F] [; comment], in any
-# case, spaces and tabs between words only, at most MAX_LINE characters. A comment with a
-# parenthesis or an asterisk, anything else, takes the general path (which reports it).
-# One pattern over a whole chunk of lines matches every line once: a common line with
-# its words captured, any other line with empty groups.
-_NUM = r"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))"
-_LINES = re.compile(rf"^(?:(?=[^\n]{{0,{MAX_LINE}}}$)[ \t]*G0?([01])[ \t]*X[ \t]*{_NUM}"
-                    rf"[ \t]*Y[ \t]*{_NUM}(?:[ \t]*F[ \t]*{_NUM})?[ \t]*(?:;[^()*\n]*)?$"
-                    r"|[^\n]*$)", re.I | re.M)
 # G words accepted without effect on a plotter (plane XY, feed per minute, work
 # coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
 _NOOP_G = {17.0, 94.0, 54.0, 61.0, 64.0, 40.0, 49.0, 80.0, 91.1}
@@ -127,58 +119,58 @@ class GcodeReader:
 
     def ops(self, chunks: Iterable[tuple[int, str]]) -> Iterator[tuple]:
         """The ops of the source, given as chunks of whole lines: (number of the chunk's
-        first line, text ending with a newline). A run of common lines becomes one MOVES
-        op; every other line goes through the general parser."""
+        first line, text ending with a newline). The common lines (G0/G1 X Y [F]
+        [; comment], read by the native fast path, native/gcodescan.c) become MOVES ops,
+        a run at a time; every other line goes through the general parser."""
         if self.dialect == "servo-z" and self.servo_down is None:
             self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
             return
         out: list[tuple] = []
         for first, text in chunks:
-            rows = _LINES.findall(text)     # one per line (and one after the last newline)
+            kind, xs, ys, fs = scan(text, MAX_LINE)
             raws = text.split("\n")
-            n = len(raws) - 1
-            k = 0
-            while k < n:
-                if not rows[k][0] or self.relative or self.inches or not self.fast:
+            common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
+            cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
+            for a, b in itertools.pairwise(cuts):
+                k = a
+                while k < b:
+                    if common[a] and not self.relative and not self.inches:
+                        taken = self._run(out, first + k, kind[k:b], xs[k:b], ys[k:b],
+                                          fs[k:b])
+                        if taken:
+                            k += taken
+                            continue
+                    # any other line, a common one in relative or inch mode, or one
+                    # whose F is not positive (the general parser reports it)
                     self._line(out, first + k, raws[k])
                     k += 1
-                else:
-                    j = k + 1
-                    while j < n and rows[j][0]:
-                        j += 1
-                    taken = self._run(out, first + k, rows[k:j])
-                    if not taken:       # its F is not positive: the general parser says so
-                        self._line(out, first + k, raws[k])
-                        taken = 1
-                    k += taken
                 if out:
                     yield from out
                     out.clear()
 
-    def _run(self, out: list[tuple], first: int, rows: list[tuple[str, ...]]) -> int:
+    def _run(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
+             y: np.ndarray, f: np.ndarray) -> int:
         """Appends the ops of consecutive common lines (absolute millimetres) as MOVES
         ops; returns how many lines it took (all, or those before a non-positive F)."""
-        modes, xs, ys, fs = zip(*rows, strict=True)
-        given = np.array([f != "" for f in fs])
-        fval = np.zeros(len(rows))
-        if given.any():
-            fval[given] = np.array([f for f in fs if f], dtype=float)
-            bad = np.flatnonzero(given & (fval <= 0))
-            if len(bad):
-                return self._run(out, first, rows[:bad[0]]) if bad[0] else 0
-        draw = np.array(modes) == "1"
-        x = np.array(xs, dtype=float) + self.off_x
-        y = np.array(ys, dtype=float) + self.off_y
+        given = ~np.isnan(f)
+        bad = np.flatnonzero(given & (f <= 0))
+        if len(bad):
+            n = int(bad[0])
+            return self._run(out, first, kind[:n], x[:n], y[:n], f[:n]) if n else 0
+        n = len(kind)
+        draw = kind == LINE
+        x = x + self.off_x
+        y = y + self.off_y
         # The feed of each line: the last F given at or before it, else the one before
         # the run; a G1 with no feed ever given warns once and takes the default.
-        at = np.maximum.accumulate(np.where(given, np.arange(len(rows)), -1))
+        at = np.maximum.accumulate(np.where(given, np.arange(n), -1))
         before = self.feed
         if before is None:
             unfed = np.flatnonzero(draw & (at < 0))
             if len(unfed):
                 self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
                 before = self.default_feed
-        feed = np.where(at >= 0, fval[np.maximum(at, 0)], np.nan if before is None else before)
+        feed = np.where(at >= 0, f[np.maximum(at, 0)], np.nan if before is None else before)
         if at[-1] >= 0 or before is not None:
             self.feed = float(feed[-1])
         feeds = np.where(draw, feed, np.nan)
@@ -186,14 +178,14 @@ class GcodeReader:
         self.x, self.y = float(x[-1]), float(y[-1])
         if self.dialect not in MOTION_PEN:
             out.append((MOVES, first, x, y, feeds))
-            return len(rows)
+            return n
         # The pen follows the motion mode: one MOVES op per stretch of the same pen.
-        pen = draw if self.dialect == "none" or self.laser else np.zeros(len(rows), bool)
-        cuts = [0, *(np.flatnonzero(pen[1:] != pen[:-1]) + 1).tolist(), len(rows)]
+        pen = draw if self.dialect == "none" or self.laser else np.zeros(n, bool)
+        cuts = [0, *(np.flatnonzero(pen[1:] != pen[:-1]) + 1).tolist(), n]
         for a, b in itertools.pairwise(cuts):
             self._pen(out, first + a, bool(pen[a]))
             out.append((MOVES, first + a, x[a:b], y[a:b], feeds[a:b]))
-        return len(rows)
+        return n
 
     def _line(self, out: list[tuple], line_no: int, raw: str) -> None:
         """Appends the ops of one line read by the general parser."""
