@@ -21,9 +21,12 @@ import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
+import numpy as np
+
 PEN, MOVE, ARC, DWELL, LAYER, MOVES = 0, 1, 2, 3, 4, 5
 
 Stroke = list[tuple[float, float]]
+_BULK = 16      # points of a stroke from which it is written as one MOVES op
 # Colours for layers whose source names none (G-code tool changes, coordinates).
 PALETTE = ("#000000", "#1f5fbf", "#c0282d", "#2e8b3e", "#8a4fb5", "#d77a12", "#0e8c8c")
 
@@ -109,6 +112,10 @@ def strokes_to_ops(strokes: Iterable[Stroke], feed: float) -> Iterator[tuple]:
         yield (PEN, None, False)
         yield (MOVE, None, x0, y0, None)
         yield (PEN, None, True)
+        if len(stroke) > _BULK:
+            pts = np.array(stroke[1:], dtype=float)
+            yield (MOVES, None, pts[:, 0], pts[:, 1], np.full(len(pts), feed, dtype=float))
+            continue
         for x, y in stroke[1:]:
             yield (MOVE, None, x, y, feed)
     yield (PEN, None, False)
