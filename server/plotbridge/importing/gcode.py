@@ -134,19 +134,20 @@ class GcodeReader:
             for a, b in itertools.pairwise(cuts):
                 k = a
                 while k < b:
+                    taken = 0
                     if common[a] and not self.relative and not self.inches:
                         taken = self._run(out, first + k, kind[k:b], xs[k:b], ys[k:b],
                                           fs[k:b])
-                        if taken:
-                            k += taken
-                            continue
-                    # any other line, a common one in relative or inch mode, or one
-                    # whose F is not positive (the general parser reports it)
-                    self._line(out, first + k, raws[k])
-                    k += 1
-                if out:
-                    yield from out
-                    out.clear()
+                    if taken:
+                        k += taken
+                    else:
+                        # any other line, a common one in relative or inch mode, or one
+                        # whose F is not positive (the general parser reports it)
+                        self._line(out, first + k, raws[k])
+                        k += 1
+                    if out:     # before the next line: errors keep the source's order
+                        yield from out
+                        out.clear()
 
     def _run(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
              y: np.ndarray, f: np.ndarray) -> int:
