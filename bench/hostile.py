@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
+import math
 import os
 import signal
 import sys
@@ -40,9 +41,12 @@ class LimitedServer(ServerProcess):
 
 
 def short_moves(lines: int) -> str:
-    moves = [f"G1 X{10 + (i % 2) * 0.5:.1f} Y{10 + (i // 2) * 0.01:.2f} F6000"
+    """0.5 mm chords around 40 mm circles: nearly straight junctions, so the board
+    keeps its speed and the rate measures the streaming, not zigzag braking."""
+    step = 0.5 / 40.0  # rad per chord
+    moves = [f"G1 X{100 + 40 * math.cos(i * step):.3f} Y{100 + 40 * math.sin(i * step):.3f} F6000"
              for i in range(lines)]  # fmt: skip
-    return "\n".join(["G21", "G90", "G0 X10 Y10", "M3", *moves, "M5"]) + "\n"
+    return "\n".join(["G21", "G90", "G0 X140 Y100", "M3", *moves, "M5"]) + "\n"
 
 
 class Peak:

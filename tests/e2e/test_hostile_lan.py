@@ -108,13 +108,16 @@ def test_a_killed_import_worker_and_a_degenerate_svg(target):
         assert killed.status_code == 413 and "died" in killed.text, killed.text
 
     def step(attack: attacks.Attack) -> None:
-        answer = target.client.post("/api/jobs", files={"file": ("many.svg", svg)})
+        answer = target.client.post("/api/jobs", files={"file": ("many.svg", svg)}, timeout=120)
         attack.got(answer.status_code)
 
     uploads = attacks.Attack("degenerate svg", 1, step)
     run_beside(target, uploads)
-    assert uploads.statuses[201] > 0, uploads.statuses
+    assert not uploads.errors, (uploads.errors, uploads.statuses)
     assert len(attacks.import_workers(target.proc.pid)) <= 2
+    # later uploads work (on a loaded host none may have finished while the job ran)
+    after = target.client.post("/api/jobs", files={"file": ("many.svg", svg)}, timeout=120)
+    assert after.status_code == 201, after.text
 
 
 def test_an_idle_websocket_outlives_every_deadline(target):
