@@ -12,7 +12,7 @@ ARGS ?=
 
 INKSCAPE_EXTENSIONS ?= $(HOME)/.config/inkscape/extensions
 
-.PHONY: run test setup setup-test firmware sim lint flash install-service bench clean inkscape-extension
+.PHONY: run test setup setup-test native firmware sim lint flash install-service bench clean inkscape-extension
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
@@ -22,8 +22,16 @@ test: setup-test firmware sim
 	$(MAKE) -C firmware test
 	$(VENV)/bin/pytest
 
-setup: .stamps/system-run $(VENV)/.stamp
-setup-test: .stamps/system-test $(VENV)/.stamp-dev
+setup: .stamps/system-run $(VENV)/.stamp native
+setup-test: .stamps/system-test $(VENV)/.stamp-dev native
+
+# The server's C helpers (server/plotbridge/native/), loaded with ctypes.
+NATIVE_DIR := server/plotbridge/native
+native: $(NATIVE_DIR)/build/libgcodescan.so
+
+$(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c
+	@mkdir -p $(dir $@)
+	$(CC) -std=gnu11 -O2 -Wall -Wextra -Werror -fPIC -shared $< -o $@.tmp -lm && mv $@.tmp $@
 
 .stamps/system-%: scripts/setup-system
 	scripts/setup-system $*

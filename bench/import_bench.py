@@ -8,7 +8,8 @@
 (c) estimate against the virtual plotter's simulated plot time on five drawings of
     different character (target: within 2% each);
 (d) SVG import speed per drawing (vpype's benchmark drawings from --vpype-drawings DIR,
-    a checkout's tests/data/test_svg/benchmark; else generated ones of the same kinds):
+    a checkout's tests/data/test_svg/benchmark; else generated ones of the same kinds and
+    names, not vpype's files):
     our SVG stage (parse, resolve, flatten) against vpype's `read` (target: no slower),
     and our whole import (parse, optimize, estimate, preview) against vpype's
     `read linemerge linesort` (target: within 2x).
@@ -107,7 +108,9 @@ def bench_throughput(tmp: Path, lines: int) -> None:
     print(f"    ratio {ratio:.1f}x wc -l (target <= 10x): {'MET' if ratio <= 10 else 'NOT MET'}; "
           f"CPU ratio {cpu / floor:.1f}x; vs a Python line count {took / py_count:.1f}x")
     print(f"    peak RSS {rss:.0f} MB (target < 150 MB): {'MET' if rss < 150 else 'NOT MET'}")
-    bench_motion_library(count)
+    motion = bench_motion_library(count)
+    print(f"    the import without the motion library: CPU {cpu - motion:.2f} s, "
+          f"{(cpu - motion) / floor:.1f}x wc -l (the library alone is {motion / floor:.1f}x)")
 
 
 def bench_motion_library(lines: int) -> None:
@@ -131,6 +134,7 @@ def bench_motion_library(lines: int) -> None:
     took = time.perf_counter() - t
     print(f"    of which the motion library (firmware planner + segments, C): {took:.2f} s "
           f"for {lines:,} moves ({lines / took:,.0f} moves/s)")
+    return took
 
 
 # ---------------------------------------------------------------- (b) vs vpype
@@ -250,6 +254,15 @@ def speed_drawings(tmp: Path, directory: Path | None) -> dict[str, Path]:
         "7k_lines": [f'<line x1="{rng.uniform(0, 1000):.1f}" y1="{rng.uniform(0, 700):.1f}" '
                      f'x2="{rng.uniform(0, 1000):.1f}" y2="{rng.uniform(0, 700):.1f}"/>'
                      for _ in range(7000)],
+        # long polylines written as path data (an Inkscape export)
+        "bar_nodef_path_polylines": ['<path d="M ' + " L ".join(pt() for _ in range(600))
+                                     + '"/>' for _ in range(175)],
+        # many short curved paths in transformed groups (a traced drawing)
+        "multi_skull": [f'<g transform="translate({rng.uniform(0, 500):.1f} '
+                        f'{rng.uniform(0, 300):.1f}) scale(0.5)">'
+                        + "".join(f'<path d="M {pt()} C {pt()} {pt()} {pt()} '
+                                  f'S {pt()} {pt()} Z"/>' for _ in range(40)) + "</g>"
+                        for _ in range(60)],
     }
     out = {}
     for name, shapes in kinds.items():

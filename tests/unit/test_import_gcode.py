@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile
 from plotbridge.importing.gcode import read_ops
 from plotbridge.importing.models import ErrorLog
+from plotbridge.importing.ops import single_moves
 
 from .import_helpers import drawn_strokes, program_lines, run_import
 
@@ -207,7 +208,8 @@ def test_any_text_imports_or_fails_cleanly(tmp_path, text):
 
 def _ops_and_errors(lines: list[str], options: ImportOptions) -> tuple[list, list]:
     errors = ErrorLog()
-    ops = list(read_ops(enumerate(lines, 1), options, errors))
+    ops = list(single_moves(read_ops([(1, "".join(f"{ln}\n" for ln in lines))], options,
+                                     errors)))
     return ops, errors.errors
 
 
@@ -228,7 +230,8 @@ def test_common_lines_read_as_the_general_parser_reads_them(lines):
     for first in ([], ["G20"], ["G91"], ["F1200"]):
         plain = first + lines
         numbered = [f"N{k} {text}" for k, text in enumerate(plain, 1)]
-        for options in (ImportOptions(), ImportOptions(pen_dialect="z")):
+        for options in (ImportOptions(), ImportOptions(pen_dialect="z"),
+                        ImportOptions(pen_dialect="none"), ImportOptions(pen_dialect="laser")):
             ops, errors = _ops_and_errors(plain, options)
             ops_n, errors_n = _ops_and_errors(numbered, options)
             assert ops == ops_n

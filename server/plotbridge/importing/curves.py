@@ -8,6 +8,7 @@ n equal parameter steps is at most max|B''| / (8 n²).
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import svgelements as se
@@ -71,8 +72,86 @@ def _arc(seg: se.Arc, tol: float) -> np.ndarray:
     return np.asarray(seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=float)
 
 
+# Path data of lines and Béziers only (what plotting tools mostly write) is read here in
+# bulk; anything else (arcs, smooth curves, unusual syntax) by svgelements, segment by
+# segment. The number grammar and separators are svgelements' own, so both read the
+# same numbers; the unit tests compare the two.
+_NUM = r"[-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
+_PATH_BULK = re.compile(rf"[ ,\t\n\f\r]*[Mm](?:[ ,\t\n\f\r]+|[MmLlHhVvZzCcQq]|{_NUM})*")
+_PATH_TOKEN = re.compile(rf"([MmLlHhVvZzCcQq])|({_NUM})")
+_PAIRS = {"M": 2, "L": 2, "H": 1, "V": 1, "Z": 0, "C": 6, "Q": 4}
+
+
+def _bulk_subpaths(d: str, tol: float) -> list[tuple[np.ndarray, bool]] | None:
+    """path_subpaths for path data of M, L, H, V, Z, C and Q commands; None for other
+    path data."""
+    if _PATH_BULK.fullmatch(d) is None:
+        return None
+    commands: list[tuple[str, list[str]]] = []
+    for cmd, num in _PATH_TOKEN.findall(d):
+        if cmd:
+            commands.append((cmd, []))
+        else:
+            commands[-1][1].append(num)
+    out: list[tuple[np.ndarray, bool]] = []
+    cur: list[np.ndarray] = []
+    closed = False
+    x = y = sx = sy = 0.0
+    started = False
+    for cmd, nums in commands:
+        up = cmd.upper()
+        size = _PAIRS[up]
+        if (len(nums) == 0) != (size == 0) or (size and len(nums) % size):
+            return None
+        rel = cmd != up and started
+        if up == "Z":
+            cur.append(np.array([[sx, sy]]))
+            closed = True
+            x, y = sx, sy
+            continue
+        v = np.array(nums, dtype=float)
+        if up in ("M", "L"):
+            pts = v.reshape(-1, 2)
+            if rel:
+                pts = np.cumsum(np.vstack([[x, y], pts]), axis=0)[1:]
+            elif cmd == "m" and len(pts) > 1:    # the first pair absolute, then relative
+                pts = np.cumsum(pts, axis=0)
+            if up == "M":
+                if cur:
+                    out.append((np.vstack(cur), closed))
+                cur, closed = [], False
+                sx, sy = pts[0]
+                started = True
+            cur.append(pts)
+        elif up in ("H", "V"):
+            k = 0 if up == "H" else 1
+            run = np.cumsum(np.concatenate([[(x, y)[k]], v]))[1:] if rel else v
+            pts = np.empty((len(v), 2))
+            pts[:, k] = run
+            pts[:, 1 - k] = (y, x)[k]
+            cur.append(pts)
+        else:
+            n = size // 2
+            ctrl = v.reshape(-1, n, 2)
+            px, py = x, y
+            for seg in ctrl:
+                if rel:
+                    seg = np.add(seg, (px, py))
+                cur.append(_bezier(np.vstack([[px, py], seg]), tol))
+                px, py = float(seg[-1][0]), float(seg[-1][1])
+            x, y = px, py
+            continue
+        x, y = float(pts[-1][0]), float(pts[-1][1])
+    if cur:
+        out.append((np.vstack(cur), closed))
+    return out
+
+
 def path_subpaths(d: str, tol: float) -> list[tuple[np.ndarray, bool]]:
     """(points, closed) of each subpath of path data, in user units."""
+    bulk = _bulk_subpaths(d, tol)
+    if bulk is not None:
+        return bulk
     path = se.Path(d)
     out: list[tuple[np.ndarray, bool]] = []
     cur: list = []

@@ -86,3 +86,17 @@ def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
     with path.open("r", encoding=encoding, newline=None) as f:
         for n, line in enumerate(f, 1):
             yield n, line.rstrip("\n")
+
+
+def line_chunks(path: Path, encoding: str, size: int = 1 << 18) -> Iterator[tuple[int, str]]:
+    """(1-based number of the first line, text of whole lines each ending with a newline),
+    about `size` characters at a time, streamed."""
+    first = 1
+    with path.open("r", encoding=encoding, newline=None) as f:
+        while text := f.read(size):
+            if not text.endswith("\n"):
+                text += f.readline()
+                if not text.endswith("\n"):
+                    text += "\n"
+            yield first, text
+            first += text.count("\n")

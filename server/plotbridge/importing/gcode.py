@@ -1,18 +1,22 @@
 """G-code reading: dialects of pen lifting, units, relative moves, arcs, validation.
 
-`read_ops` turns numbered source lines into ops (see ops.py) in absolute millimetres,
+`read_ops` turns chunks of source lines into ops (see ops.py) in absolute millimetres,
 reporting every line it cannot accept to an ErrorLog instead of stopping at the first.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections.abc import Iterable, Iterator
 
+import numpy as np
+
+from ..native.gcodescan import LINE, OTHER, scan
 from .fields import PEN_DIALECTS as UPLOAD_DIALECTS
 from .models import ErrorLog, ImportOptions
-from .ops import ARC, DWELL, LAYER, MOVE, PALETTE, PEN
+from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PEN
 
 MAX_LINE = 256          # characters of commands on a line (comments do not count)
 MAX_RAW_LINE = 1 << 16  # characters of a line with its comments
@@ -27,12 +31,6 @@ _CONSOLE = ("$", "?", "~", "!")
 _BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
 _WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
 _COMMENT = re.compile(r"\([^)]*\)|;.*")
-# The common line, read without the general parser: G0/G1 X Y [F] [; comment], in any
-# case, spaces and tabs between words only. A comment with a parenthesis or an asterisk,
-# anything else, takes the general path (which reports it).
-_NUM = r"([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+))"
-_FAST = re.compile(rf"[ \t]*G0?([01])[ \t]*X[ \t]*{_NUM}[ \t]*Y[ \t]*{_NUM}"
-                   rf"(?:[ \t]*F[ \t]*{_NUM})?[ \t]*(?:;[^()*]*)?", re.I)
 # G words accepted without effect on a plotter (plane XY, feed per minute, work
 # coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
 _NOOP_G = {17.0, 94.0, 54.0, 61.0, 64.0, 40.0, 49.0, 80.0, 91.1}
@@ -92,8 +90,9 @@ def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
 class GcodeReader:
     """State machine over G-code lines; iterate `ops(lines)`."""
 
-    def __init__(self, options: ImportOptions, errors: ErrorLog) -> None:
+    def __init__(self, options: ImportOptions, errors: ErrorLog, fast: bool = True) -> None:
         self.errors = errors
+        self.fast = fast            # False: every line through the general parser (tests)
         dialect = options.pen_dialect
         if dialect not in PEN_DIALECTS:
             raise ValueError(f"pen_dialect must be one of {', '.join(PEN_DIALECTS)}")
@@ -118,74 +117,107 @@ class GcodeReader:
         self.tool: float | None = None
         self.default_feed = options.feed
 
-    def ops(self, lines: Iterable[tuple[int, str]]) -> Iterator[tuple]:
+    def ops(self, chunks: Iterable[tuple[int, str]]) -> Iterator[tuple]:
+        """The ops of the source, given as chunks of whole lines: (number of the chunk's
+        first line, text ending with a newline). The common lines (G0/G1 X Y [F]
+        [; comment], read by the native fast path, native/gcodescan.c) become MOVES ops,
+        a run at a time; every other line goes through the general parser."""
         if self.dialect == "servo-z" and self.servo_down is None:
             self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
             return
         out: list[tuple] = []
-        block = self._block
-        fast = _FAST.fullmatch
-        motion_pen = self.dialect in MOTION_PEN
-        for line_no, raw in lines:
-            if len(raw) > MAX_LINE:
-                if len(raw) > MAX_RAW_LINE:
-                    self.errors.add(line_no, f"line longer than {MAX_RAW_LINE} characters")
-                    continue
-                if len(_COMMENT.sub("", raw)) > MAX_LINE:
-                    self.errors.add(line_no, f"line longer than {MAX_LINE} characters "
-                                             "(without its comments)")
-                    continue
-            m = fast(raw)
-            if m is not None and not self.relative and not self.inches:
-                g, xs, ys, fs = m.groups()
-                if fs is not None:
-                    f = float(fs)
-                    if f > 0:
-                        self.feed = f
+        for first, text in chunks:
+            kind, xs, ys, fs = scan(text, MAX_LINE)
+            raws = text.split("\n")
+            common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
+            cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
+            for a, b in itertools.pairwise(cuts):
+                k = a
+                while k < b:
+                    taken = 0
+                    if common[a] and not self.relative and not self.inches:
+                        taken = self._run(out, first + k, kind[k:b], xs[k:b], ys[k:b],
+                                          fs[k:b])
+                    if taken:
+                        k += taken
                     else:
-                        m = None    # the general path reports it
-                if m is not None:
-                    self.motion = mode = int(g)
-                    self.x = x = float(xs) + self.off_x
-                    self.y = y = float(ys) + self.off_y
-                    if motion_pen:
-                        self._motion_pen(out, line_no, mode)
-                        if out:
-                            yield from out
-                            out.clear()
-                    if mode == 0:
-                        yield (MOVE, line_no, x, y, None)
-                    else:
-                        if self.feed is None:
-                            self.errors.warn(line_no, _no_feed(1, self.default_feed))
-                            self.feed = self.default_feed
-                        yield (MOVE, line_no, x, y, self.feed)
-                    continue
-            head = raw.lstrip()
-            if head[:1] in _CONSOLE:
-                self.errors.warn(line_no, f"console command '{head[:20]}' dropped: it is "
-                                          "for a terminal, not part of a drawing")
-                continue
-            pause = _PAUSE.fullmatch(raw)
-            if pause is not None and not _BLOCK_AFTER_PAUSE.match(pause.group(2)):
-                message = _COMMENT.sub("", pause.group(2)).strip() or None
-                self._boundary(message)
-                continue
-            if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
-                text = strip_line(raw, line_no, self.errors)
-                if not text:
-                    continue
-            else:   # the common plain line
-                text = raw.replace(" ", "").replace("\t", "").upper()
-                if not text:
-                    continue
-            if _BLOCK.fullmatch(text) is None:
-                self.errors.add(line_no, f"cannot parse '{raw.strip()[:60]}'")
-                continue
-            block(out, line_no, _WORD.findall(text))
-            if out:
-                yield from out
-                out.clear()
+                        # any other line, a common one in relative or inch mode, or one
+                        # whose F is not positive (the general parser reports it)
+                        self._line(out, first + k, raws[k])
+                        k += 1
+                    if out:     # before the next line: errors keep the source's order
+                        yield from out
+                        out.clear()
+
+    def _run(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
+             y: np.ndarray, f: np.ndarray) -> int:
+        """Appends the ops of consecutive common lines (absolute millimetres) as MOVES
+        ops; returns how many lines it took (all, or those before a non-positive F)."""
+        given = ~np.isnan(f)
+        bad = np.flatnonzero(given & (f <= 0))
+        if len(bad):
+            n = int(bad[0])
+            return self._run(out, first, kind[:n], x[:n], y[:n], f[:n]) if n else 0
+        n = len(kind)
+        draw = kind == LINE
+        x = x + self.off_x
+        y = y + self.off_y
+        # The feed of each line: the last F given at or before it, else the one before
+        # the run; a G1 with no feed ever given warns once and takes the default.
+        at = np.maximum.accumulate(np.where(given, np.arange(n), -1))
+        before = self.feed
+        if before is None:
+            unfed = np.flatnonzero(draw & (at < 0))
+            if len(unfed):
+                self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
+                before = self.default_feed
+        feed = np.where(at >= 0, f[np.maximum(at, 0)], np.nan if before is None else before)
+        if at[-1] >= 0 or before is not None:
+            self.feed = float(feed[-1])
+        feeds = np.where(draw, feed, np.nan)
+        self.motion = 1 if draw[-1] else 0
+        self.x, self.y = float(x[-1]), float(y[-1])
+        if self.dialect not in MOTION_PEN:
+            out.append((MOVES, first, x, y, feeds))
+            return n
+        # The pen follows the motion mode: one MOVES op per stretch of the same pen.
+        pen = draw if self.dialect == "none" or self.laser else np.zeros(n, bool)
+        cuts = [0, *(np.flatnonzero(pen[1:] != pen[:-1]) + 1).tolist(), n]
+        for a, b in itertools.pairwise(cuts):
+            self._pen(out, first + a, bool(pen[a]))
+            out.append((MOVES, first + a, x[a:b], y[a:b], feeds[a:b]))
+        return n
+
+    def _line(self, out: list[tuple], line_no: int, raw: str) -> None:
+        """Appends the ops of one line read by the general parser."""
+        if len(raw) > MAX_LINE:
+            if len(raw) > MAX_RAW_LINE:
+                self.errors.add(line_no, f"line longer than {MAX_RAW_LINE} characters")
+                return
+            if len(_COMMENT.sub("", raw)) > MAX_LINE:
+                self.errors.add(line_no, f"line longer than {MAX_LINE} characters "
+                                         "(without its comments)")
+                return
+        head = raw.lstrip()
+        if head[:1] in _CONSOLE:
+            self.errors.warn(line_no, f"console command '{head[:20]}' dropped: it is "
+                                      "for a terminal, not part of a drawing")
+            return
+        pause = _PAUSE.fullmatch(raw)
+        if pause is not None and not _BLOCK_AFTER_PAUSE.match(pause.group(2)):
+            message = _COMMENT.sub("", pause.group(2)).strip() or None
+            self._boundary(message)
+            return
+        if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
+            text = strip_line(raw, line_no, self.errors)
+        else:   # the common plain line
+            text = raw.replace(" ", "").replace("\t", "").upper()
+        if not text:
+            return
+        if _BLOCK.fullmatch(text) is None:
+            self.errors.add(line_no, f"cannot parse '{raw.strip()[:60]}'")
+            return
+        self._block(out, line_no, _WORD.findall(text))
 
     def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
         if down and self.pending_layer is not None:
@@ -467,6 +499,7 @@ def sniff_dialect(head: str) -> str:
     return "m3"
 
 
-def read_ops(lines: Iterable[tuple[int, str]], options: ImportOptions,
-             errors: ErrorLog) -> Iterator[tuple]:
-    return GcodeReader(options, errors).ops(lines)
+def read_ops(chunks: Iterable[tuple[int, str]], options: ImportOptions, errors: ErrorLog,
+             fast: bool = True) -> Iterator[tuple]:
+    """The ops of G-code given as chunks of whole lines (detect.line_chunks)."""
+    return GcodeReader(options, errors, fast).ops(chunks)

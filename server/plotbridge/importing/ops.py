@@ -5,6 +5,9 @@ An op is a tuple whose first item is its kind and whose second is the source lin
 
 - ``(PEN, line, down)``
 - ``(MOVE, line, x, y, feed)``: feed in mm/min, ``None`` for a rapid (G0)
+- ``(MOVES, line, xs, ys, feeds)``: MOVE ops of consecutive source lines from `line`
+  on (or of no line, None) as numpy arrays, feeds NaN for rapids: G-code's common
+  lines and long strokes travel as these, so that the writer takes them in bulk
 - ``(ARC, line, x, y, i, j, feed, cw)``: centre offset (i, j) from the start point
 - ``(DWELL, line, seconds)``
 - ``(LAYER, line, name, colour)``: what follows is a new layer (a pen change before it)
@@ -18,9 +21,12 @@ import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 
-PEN, MOVE, ARC, DWELL, LAYER = 0, 1, 2, 3, 4
+import numpy as np
+
+PEN, MOVE, ARC, DWELL, LAYER, MOVES = 0, 1, 2, 3, 4, 5
 
 Stroke = list[tuple[float, float]]
+_BULK = 16      # points of a stroke from which it is written as one MOVES op
 # Colours for layers whose source names none (G-code tool changes, coordinates).
 PALETTE = ("#000000", "#1f5fbf", "#c0282d", "#2e8b3e", "#8a4fb5", "#d77a12", "#0e8c8c")
 
@@ -80,6 +86,18 @@ def arc_extent(sx: float, sy: float, x: float, y: float, i: float, j: float,
     return min(xs), min(ys), max(xs), max(ys)
 
 
+def single_moves(ops: Iterable[tuple]) -> Iterator[tuple]:
+    """The ops with each MOVES op as its MOVE ops, for readers that take one at a time."""
+    for op in ops:
+        if op[0] != MOVES:
+            yield op
+            continue
+        line = op[1]
+        for k, (x, y, f) in enumerate(zip(op[2].tolist(), op[3].tolist(), op[4].tolist(),
+                                          strict=True)):
+            yield (MOVE, None if line is None else line + k, x, y, None if f != f else f)
+
+
 def layers_to_ops(layers: Iterable[Layer], feed: float) -> Iterator[tuple]:
     """Each layer's marker, then pen-up travel to each stroke's start and pen down along it."""
     for layer in layers:
@@ -94,6 +112,10 @@ def strokes_to_ops(strokes: Iterable[Stroke], feed: float) -> Iterator[tuple]:
         yield (PEN, None, False)
         yield (MOVE, None, x0, y0, None)
         yield (PEN, None, True)
+        if len(stroke) > _BULK:
+            pts = np.array(stroke[1:], dtype=float)
+            yield (MOVES, None, pts[:, 0], pts[:, 1], np.full(len(pts), feed, dtype=float))
+            continue
         for x, y in stroke[1:]:
             yield (MOVE, None, x, y, feed)
     yield (PEN, None, False)
@@ -108,7 +130,7 @@ def ops_to_layers(ops: Iterable[tuple], tolerance: float) -> tuple[list[Layer], 
     x = y = 0.0
     down = False
     feed = 0.0
-    for op in ops:
+    for op in single_moves(ops):
         kind = op[0]
         if kind == LAYER:
             if layers[-1].strokes:

@@ -12,10 +12,21 @@ from pathlib import Path
 import numpy as np
 
 from .coords import read_coords
-from .detect import check_text, detect_format, numbered_lines
+from .detect import check_text, detect_format, line_chunks, numbered_lines
 from .gcode import read_ops, sniff_dialect
 from .models import ErrorLog, ImportFailed, ImportOptions, ImportResult, MachineProfile
-from .ops import ARC, MOVE, PALETTE, PEN, Layer, Stroke, arc_extent, layers_to_ops, ops_to_layers
+from .ops import (
+    ARC,
+    MOVE,
+    PALETTE,
+    PEN,
+    Layer,
+    Stroke,
+    arc_extent,
+    layers_to_ops,
+    ops_to_layers,
+    single_moves,
+)
 from .optimize import optimize_strokes, time_budget, travel
 from .patterns import pattern_strokes
 from .placement import Bounds, Transform, needs_bounds, placement
@@ -32,7 +43,7 @@ def drawn_bounds(ops: Iterable[tuple]) -> Bounds | None:
     b = [math.inf, math.inf, -math.inf, -math.inf]
     x = y = 0.0
     down = False
-    for op in ops:
+    for op in single_moves(ops):
         kind = op[0]
         if kind == PEN:
             down = op[2]
@@ -161,7 +172,7 @@ def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOpt
             options = replace(options, pen_dialect=sniff_dialect(f.read(SNIFF_CHARS)))
     try:
         def ops() -> Iterator[tuple]:
-            return read_ops(numbered_lines(source, encoding), options, errors)
+            return read_ops(line_chunks(source, encoding), options, errors)
         ops()  # validates the dialect options before reading
     except ValueError as e:
         raise ImportFailed.one(422, str(e)) from None

@@ -52,6 +52,21 @@ class PreviewBuilder:
             self._queue(continues=True)
             self._raw = [raw[-1]]
 
+    def draw_many(self, x0: float, y0: float, pts: list[tuple[float, float]]) -> None:
+        """`draw` along a polyline from (x0, y0) through `pts`."""
+        if self._travel_from is not None:
+            self._flush_travel()
+        raw = self._raw
+        if not raw:
+            raw.append((x0, y0))
+        while pts:
+            room = _BATCH - len(raw)
+            raw.extend(pts[:room])
+            pts = pts[room:]
+            if len(raw) >= _BATCH:
+                self._queue(continues=True)
+                self._raw = raw = [raw[-1]]
+
     def move(self, x0: float, y0: float, x: float, y: float) -> None:
         """A pen-up move; consecutive ones are shown as one travel line."""
         self.end_stroke()

@@ -5,9 +5,11 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
+import numpy as np
+
 from ..motion.estimate import Estimator
 from .models import ErrorLog, MachineProfile
-from .ops import ARC, DWELL, LAYER, MOVE, PALETTE, PEN, arc_extent, arc_points
+from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PEN, arc_extent, arc_points
 from .placement import Transform
 from .preview import PreviewBuilder
 
@@ -97,6 +99,9 @@ class ProgramWriter:
             if kind == MOVE:
                 x, y = (op[2], op[3]) if ident else t.apply(op[2], op[3])
                 self.move(op[1], x, y, op[4])
+            elif kind == MOVES:
+                xs, ys = (op[2], op[3]) if ident else t.apply(op[2], op[3])
+                self.moves(op[1], xs, ys, op[4])
             elif kind == PEN:
                 self.pen(op[1], op[2])
             elif kind == ARC:
@@ -199,6 +204,56 @@ class ProgramWriter:
             self.travel_mm += d
             self.preview.move(x0, y0, x, y)
         self.x, self.y = x, y
+
+    def moves(self, first: int | None, xs: np.ndarray, ys: np.ndarray,
+              feeds: np.ndarray) -> None:
+        """`move` for each point in turn (feeds NaN for rapids; source lines from `first`
+        on), done for all at once; a run that leaves the work area goes point by point."""
+        xt = [f"{v:.3f}" for v in xs.tolist()]
+        yt = [f"{v:.3f}" for v in ys.tolist()]
+        x = np.array(xt, dtype=float)
+        y = np.array(yt, dtype=float)
+        a = self._area
+        if ((x < a[0]) | (x > a[2]) | (y < a[1]) | (y > a[3])).any():
+            for k, (px, py, f) in enumerate(zip(xs.tolist(), ys.tolist(), feeds.tolist(),
+                                                strict=True)):
+                self.move(None if first is None else first + k, px, py,
+                          None if f != f else f)
+            return
+        x0 = np.concatenate(([self.x], x[:-1]))
+        y0 = np.concatenate(([self.y], y[:-1]))
+        keep = (x != x0) | (y != y0)
+        if not keep.all():
+            if not keep.any():
+                return
+            sel = keep.tolist()
+            xt = [v for v, k in zip(xt, sel, strict=True) if k]
+            yt = [v for v, k in zip(yt, sel, strict=True) if k]
+            x, y, feeds = x[keep], y[keep], feeds[keep]
+            x0 = np.concatenate(([self.x], x[:-1]))
+            y0 = np.concatenate(([self.y], y[:-1]))
+        fl = feeds.tolist()
+        texts_of = {f: _feed(f) for f in set(fl) if f == f}
+        texts = [f"G1 X{a} Y{b} F{texts_of[f]}" if f == f else f"G0 X{a} Y{b}"
+                 for a, b, f in zip(xt, yt, fl, strict=True)]
+        self.planner.moves(x, y, feeds, [len(t) + 1 for t in texts])
+        self.line += len(texts)
+        self.last = texts[-1]
+        self._buf.extend(texts)
+        if len(self._buf) >= 4096:
+            self.flush()
+        xl, yl = x.tolist(), y.tolist()
+        d = np.array(list(map(math.hypot, (x - x0).tolist(), (y - y0).tolist())))
+        if self.down:
+            self.pen_down_mm = float(np.cumsum(np.concatenate(([self.pen_down_mm], d)))[-1])
+            self.preview.draw_many(self.x, self.y, list(zip(xl, yl, strict=True)))
+            b = self.bounds    # the stroke's first point was added at pen down
+            b[0], b[1] = min(b[0], min(xl)), min(b[1], min(yl))
+            b[2], b[3] = max(b[2], max(xl)), max(b[3], max(yl))
+        else:
+            self.travel_mm = float(np.cumsum(np.concatenate(([self.travel_mm], d)))[-1])
+            self.preview.move(self.x, self.y, xl[-1], yl[-1])
+        self.x, self.y = xl[-1], yl[-1]
 
     def arc(self, src_line: int | None, x: float, y: float, i: float, j: float,
             feed: float, cw: bool) -> None:

@@ -95,6 +95,19 @@ class Estimator:
     def move(self, line: int, x: float, y: float, feed: float | None) -> None:
         self._set(RAPID if feed is None else LINE, x, y, feed or 0.0)
 
+    def moves(self, x: np.ndarray, y: np.ndarray, feeds: np.ndarray,
+              nbytes: list[int]) -> None:
+        """`receive` and `move` for each of a run of lines (feeds NaN for rapids)."""
+        rapid = np.isnan(feeds)
+        self.kind.frombytes(np.where(rapid, RAPID, LINE).astype(np.uint8).tobytes())
+        self.bytes.frombytes(np.minimum(nbytes, 65535).astype(np.uint16).tobytes())
+        self.x.frombytes(x.astype(np.float32).tobytes())
+        self.y.frombytes(y.astype(np.float32).tobytes())
+        self.feed.frombytes(np.where(rapid, 0.0, feeds).astype(np.float32).tobytes())
+        zeros = bytes(4 * len(x))
+        self.i.frombytes(zeros)
+        self.j.frombytes(zeros)
+
     def arc(self, line: int, x: float, y: float, i: float, j: float, feed: float,
             cw: bool) -> None:
         self._set(ARC_CW if cw else ARC_CCW, x, y, feed, i, j)

@@ -1,0 +1,36 @@
+"""The server's own C helpers (C files here, built by `make native`, part of `make
+setup`, into build/), loaded with ctypes: standard library, no build step at import
+time, and each helper is called once per large batch, so the per-call cost of ctypes
+does not matter. A helper missing at first use is built then."""
+
+from __future__ import annotations
+
+import ctypes
+import subprocess
+import threading
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parents[2]
+_lock = threading.Lock()
+_loaded: dict[str, ctypes.CDLL] = {}
+
+
+class NativeMissing(RuntimeError):
+    pass
+
+
+def library(name: str) -> ctypes.CDLL:
+    """build/lib<name>.so, made first when missing."""
+    with _lock:
+        lib = _loaded.get(name)
+        if lib is None:
+            path = HERE / "build" / f"lib{name}.so"
+            if not path.exists():
+                r = subprocess.run(["make", "-s", "-C", str(REPO), "native"],
+                                   capture_output=True, text=True)
+                if r.returncode or not path.exists():
+                    raise NativeMissing(f"cannot build {path}: "
+                                        f"{r.stderr.strip() or r.stdout.strip()}")
+            lib = _loaded[name] = ctypes.CDLL(str(path))
+        return lib

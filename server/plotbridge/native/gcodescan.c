@@ -1,0 +1,123 @@
+/* gcodescan: the G-code importer's fast path (server/plotbridge/importing/gcode.py).
+ *
+ * Classifies each line of a chunk of text as a common line, G0/G1 X Y [F] [; comment]
+ * in any case with spaces and tabs between words, at most max_line characters, or
+ * any other line, and reads the numbers of the common ones. Every other line is read
+ * by the importer's general parser, which accepts the common lines too and gives the
+ * same result for them (the unit tests compare the two).
+ *
+ * Numbers are read with strtod, correctly rounded like Python's float(); the grammar
+ * of a number is the general parser's: [-+]? (digits [. digits*] | . digits).
+ */
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+
+enum { OTHER = 0, RAPID = 1, LINE = 2 };
+#define NUM_MAX 255
+
+static const char *blanks(const char *p, const char *end)
+{
+    while (p < end && (*p == ' ' || *p == '\t'))
+        p++;
+    return p;
+}
+
+static int digit(const char *p, const char *end)
+{
+    return p < end && *p >= '0' && *p <= '9';
+}
+
+/* Reads a number at p; returns the position after it, NULL when there is none. */
+static const char *number(const char *p, const char *end, double *out)
+{
+    const char *s = p;
+    char buf[NUM_MAX + 1];
+    if (p < end && (*p == '-' || *p == '+'))
+        p++;
+    if (digit(p, end)) {
+        while (digit(p, end))
+            p++;
+        if (p < end && *p == '.')
+            p++;
+        while (digit(p, end))
+            p++;
+    } else if (p < end && *p == '.' && digit(p + 1, end)) {
+        p++;
+        while (digit(p, end))
+            p++;
+    } else {
+        return NULL;
+    }
+    if (p - s > NUM_MAX)
+        return NULL;
+    memcpy(buf, s, (size_t)(p - s));
+    buf[p - s] = '\0';
+    *out = strtod(buf, NULL);
+    return p;
+}
+
+static const char *letter(const char *p, const char *end, char upper)
+{
+    p = blanks(p, end);
+    return p < end && (*p == upper || *p == upper + 32) ? p + 1 : NULL;
+}
+
+/* One line [p, end) (no newline): its kind, and its numbers when common. */
+static uint8_t scan_line(const char *p, const char *end, double *x, double *y, double *f)
+{
+    uint8_t kind;
+    const char *q;
+    if (!(p = letter(p, end, 'G')))
+        return OTHER;
+    if (p + 1 < end && p[0] == '0' && (p[1] == '0' || p[1] == '1'))
+        p++;
+    if (p >= end || (*p != '0' && *p != '1'))
+        return OTHER;
+    kind = *p == '0' ? RAPID : LINE;
+    p++;
+    if (!(p = letter(p, end, 'X')) || !(p = number(blanks(p, end), end, x)))
+        return OTHER;
+    if (!(p = letter(p, end, 'Y')) || !(p = number(blanks(p, end), end, y)))
+        return OTHER;
+    *f = NAN;
+    q = letter(p, end, 'F');
+    if (q && !(p = number(blanks(q, end), end, f)))
+        return OTHER;
+    p = blanks(p, end);
+    if (p < end && *p == ';') {
+        for (p++; p < end; p++)
+            if (*p == '(' || *p == ')' || *p == '*')
+                return OTHER;
+    }
+    return p == end ? kind : OTHER;
+}
+
+/* The lines of text[0, len), which ends with a newline: kind[k] (OTHER, RAPID or LINE)
+ * and for common lines x[k], y[k], f[k] (NaN without F). Lines holding bytes outside
+ * ASCII are OTHER (max_line counts characters). Returns the number of lines, at most
+ * max_lines. */
+long gcode_scan(const char *text, long len, long max_lines, long max_line, uint8_t *kind,
+                double *x, double *y, double *f)
+{
+    const char *p = text, *end = text + len;
+    long n = 0;
+    while (p < end && n < max_lines) {
+        const char *eol = memchr(p, '\n', (size_t)(end - p));
+        const char *c;
+        if (!eol)
+            eol = end;
+        kind[n] = OTHER;
+        if (eol - p <= max_line) {
+            for (c = p; c < eol && (unsigned char)*c < 0x80; c++)
+                ;
+            if (c == eol)
+                kind[n] = scan_line(p, eol, &x[n], &y[n], &f[n]);
+        }
+        n++;
+        p = eol + 1;
+    }
+    return n;
+}

@@ -1,0 +1,184 @@
+"""The importer's fast paths give what the general paths give, byte for byte: G-code's
+common lines (native/gcodescan.c, read a chunk at a time, written in bulk by
+ProgramWriter.moves) against every line through the general parser and each move
+written alone; SVG path data read in bulk against svgelements."""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+import numpy as np
+import pytest
+from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile, curves
+from plotbridge.importing.detect import line_chunks
+from plotbridge.importing.gcode import read_ops
+from plotbridge.importing.models import ErrorLog
+from plotbridge.importing.ops import single_moves
+from plotbridge.importing.pipeline import write_program
+from plotbridge.importing.placement import Transform
+from plotbridge.native.gcodescan import LINE, OTHER, RAPID, scan
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+PROFILE = MachineProfile(width=300, height=220)
+
+
+def _write(src: Path, dest: Path, options: ImportOptions, fast: bool, transform: Transform,
+           chunk: int) -> tuple:
+    """(program, preview, result or the errors) of one way of importing."""
+    errors = ErrorLog()
+
+    def ops():
+        chunks = line_chunks(src, "utf-8", chunk)
+        if fast:
+            return read_ops(chunks, options, errors)
+        return single_moves(read_ops(chunks, options, errors, fast=False))
+
+    try:
+        r = write_program(ops, "gcode", dest, transform, PROFILE, errors)
+    except ImportFailed as e:
+        return None, None, (e.status, e.errors)
+    result = (r.lines_total, r.estimate_s, r.bounds, r.stats, r.timeline, r.layers, r.warnings)
+    return r.program_path.read_bytes(), r.preview_path.read_bytes(), result
+
+
+def assert_same_import(src: Path, tmp_path: Path, options: ImportOptions,
+                       transform: Transform | None = None, chunk: int = 1 << 18) -> None:
+    transform = transform or Transform()
+    fast = _write(src, tmp_path / "fast", options, True, transform, chunk)
+    general = _write(src, tmp_path / "general", options, False, transform, chunk)
+    assert fast[2] == general[2]
+    assert fast[0] == general[0]
+    assert fast[1] == general[1]
+
+
+def test_scan_reads_common_lines_and_leaves_the_rest():
+    text = ("G1 X1.5 Y-2 F3000\ng0x.5y+7\n  G01\tX 1. Y 2 ; a note\nG1 X1 Y2 ;(no)\n"
+            "G1 X1e3 Y2\nG1 Y2 X1\nN5 G1 X1 Y2\nG10 X1 Y2\nG1 X1 Y2 F\n\nG1 X1 Y2 ; é\n"
+            f"G1 X1 Y2 ;{'x' * 300}\n")
+    kind, x, y, f = scan(text, 256)
+    assert kind.tolist() == [LINE, RAPID, LINE] + [OTHER] * 9
+    assert x[:3].tolist() == [1.5, 0.5, 1.0] and y[:3].tolist() == [-2.0, 7.0, 2.0]
+    assert f[0] == 3000 and np.isnan(f[1:3]).all()
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in (FIXTURES / "gcode").glob("*.gcode")))
+def test_gcode_fixtures_import_the_same_on_both_paths(name, tmp_path):
+    assert_same_import(FIXTURES / "gcode" / name, tmp_path, ImportOptions())
+
+
+def _corpus(rng: random.Random, lines: int) -> str:
+    """G-code mixing the common lines with everything that leaves the fast path."""
+    out = []
+    x, y = 100.0, 100.0
+    for _ in range(lines):
+        r = rng.random()
+        x = min(max(x + rng.uniform(-3, 3), -2), 305)
+        y = min(max(y + rng.uniform(-3, 3), -2), 222)
+        g = rng.choice(["G1", "G01", "g1", "G0", "G00"])
+        f = rng.choice(["", "", "", " F3000", " F1500.55", "F600", " F0"])
+        sep = rng.choice([" ", "", "\t"])
+        tail = rng.choice(["", "", " ; seg", ";", " (c)", " ;(x)", " ; a*b"])
+        if r < 0.75:
+            out.append(f"{g}{sep}X{x:.{rng.randint(0, 4)}f}{sep}Y{y:.3f}{f}{tail}")
+        elif r < 0.80:
+            out.append(rng.choice(["M3", "M5", "M03 S1", "M05"]))
+        elif r < 0.83:
+            out.append(rng.choice(["G91", "G90", "G20", "G21"]))
+        elif r < 0.86:
+            out.append(f"N{rng.randint(1, 99)} G1 X{x:.3f} Y{y:.3f}")
+        elif r < 0.88:
+            out.append(f"G92 X{rng.uniform(-5, 5):.2f} Y{rng.uniform(-5, 5):.2f}")
+        elif r < 0.90:
+            out.append(f"G2 X{x:.3f} Y{y:.3f} I1 J0")
+        elif r < 0.92:
+            out.append(rng.choice(["", "   ", "%", "; comment only", "(setup)", "M0 change"]))
+        elif r < 0.94:
+            out.append(f"G1 X{x:.3f} Y{y:.3f} Z{rng.choice(['-1', '2'])}")
+        elif r < 0.96:
+            out.append(f"G1 X-{x:.3f} Y{y:.3f}")
+        else:
+            out.append(f"G1 X{x:.3f} Y{y:.3f} ; {'long comment ' * rng.randint(10, 30)}")
+    return "\n".join(out) + rng.choice(["\n", ""])
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_generated_gcode_imports_the_same_on_both_paths(seed, tmp_path):
+    rng = random.Random(seed)
+    src = tmp_path / "gen.gcode"
+    src.write_text(_corpus(rng, 1500))
+    dialect = ["auto", "m3", "none", "laser", "z"][seed % 5]
+    transform = [Transform(), Transform(scale=0.5, quarter=1, tx=150.0, ty=3.0)][seed % 2]
+    assert_same_import(src, tmp_path, ImportOptions(pen_dialect=dialect), transform,
+                       chunk=rng.choice([64, 1000, 1 << 18]))
+
+
+def test_generated_gcode_that_stays_on_the_page_imports_the_same(tmp_path):
+    # The errors above stop most generated files; this one is accepted.
+    rng = random.Random(99)
+    lines = ["G21", "G90", "G0 X10 Y10", "M3"]
+    x, y = 10.0, 10.0
+    for k in range(20000):
+        x = min(max(x + rng.uniform(-1, 1), 1), 299)
+        y = min(max(y + rng.uniform(-1, 1), 1), 219)
+        lines.append(f"G1 X{x:.4f} Y{y:.4f}" + (f" F{rng.choice((1500, 3000))}" if k % 7 == 0
+                                                 else "") + (" ; s" if k % 3 else ""))
+        if k % 500 == 499:
+            lines += ["M5", f"G0 X{x + 1:.3f} Y{y:.3f}", "M3"]
+    src = tmp_path / "walk.gcode"
+    src.write_text("\n".join(lines) + "\nM5\n")
+    assert_same_import(src, tmp_path, ImportOptions(), chunk=4096)
+    program, _, result = _write(src, tmp_path / "again", ImportOptions(), True, Transform(),
+                                1 << 18)
+    assert program is not None and result[0] > 20000
+
+
+def _general_subpaths(d: str, tol: float, monkeypatch) -> list:
+    with monkeypatch.context() as m:
+        m.setattr(curves, "_bulk_subpaths", lambda d, tol: None)
+        return curves.path_subpaths(d, tol)
+
+
+@pytest.mark.parametrize("d", [
+    "M 10 10 L 20 20 30 10 Z",
+    "m10,10 20,0 0,20 -20,0z m 5 5 l 1 1",
+    "M1-2L3.5.5H10V-3h2v-2Z L 4 4",
+    "M0 0C10 0 10 10 20 10S30 20 40 20",             # S: svgelements
+    "M0 0c10 0 10 10 20 10 5 5 5 5 10 0q 3 3 6 0Q 50 50 60 60",
+    "M 1e1 2E-1 l 1e0 1 M 3 3",
+    "M -0 -0 L -0 5",
+    "M 5 5 A 3 3 0 0 1 10 10",                       # A: svgelements
+    "M 1 1 L 2",                                     # odd: svgelements
+    "L 1 1 2 2",                                     # no moveto first: svgelements
+])
+def test_path_data_read_in_bulk_as_svgelements_reads_it(d, monkeypatch):
+    try:
+        general = _general_subpaths(d, 0.01, monkeypatch)
+    except ValueError:      # svgelements refuses it (the element is skipped with a warning)
+        with pytest.raises(ValueError):
+            curves.path_subpaths(d, 0.01)
+        return
+    bulk = curves.path_subpaths(d, 0.01)
+    assert len(bulk) == len(general)
+    for (a, ca), (b, cb) in zip(bulk, general, strict=True):
+        assert ca == cb
+        assert a.shape == b.shape
+        assert np.array_equal(a, b) and (np.signbit(a) == np.signbit(b)).all()
+
+
+def test_svg_fixtures_paths_read_in_bulk_as_svgelements_reads_them(monkeypatch):
+    from plotbridge.importing.svgxml import parse_svg_xml
+
+    seen = 0
+    for src in sorted((FIXTURES / "svg").glob("*.svg")):
+        for el in parse_svg_xml(src.read_bytes()).iter():
+            d = el.get("d")
+            if not d or curves._bulk_subpaths(d, 0.01) is None:
+                continue
+            seen += 1
+            bulk = curves.path_subpaths(d, 0.01)
+            general = _general_subpaths(d, 0.01, monkeypatch)
+            assert [c for _, c in bulk] == [c for _, c in general]
+            assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(bulk, general,
+                                                                      strict=True))
+    assert seen > 0
