@@ -33,7 +33,11 @@
  *  GRBL_WCS:   G54-G59 and G28/G30 positions in EEPROM, G10 L2/L20, G28.1, G30.1,
  *              $RST=# (without: G54 only, G28/G30 go to machine 0; error:20)
  *  GRBL_LINES: $N0/$N1 startup lines and the $I= build info string (error:3)
- *  GRBL_G93:   inverse time feed (error:20) */
+ *  GRBL_G93:   inverse time feed (error:20)
+ *  GRBL_LINE_NUMBERS: every planner block carries its line's N number and
+ *              the status report shows the executing one as |Ln: (GRBL's
+ *              USE_LINE_NUMBERS, OPT letter N); 4 bytes a block, which the
+ *              328P's RAM has no room for beside 33 blocks */
 #if defined(__AVR_ATmega328P__)
 #define GRBL_FULL_DEFAULT 0
 #else
@@ -47,6 +51,9 @@
 #endif
 #ifndef GRBL_G93
 #define GRBL_G93 GRBL_FULL_DEFAULT
+#endif
+#ifndef GRBL_LINE_NUMBERS
+#define GRBL_LINE_NUMBERS GRBL_FULL_DEFAULT
 #endif
 
 /* Step timer: Timer1 at F_CPU/8 = 2 MHz. */

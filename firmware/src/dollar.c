@@ -113,6 +113,9 @@ static void print_build_info(void)
 #if !GRBL_LINES
         "I"
 #endif
+#if GRBL_LINE_NUMBERS
+        "N"
+#endif
         ",");
     report_uint(PLAN_SIZE - 1); /* the same count as Bf: when idle */
     RPT(",128]\r\n");

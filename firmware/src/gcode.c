@@ -13,7 +13,7 @@
 enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_COUNT };
 static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N', 'T', 'L'};
 #define WB(w) (1u << (w))
-#define MAX_LINE_NUMBER 9999999.0f /* GRBL's limit on N */
+#define MAX_LINE_NUMBER 10000000.0f /* GRBL's limit on N (exact in a float) */
 
 /* non-modal G commands (GRBL's group 0, one per line) */
 enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1, NM_G10, NM_SET_HOME };
@@ -244,6 +244,10 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     }
     if ((seen & WB(W_N)) && val[W_N] > MAX_LINE_NUMBER)
         return ERR_LINE_NUMBER;
+#if GRBL_LINE_NUMBERS
+    if (seen & WB(W_N)) /* GRBL keeps the whole part */
+        blk->line = (int32_t)val[W_N];
+#endif
     if ((seen & WB(W_T)) && val[W_T] > 255.0f)
         return ERR_TOOL_NUMBER;
     if (seen & WB(W_F)) {

@@ -27,7 +27,7 @@ typedef uint16_t plan_f16_t;
 plan_f16_t plan_f16_from_float(float v);
 float plan_f16_to_float(plan_f16_t h);
 
-/* A queued move, 21 bytes: only what the queue and the segment preparer
+/* A queued move, 21 bytes (25 with GRBL_LINE_NUMBERS): only what the queue and the segment preparer
  * need. The planner passes run on every queued block for every new one, so
  * they work on squared speeds in fixed point (plan_sqr_t: integer adds and
  * compares); the length and acceleration are not stored but derived from
@@ -43,6 +43,9 @@ typedef struct {
     plan_f16_t nominal_sqr;   /* cruise speed squared, (mm/s)^2, overrides applied */
     uint16_t feed;            /* programmed feed, mm/min rounded (unused by rapids) */
     uint8_t flags;
+#if GRBL_LINE_NUMBERS
+    int32_t line;             /* the N number of the line it comes from, 0 none */
+#endif
 } plan_block_t;
 
 /* The float view of a block's geometry (main loop only), from its steps
@@ -67,6 +70,10 @@ uint8_t plan_count(void);
  * more than PLAN_MAX_EVENTS step events: the caller splits it (plan_pieces). */
 #define PLAN_TOO_LONG 2
 uint8_t plan_line(const float *target, float feed, uint8_t flags);
+#if GRBL_LINE_NUMBERS
+/* The N number plan_line gives the blocks it queues from now on (0: none). */
+void plan_set_line_number(int32_t n);
+#endif
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
 uint16_t plan_events(const plan_block_t *b); /* step events of a block */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */

@@ -72,7 +72,12 @@ void test_gcode_errors(void)
     CHECK(parse("M6") == ERR_UNSUPPORTED);
     CHECK(parse("T1") == STATUS_OK);
     CHECK(parse("T256") == ERR_TOOL_NUMBER);
-    CHECK(parse("N10000000G0X1") == ERR_LINE_NUMBER);
+    /* GRBL's range: N up to 10,000,000; the block carries the whole part */
+    CHECK(parse("N10000001G0X1") == ERR_LINE_NUMBER);
+    CHECK(parse("N10000000G0X1") == STATUS_OK && blk.line == 10000000);
+    CHECK(parse("N-1G0X1") == ERR_NEGATIVE);
+    CHECK(parse("N42.7G0X2") == STATUS_OK && blk.line == 42);
+    CHECK(parse("G0X3") == STATUS_OK && blk.line == 0);
     CHECK(parse("M0M2") == ERR_MODAL_CONFLICT);
     CHECK(parse("G53G2X1I1") == ERR_G53_MOTION);
     CHECK(parse("G53G92X1") == ERR_MODAL_CONFLICT);
