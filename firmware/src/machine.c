@@ -119,10 +119,10 @@ void machine_report_status(void)
     }
 #if GRBL_LINE_NUMBERS
     /* the executing block's line, as GRBL: only a positive one */
-    const plan_block_t *cur = plan_current();
-    if (cur && cur->line > 0) {
+    int32_t ln = seg_exec_line();
+    if (ln > 0) {
         RPT("|Ln:");
-        report_uint((uint32_t)cur->line);
+        report_uint((uint32_t)ln);
     }
 #endif
     RPT("|FS:");

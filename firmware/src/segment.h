@@ -12,6 +12,9 @@ typedef struct {
     int16_t steps[N_AXIS];  /* |motor steps|, at most PLAN_MAX_EVENTS */
     int16_t events;
     uint8_t dir_negative;   /* bit per motor */
+#if GRBL_LINE_NUMBERS
+    int32_t line;           /* its planner block's N number */
+#endif
 } step_block_t;
 
 typedef struct {
@@ -34,6 +37,13 @@ void seg_hold(uint8_t on);
 uint8_t seg_hold_reached(void);
 /* Forget the rest of the block being prepared (jog cancel after a hold). */
 void seg_drop_block(void);
+#if GRBL_LINE_NUMBERS
+/* N number of the block the steppers are executing: the segment under way,
+ * else (a hold has drained them) the block being prepared; 0 when idle.
+ * Not the block being prepared while segments run: that one is up to
+ * SEG_SIZE - 1 short blocks ahead of the pen. Main loop only. */
+int32_t seg_exec_line(void);
+#endif
 /* Speed of the most recently prepared segment, mm/s. */
 float seg_speed(void);
 #endif
