@@ -231,6 +231,14 @@ def buffers_from_feedback(text: str) -> tuple[int, int] | None:
     return int(parts[1]), int(parts[2])
 
 
+def option_letters(text: str) -> str | None:
+    """The build option letters of `$I`'s `[OPT:VN,15,128]` ("VN"), else None; `N`: the
+    board numbers its planner blocks and reports the executing line as `Ln:`."""
+    if not text.startswith("OPT:"):
+        return None
+    return text[4:].split(",", 1)[0]
+
+
 def line_problem(line: str) -> str | None:
     """Why `line` cannot be sent to the board as one G-code/`$` line, or None if it can.
 

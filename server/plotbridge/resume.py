@@ -30,7 +30,8 @@ Point = tuple[float, float]
 @dataclass(frozen=True)
 class Mark:
     """What the last status report told about an active job: the executing line lies in
-    `first..last` (first: the conservative acked-minus-queued bound, last: acked), and
+    `first..last` (first: the board's reported `Ln:` where it numbers lines, else the
+    conservative acked-minus-queued bound; last: acked, or `Ln:` if beyond), and
     the carriage was at `x`, `y` (machine mm). `ran_to`: where the board stood once it
     had run out of moves after the server died (its first Idle report on reconnect)."""
 
@@ -89,6 +90,13 @@ def first_unexecuted_line(motion: bytes, acked: int, queued_blocks: int, floor: 
         if line - 1 < len(motion) and motion[line - 1]:
             remaining -= 1
     return max(line, floor)
+
+
+def executing_line(reported: int, conservative: int | None, floor: int) -> int | None:
+    """The first line not known to be executed when the board reports (`Ln:`) that it
+    executes line `reported`: that line, exactly (the report's position lies on its move).
+    A number before `floor` (from before this stream) tells nothing: `conservative`."""
+    return reported if reported >= floor else conservative
 
 
 # ---- the geometry of one move ----------------------------------------------------------

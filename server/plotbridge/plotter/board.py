@@ -32,14 +32,17 @@ class BoardFacts:
     planner_blocks: int = PLANNER_BLOCKS
     rx_buffer: int = RX_BUFFER_SIZE
     segment_blocks: int = SEGMENT_BLOCKS
+    line_numbers: bool = False
+    """The board reports the executing line (`Ln:`) of lines sent with an `N` word."""
 
-    def learn_options(self, planner_blocks: int, rx_buffer: int) -> bool:
-        """From `$I`'s `[OPT:...]`; True when the receive buffer size changed.
+    def learn_options(self, planner_blocks: int, rx_buffer: int, letters: str = "") -> bool:
+        """From `$I`'s `[OPT:letters,...]`; True when the receive buffer size changed.
 
         A receive buffer larger than GRBL's is not trusted (character counting
         beyond it gains nothing and risks overruns); one too small is ignored.
         """
         self.planner_blocks = max(self.planner_blocks, planner_blocks)
+        self.line_numbers = "N" in letters
         size = min(rx_buffer, RX_BUFFER_SIZE)
         if size >= 16 and size != self.rx_buffer:
             self.rx_buffer = size

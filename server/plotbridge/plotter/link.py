@@ -40,6 +40,7 @@ from plotbridge.grbl import (
     cost,
     error_message,
     line_problem,
+    option_letters,
     version_from_feedback,
 )
 from plotbridge.plotter.board import BoardFacts
@@ -505,16 +506,16 @@ class Link:
             if kind == "feedback" and (version := version_from_feedback(payload)):
                 self.status.firmware = version
             elif kind == "feedback" and (sizes := buffers_from_feedback(payload)):
-                self._learn_options(*sizes)
+                self._learn_options(*sizes, option_letters(payload) or "")
             elif kind == "msg" and payload.strip().lower() == "reset to continue":
                 # Stock GRBL after a limit alarm ignores everything until reset.
                 self._soft_reset("alarm")
             if isinstance(front, _Command):
                 front.responses.append(line)
 
-    def _learn_options(self, planner_blocks: int, rx_buffer: int) -> None:
+    def _learn_options(self, planner_blocks: int, rx_buffer: int, letters: str) -> None:
         """Count against the board's own receive buffer when it is smaller than GRBL's."""
-        if self.facts.learn_options(planner_blocks, rx_buffer):
+        if self.facts.learn_options(planner_blocks, rx_buffer, letters):
             log.info("board receive buffer: %d bytes", rx_buffer)
             self._counter.capacity = self.facts.rx_buffer
 

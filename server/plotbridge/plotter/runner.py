@@ -27,6 +27,7 @@ from plotbridge.program.reader import ProgramReader
 from plotbridge.resume import (
     Mark,
     ResumePoint,
+    executing_line,
     first_unexecuted_line,
     layer_runs,
     locate,
@@ -193,11 +194,16 @@ class Runner:
                 self._pen_loaded(job, "the board's resume button")
             return
         queued = self.link.facts.queued_blocks(status.planner_free)
-        if queued is not None:
-            job.safe_line = first_unexecuted_line(self._motion, job.lines_done, queued,
-                                                  self._floor)  # fmt: skip
+        safe = None if queued is None else first_unexecuted_line(
+            self._motion, job.lines_done, queued, self._floor)  # fmt: skip
+        if self.link.facts.line_numbers and status.line is not None:
+            # the board names the line it executes: the position lies on it
+            safe = executing_line(status.line, safe, self._floor)
+        if safe is not None:
+            job.safe_line = safe
             if status.x is not None and status.y is not None:
-                self._keep_mark(job, Mark(job.safe_line, job.lines_done, status.x, status.y))
+                last = max(job.lines_done, safe)  # its ok may still be on the way
+                self._keep_mark(job, Mark(safe, last, status.x, status.y))
         self._follow_buttons(job, status.state)
 
     async def exact_stop_known(self, limit: float = EXACT_STOP_S) -> None:
@@ -224,7 +230,8 @@ class Runner:
         self._stop_told()
         log.info("job %s: the steps stopped at %s, %s (%s, the first report after the reset)",
                  job.id, status.x, status.y, status.state)  # fmt: skip
-        self._keep_mark(job, Mark(self._mark.first, job.lines_done, status.x, status.y))
+        last = max(job.lines_done, self._mark.last)
+        self._keep_mark(job, Mark(self._mark.first, last, status.x, status.y))
 
     def _ran_out(self, status: MachineStatus) -> None:
         """The first Idle (or Alarm) report while an orphaned job waits: where the board
@@ -358,7 +365,8 @@ class Runner:
             self._motion, self._floor = reader.motion, floor  # motion: filled as it goes
             start_time = time.time()
             async with contextlib.aclosing(_until(reader.lines(), stop)) as lines:
-                await self.link.stream(wire.compact_async(feed.lines(lines), self.link.settings),
+                await self.link.stream(wire.compact_async(feed.lines(lines), self.link.settings,
+                                                          self.link.facts.line_numbers),
                                        self._on_ack)  # fmt: skip
             state = await self._wait_done(start_time)
             if not job.active:

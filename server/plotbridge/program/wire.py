@@ -8,6 +8,10 @@ becomes the shortest decimal that lands on the same motor step as the original
 offsets (`I`, `J`) are corrected for the start point's rounding so the centre stays put.
 Plain GRBL 1.1 G-code: a stock GRBL board accepts it. Lines the compactor does not know
 are sent as they are (without spaces) and make it forget the modal state.
+
+To a board that reports the executing line (`$I` OPT letter `N`), each program line goes
+with its number as an `N` word (`N120X5Y7`), which comes back as the status report's
+`Ln:`; lines numbered 0 (a resume's preamble) and `$` commands go without.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ import math
 from collections.abc import AsyncIterable, AsyncIterator, Iterable, Iterator
 
 MOTION = ("G0", "G1", "G2", "G3")
+MAX_LINE_NUMBER = 10_000_000  # GRBL's largest N (error:27 above it)
 KEEPS_MODES = ("M3", "M5", "G21", "G90")   # lines that leave the motion mode and F alone
 
 
@@ -104,6 +109,13 @@ class Compactor:
         return "".join(out) or head
 
 
+def numbered(n: int, text: str) -> str:
+    """`text` with its program line number `n` as an `N` word where the board takes one."""
+    if not text or text.startswith("$") or not 0 < n <= MAX_LINE_NUMBER:
+        return text
+    return f"N{n}{text}"
+
+
 def compact(lines: Iterable[tuple[int, str]],
             steps_per_mm: tuple[float, float] = (80.0, 80.0)) -> Iterator[tuple[int, str]]:
     c = Compactor(steps_per_mm)
@@ -112,11 +124,13 @@ def compact(lines: Iterable[tuple[int, str]],
 
 
 async def compact_async(lines: AsyncIterable[tuple[int, str]],
-                        settings: dict[int, float] | None = None
-                        ) -> AsyncIterator[tuple[int, str]]:
+                        settings: dict[int, float] | None = None,
+                        line_numbers: bool = False) -> AsyncIterator[tuple[int, str]]:
     """The streaming hook: (line number, text) pairs in, the same numbers with wire text
-    out; `settings` is the board's $$ (steps/mm from $100, $101)."""
+    out; `settings` is the board's $$ (steps/mm from $100, $101); `line_numbers`: the
+    board reports `Ln:`, so each line carries its number."""
     s = settings or {}
     c = Compactor((float(s.get(100, 80.0)), float(s.get(101, 80.0))))
     async for n, text in lines:
-        yield n, c.line(text)
+        wire = c.line(text)
+        yield n, numbered(n, wire) if line_numbers else wire
