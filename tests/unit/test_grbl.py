@@ -13,6 +13,7 @@ from plotbridge.grbl import (
     cost,
     error_message,
     line_problem,
+    option_letters,
     parse_status,
     version_from_feedback,
 )
@@ -90,6 +91,14 @@ def test_messages_and_version():
     assert buffers_from_feedback("OPT:,17,64") == (17, 64)
     assert buffers_from_feedback("OPT:V") is None
     assert buffers_from_feedback("VER:1.1h:") is None
+
+
+def test_option_letters_say_whether_the_board_numbers_lines():
+    assert option_letters("OPT:VN,15,128") == "VN"
+    assert option_letters("OPT:N,63,128") == "N"
+    assert option_letters("OPT:#I,33,128") == "#I"
+    assert option_letters("OPT:,63,128") == ""
+    assert option_letters("VER:1.1h:") is None
 
 
 def test_line_problem():

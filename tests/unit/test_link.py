@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import re
 import time
 from collections.abc import Callable
 
@@ -21,6 +22,7 @@ from plotbridge.plotter.link import (
     StreamAborted,
     _PortProtocol,
 )
+from plotbridge.program.wire import compact_async
 
 SETTINGS = ["$0=4", "$10=3", "$110=6000.000", "$130=300.000", "$131=220.000"]
 
@@ -206,6 +208,11 @@ def program(count: int, start: int = 1) -> list[tuple[int, str]]:
     # Lines of varying length, so the buffer fills unevenly.
     return [(n, f"G1 X{n * 0.5:.3f} Y{(n * 7) % 200:.3f} F3000" + " " * (n % 9))
             for n in range(start, start + count)]
+
+
+async def aiter_of(items):
+    for item in items:
+        yield item
 
 
 async def feed_slowly(board: FakeBoard, stop: asyncio.Event, per_tick: int = 1) -> None:
@@ -648,6 +655,48 @@ async def test_smaller_receive_buffer_from_build_info_is_respected():
         stop.set()
         await drainer
         assert 40 < board.max_rx <= 64
+
+
+async def test_lines_go_numbered_to_a_board_with_line_numbers_and_count_the_n_words():
+    board = FakeBoard(auto=False)
+    board.script["$I"] = ["[VER:1.1h.plotbridge:]", "[OPT:N,63,128]", "ok"]
+    async with running(board) as link:
+        assert link.facts.line_numbers
+        fills: list[int] = []
+        stop = asyncio.Event()
+
+        async def drain() -> None:
+            while not stop.is_set():
+                fills.append(len(board.rx))
+                board.execute(1)
+                await asyncio.sleep(0.001)
+
+        async def lines():
+            for item in program(300, start=99_990):  # N words of 5 to 6 digits
+                yield item
+
+        acked: list[int] = []
+        drainer = asyncio.create_task(drain())
+        await link.stream(compact_async(lines(), link.settings, link.facts.line_numbers),
+                          acked.append)
+        stop.set()
+        await drainer
+        sent = [line for line in board.lines if line.startswith("N")]
+        assert [int(re.match(r"N(\d+)", line)[1]) for line in sent] == list(range(99_990, 100_290))
+        assert acked == list(range(99_990, 100_290))
+        # the added bytes are counted: never over the 128 bytes, yet kept full
+        assert board.max_rx <= 128
+        assert min(fills[5:-20]) > 128 - 2 * 40
+        assert link._counter.outstanding == 0
+
+
+async def test_lines_go_unnumbered_to_a_board_without_line_numbers():
+    board = FakeBoard()
+    async with running(board) as link:
+        assert not link.facts.line_numbers
+        await link.stream(compact_async(aiter_of(program(5)), link.settings,
+                                        link.facts.line_numbers), lambda n: None)
+        assert board.lines[-5:] and not any(line.startswith("N") for line in board.lines)
 
 
 async def test_partial_writes_are_finished_in_order():

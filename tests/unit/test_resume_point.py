@@ -12,6 +12,7 @@ from plotbridge.resume import (
     Mark,
     PickError,
     ResumePoint,
+    executing_line,
     layer_runs,
     locate,
     moves,
@@ -116,3 +117,20 @@ def test_moves_know_their_arc_geometry(program):
     assert arc.centre == (60.0, 10.0) and arc.clockwise
     assert arc.length == pytest.approx(10 * math.pi)
     assert arc.nearest((60.0, 25.0)) == (pytest.approx(5.0), pytest.approx(0.5))
+
+
+def test_a_reported_executing_line_replaces_the_conservative_bound():
+    assert executing_line(40, 13, floor=1) == 40
+    assert executing_line(40, None, floor=1) == 40  # no Bf: in the report
+    # a number from before this stream (a previous layer's) tells nothing
+    assert executing_line(5, 13, floor=10) == 13
+
+
+def test_locate_from_the_reported_line_finds_the_point_on_it(tmp_path):
+    # the same point lies on line 2 and on line 4 (the stroke comes back over it):
+    # the conservative window finds line 2, the reported Ln: 4 finds the right one
+    program = tmp_path / "p.gcode"
+    program.write_text("M3\nG1 X10 Y10 F1000\nG1 X10 Y0\nG1 X0 Y10\nM5\n")
+    point = (5.0, 5.0)
+    assert locate(program, Mark(1, 5, *point)) == ResumePoint(2, point)
+    assert locate(program, Mark(4, 5, *point)) == ResumePoint(4, point)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from plotbridge.program.wire import Compactor, compact, number, on_step, step_of
+from plotbridge.program.wire import Compactor, compact, number, numbered, on_step, step_of
 
 SPM = (80.0, 80.0)
 
@@ -84,3 +84,13 @@ def test_compaction_never_changes_a_step(moves, spm):
 @given(coordinate)
 def test_on_step_is_never_longer(v):
     assert len(on_step(v, 80.0)) <= len(f"{v:.3f}")
+
+
+def test_numbered_lines_carry_their_program_line_as_an_n_word():
+    assert numbered(12, "X5Y7") == "N12X5Y7"
+    assert numbered(10_000_000, "G0X1") == "N10000000G0X1"
+    # a preamble line (0), a number GRBL refuses (error:27), a $ command, nothing: as is
+    assert numbered(0, "G0X1") == "G0X1"
+    assert numbered(10_000_001, "G0X1") == "G0X1"
+    assert numbered(3, "$H") == "$H"
+    assert numbered(3, "") == ""
