@@ -173,6 +173,7 @@ class Machine(BaseModel):
     feed: float | None = None
     pins: str | None = None
     planner_free: int | None = None
+    line: int | None = None  # the executing program line (Ln:), boards that number lines
 
 
 class ErrorBody(BaseModel):

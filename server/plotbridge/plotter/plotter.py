@@ -136,6 +136,7 @@ class Plotter:
             "feed": status.feed,
             "pins": status.pins or None,
             "planner_free": status.planner_free,
+            "line": status.line,
         }
 
     def describe(self) -> dict[str, Any]:

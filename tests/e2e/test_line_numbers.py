@@ -1,0 +1,73 @@
+"""End to end: a board whose firmware numbers lines (`$I` OPT `N`: the Mega profiles)
+through a real `plotbridge serve --virtual --board mega-ramps14`: the job goes out with
+`N` words, every status report while it runs carries the executing line (`Ln:`, the
+machine object's `line`), and a job stopped by the emergency stop resumes from the
+reported line with nothing drawn twice."""
+
+from __future__ import annotations
+
+import subprocess
+import time
+
+import pytest
+
+from tests.e2e.test_server import ESTOP_REDRAW_MM, assert_same_drawing, preview, submit
+from tests.fixtures.plotsim import FIRMWARE_DIR
+from tests.fixtures.server import running_server
+
+pytestmark = pytest.mark.e2e
+
+MEGA = "mega-ramps14"
+FEED = 3000  # mm/min
+SEGMENT = 0.5  # mm: one planner block a line
+FIRST_MOVE = 5  # program line of the first 0.5 mm segment (after G21 G90 G0 M3)
+
+
+def short_segments() -> tuple[str, int, float]:
+    """One stroke of 0.5 mm segments (a row along y=20, 10 mm up, a row back along
+    y=30): the G-code, its last segment's line and the pen-down length."""
+    points = [(10 + SEGMENT * k, 20.0) for k in range(1, 161)]
+    points += [(90.0, 20 + SEGMENT * k) for k in range(1, 21)]
+    points += [(90 - SEGMENT * k, 30.0) for k in range(1, 161)]
+    lines = ["G21", "G90", "G0 X10 Y20", "M3"]
+    lines += [f"G1 X{x:.3f} Y{y:.3f} F{FEED}" for x, y in points]
+    return "\n".join([*lines, "M5"]) + "\n", len(lines), SEGMENT * len(points)
+
+
+@pytest.fixture(scope="module")
+def mega_build(sim_build) -> None:
+    subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={MEGA}", "all"],
+                   check=True, capture_output=True)
+
+
+def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(mega_build, tmp_path):
+    gcode, last_move, length = short_segments()
+    link = ["--virtual", "--sim-speed", "1", "--board", MEGA]
+    with running_server(tmp_path / "data", link) as server:
+        server.home()
+        assert server.machine()["line"] is None  # idle: nothing executes
+        job = submit(server, gcode)
+        seen: list[int] = []
+        deadline = time.monotonic() + 60
+        while len(seen) < 5 and time.monotonic() < deadline:
+            machine = server.machine()
+            if machine["state"] == "Run" and machine["position"]["x"] > 11:  # past the M3
+                assert machine["line"] is not None, machine  # every report while it draws
+                seen.append(machine["line"])
+            time.sleep(0.1)
+        assert seen == sorted(seen), seen  # the executing line only moves on
+        assert FIRST_MOVE <= seen[0] and seen[-1] <= last_move, seen
+        assert server.client.post("/api/machine/estop").status_code == 202
+        stopped = server.wait_job(job["id"], ("stopped",), 10)
+        # the stop came mid-program: the resume starts at the reported line, not before
+        assert seen[-1] <= stopped["resume_line"] <= last_move, (seen, stopped)
+        server.wait_machine(lambda m: m["state"] == "Alarm", 10)
+        resumed = server.client.post(f"/api/jobs/{job['id']}/resume", json={"home": True})
+        assert resumed.status_code == 200, resumed.text
+        done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+        assert done["state"] == "done", done
+        trace = server.client.get("/api/sim/trace").json()
+        assert_same_drawing(preview(server, job["id"])["strokes"], trace["strokes"])
+        redrawn = trace["draw_mm"] - length
+        print(f"estop on 0.5 mm segments, resumed from Ln: {redrawn:.4f} mm drawn twice")
+        assert -ESTOP_REDRAW_MM <= redrawn <= ESTOP_REDRAW_MM, f"{redrawn:.3f} mm drawn twice"
