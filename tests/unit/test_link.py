@@ -215,6 +215,14 @@ async def aiter_of(items):
         yield item
 
 
+async def drain_recording(board: FakeBoard, stop: asyncio.Event, fills: list[int]) -> None:
+    """Execute one line at a time, recording how full the receive buffer was before each."""
+    while not stop.is_set():
+        fills.append(len(board.rx))
+        board.execute(1)
+        await asyncio.sleep(0.001)
+
+
 async def feed_slowly(board: FakeBoard, stop: asyncio.Event, per_tick: int = 1) -> None:
     """Execute lines a few at a time, like a planner draining."""
     while not stop.is_set():
@@ -343,13 +351,7 @@ async def test_stream_keeps_buffer_full_never_over_128_acks_in_order():
         fills: list[int] = []
         stop = asyncio.Event()
 
-        async def drain() -> None:
-            while not stop.is_set():
-                fills.append(len(board.rx))
-                board.execute(1)
-                await asyncio.sleep(0.001)
-
-        drainer = asyncio.create_task(drain())
+        drainer = asyncio.create_task(drain_recording(board, stop, fills))
         await link.stream(iter(program(300)), acked.append)
         stop.set()
         await drainer
@@ -665,18 +667,12 @@ async def test_lines_go_numbered_to_a_board_with_line_numbers_and_count_the_n_wo
         fills: list[int] = []
         stop = asyncio.Event()
 
-        async def drain() -> None:
-            while not stop.is_set():
-                fills.append(len(board.rx))
-                board.execute(1)
-                await asyncio.sleep(0.001)
-
         async def lines():
             for item in program(300, start=99_990):  # N words of 5 to 6 digits
                 yield item
 
         acked: list[int] = []
-        drainer = asyncio.create_task(drain())
+        drainer = asyncio.create_task(drain_recording(board, stop, fills))
         await link.stream(compact_async(lines(), link.settings, link.facts.line_numbers),
                           acked.append)
         stop.set()
