@@ -213,7 +213,7 @@ def locate(program: Path, mark: Mark, tolerance: float = LOCATE_TOLERANCE) -> Re
         if found is None or found.line > mark.last:
             return ResumePoint(mark.first)
         if mark.ran_to is None:
-            return ResumePoint(found.line, point)
+            return ResumePoint(_past_end(found, walk, point).line, point)
         distance, t = found.nearest(mark.ran_to)
         if distance <= tolerance and t >= found.nearest(point)[1]:
             return ResumePoint(found.line, mark.ran_to)
@@ -223,6 +223,17 @@ def locate(program: Path, mark: Mark, tolerance: float = LOCATE_TOLERANCE) -> Re
             if move.nearest(mark.ran_to)[0] <= tolerance:
                 return ResumePoint(move.line, mark.ran_to)
     return ResumePoint(found.line, point)
+
+
+def _past_end(found: Move, walk: Iterator[Move], point: Point) -> Move:
+    """A point within the tolerance of `found`'s end but past it (the pen stopped a step
+    into the next line) lies on the move after it when that one passes closer: resuming
+    on `found` would go back to its end and draw that bit twice."""
+    distance, t = found.nearest(point)
+    if t < 1.0 or distance == 0.0:
+        return found
+    after = next(walk, None)
+    return after if after is not None and after.nearest(point)[0] < distance else found
 
 
 # ---- a point the user picks ----------------------------------------------------------

@@ -134,3 +134,11 @@ def test_locate_from_the_reported_line_finds_the_point_on_it(tmp_path):
     point = (5.0, 5.0)
     assert locate(program, Mark(1, 5, *point)) == ResumePoint(2, point)
     assert locate(program, Mark(4, 5, *point)) == ResumePoint(4, point)
+
+
+def test_a_point_a_step_past_a_lines_end_resumes_on_the_next_line(tmp_path):
+    program = tmp_path / "p.gcode"
+    program.write_text("M3\nG1 X10 Y0 F1000\nG1 X20 Y0\nM5\n")
+    assert locate(program, Mark(2, 3, 10.025, 0.0)) == ResumePoint(3, (10.025, 0.0))
+    assert locate(program, Mark(2, 3, 9.975, 0.0)) == ResumePoint(2, (9.975, 0.0))
+    assert locate(program, Mark(2, 3, 10.0, 0.0)) == ResumePoint(2, (10.0, 0.0))
