@@ -100,11 +100,17 @@ def test_three_colours_two_pen_changes(parked_server, plotter):
     drawn = plotter.trace()["strokes"]
     assert len(drawn) == len(shown["strokes"]) == 9
     drawn_before.append(len(drawn))
+    columns = []
     for index, colour in enumerate(COLOURS):
         start, end = drawn_before[index], drawn_before[index + 1]
         assert shown["colours"][start:end] == [colour] * 3  # this colour, in this layer only
         for want, got in zip(shown["strokes"][start:end], drawn[start:end], strict=True):
             assert_same_drawing([want], [got])  # in the preview's order, each in place
+        # the SVG draws each colour in a column of its own: one layer, one column
+        lefts = [min(p[0] for p in stroke) for stroke in drawn[start:end]]
+        assert max(lefts) - min(lefts) <= 2 * STEP, lefts
+        columns.append(lefts[0])
+    assert columns == sorted(columns) and columns[1] - columns[0] > 5, columns
 
 
 def test_the_board_resume_button_ends_a_colour_change(parked_server, plotter):
