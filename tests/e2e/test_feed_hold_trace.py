@@ -45,23 +45,23 @@ def joined(strokes: list) -> list:
     return out
 
 
-def hold_mid_stroke(
-    server, plotter, svg: str, hold: Callable[[], None], go_on: Callable[[], None]
-) -> None:
+def start_and_hold(server, plotter, svg: str, hold: Callable[[], None]) -> tuple[str, tuple]:
+    """Starts a job of `svg`, holds it 30 mm into its stroke and checks the pen is lifted
+    where the carriage stopped; returns the job id and that point."""
     server.home()
     plotter.clear()
     response = server.client.post(
         "/api/jobs", files={"file": ("stroke.svg", svg)}, data={"start": "true"}
     )
     assert response.status_code == 201, response.text
-    job = response.json()
+    job_id = response.json()["id"]
 
     drawing = plotter.wait_trace(lambda t: t["pen"] == "down" and t["strokes"]
                                  and length(t["strokes"][-1]) > 30, 60)
     hold()
     server.wait_machine(lambda m: m["state"].startswith("Hold"), 30)
     held = plotter.wait_trace(lambda t: t["pen"] == "up", 30)
-    assert server.job(job["id"])["state"] == "paused"
+    assert server.job(job_id)["state"] == "paused"
     assert len(held["strokes"]) == 1
     stopped = (held["position"]["x"], held["position"]["y"])
     # the pen left the paper where the carriage stopped, not while it still moved
@@ -69,43 +69,72 @@ def hold_mid_stroke(
     assert length(drawing["strokes"][0]) <= length(held["strokes"][0]) < 175  # mid-stroke
     assert server.machine()["state"].startswith("Hold")
     assert plotter.trace()["position"] == held["position"]  # still there, pen still up
+    return job_id, stopped
 
-    go_on()
-    going = plotter.wait_trace(lambda t: len(t["strokes"]) == 2, 30)
-    # lowered at the stop point before moving: the new stroke starts there
-    assert math.dist(going["strokes"][1][0][:2], stopped) <= STEP + 1e-9
 
-    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 60)
+def assert_drawn_once(server, plotter, job_id: str, lifts: int) -> None:
+    """The job ends done; its trace, joined where the pen was lowered where it was lifted,
+    is the preview's one stroke exactly once; `lifts` pen lifts came before the end."""
+    done = server.wait_job(job_id, ("done", "failed", "stopped", "interrupted"), 60)
     assert done["state"] == "done", done
-    expected = preview(server, job["id"])["strokes"]
+    expected = preview(server, job_id)["strokes"]
     trace = plotter.trace()
     drawn = joined(trace["strokes"])
     assert len(drawn) == len(expected) == 1
     assert_same_drawing(expected, drawn)
     # nothing drawn twice; a curve's trace follows the steps' staircase, up to 0.1% longer
     assert abs(length(drawn[0]) - length(expected[0])) < max(4 * STEP, 1e-3 * length(drawn[0]))
-    assert trace["pen_lifts"] == 2  # the hold and the end of the stroke: no extra dot
+    assert trace["pen_lifts"] == lifts + 1  # the holds' and the stroke's end: no dot
 
 
-@pytest.mark.parametrize("svg", [LINE, CIRCLE], ids=["line", "circle"])
-def test_api_hold_mid_stroke_lifts_and_lowers_the_pen_in_place(server, plotter, svg):
+def hold_mid_stroke(
+    server, plotter, svg: str, hold: Callable[[], None], go_on: Callable[[], None]
+) -> None:
+    job_id, stopped = start_and_hold(server, plotter, svg, hold)
+    go_on()
+    going = plotter.wait_trace(lambda t: len(t["strokes"]) == 2, 30)
+    # lowered at the stop point before moving: the new stroke starts there
+    assert math.dist(going["strokes"][1][0][:2], stopped) <= STEP + 1e-9
+    assert_drawn_once(server, plotter, job_id, lifts=1)
+
+
+def click(plotter, button: str) -> Callable[[], None]:
+    """Presses a board button until the simulator shows it pressed, then lets go."""
+    def press() -> None:
+        plotter.press(button)
+        try:
+            plotter.wait_trace(lambda t: t["buttons"][button], 10)
+        finally:
+            plotter.release(button)
+    return press
+
+
+def test_api_hold_mid_stroke_lifts_and_lowers_the_pen_in_place(server, plotter):
     def post(path: str) -> Callable[[], None]:
         def send() -> None:
             response = server.client.post(path)
             assert response.status_code == 200, response.text
         return send
 
-    hold_mid_stroke(server, plotter, svg, post("/api/machine/hold"), post("/api/machine/continue"))
+    hold_mid_stroke(server, plotter, LINE, post("/api/machine/hold"), post("/api/machine/continue"))
 
 
 def test_pause_button_mid_stroke_lifts_and_lowers_the_pen_in_place(server, plotter):
-    def click(button: str) -> Callable[[], None]:
-        def press() -> None:
-            plotter.press(button)
-            try:
-                plotter.wait_trace(lambda t: t["buttons"][button], 10)
-            finally:
-                plotter.release(button)
-        return press
+    hold_mid_stroke(server, plotter, CIRCLE, click(plotter, "pause"), click(plotter, "resume"))
 
-    hold_mid_stroke(server, plotter, CIRCLE, click("pause"), click("resume"))
+
+def test_a_hold_while_the_pen_goes_back_down_holds(server, plotter):
+    """Pause pressed again while the resume lowers the pen and waits for it to settle
+    ($64 + $62 ms): the machine stays held, the pen goes up again, nothing moves."""
+    job_id, stopped = start_and_hold(server, plotter, LINE, click(plotter, "pause"))
+    click(plotter, "resume")()
+    click(plotter, "pause")()  # well within the 150 ms settle
+    since = plotter.trace()["sim_time"]
+    # a simulated second on, the resume would long be over: still held, pen up, in place
+    held = plotter.wait_trace(lambda t: t["sim_time"] > since + 1, 30)
+    assert (held["position"]["x"], held["position"]["y"]) == stopped, "it moved on"
+    assert held["pen"] == "up" and len(held["strokes"]) <= 2  # maybe the lowering began
+    assert server.machine()["state"].startswith("Hold")
+    assert server.job(job_id)["state"] == "paused"
+    click(plotter, "resume")()
+    assert_drawn_once(server, plotter, job_id, lifts=held["pen_lifts"])
