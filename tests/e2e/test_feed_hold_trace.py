@@ -109,26 +109,35 @@ def click(plotter, button: str) -> Callable[[], None]:
     return press
 
 
-def test_api_hold_mid_stroke_lifts_and_lowers_the_pen_in_place(server, plotter):
-    def post(path: str) -> Callable[[], None]:
-        def send() -> None:
-            response = server.client.post(path)
-            assert response.status_code == 200, response.text
-        return send
+def post(server, path: str) -> Callable[[], None]:
+    def send() -> None:
+        response = server.client.post(path)
+        assert response.status_code == 200, response.text
+    return send
 
-    hold_mid_stroke(server, plotter, LINE, post("/api/machine/hold"), post("/api/machine/continue"))
+
+def hold_and_go_on(how: str, server, plotter) -> tuple[Callable[[], None], Callable[[], None]]:
+    if how == "api":
+        return post(server, "/api/machine/hold"), post(server, "/api/machine/continue")
+    return click(plotter, "pause"), click(plotter, "resume")
+
+
+def test_api_hold_mid_stroke_lifts_and_lowers_the_pen_in_place(server, plotter):
+    hold_mid_stroke(server, plotter, LINE, *hold_and_go_on("api", server, plotter))
 
 
 def test_pause_button_mid_stroke_lifts_and_lowers_the_pen_in_place(server, plotter):
-    hold_mid_stroke(server, plotter, CIRCLE, click(plotter, "pause"), click(plotter, "resume"))
+    hold_mid_stroke(server, plotter, CIRCLE, *hold_and_go_on("buttons", server, plotter))
 
 
-def test_a_hold_while_the_pen_goes_back_down_holds(server, plotter):
-    """Pause pressed again while the resume lowers the pen and waits for it to settle
-    ($64 + $62 ms): the machine stays held, the pen goes up again, nothing moves."""
-    job_id, stopped = start_and_hold(server, plotter, LINE, click(plotter, "pause"))
-    click(plotter, "resume")()
-    click(plotter, "pause")()  # well within the 150 ms settle
+@pytest.mark.parametrize("how", ["api", "buttons"])
+def test_a_hold_while_the_pen_goes_back_down_holds(server, plotter, how):
+    """Held again while the resume lowers the pen and waits for it to settle ($64 + $62
+    ms): the machine stays held, the pen goes up again, nothing moves."""
+    hold, go_on = hold_and_go_on(how, server, plotter)
+    job_id, stopped = start_and_hold(server, plotter, LINE, hold)
+    go_on()
+    hold()  # well within the 150 ms settle
     since = plotter.trace()["sim_time"]
     # a simulated second on, the resume would long be over: still held, pen up, in place
     held = plotter.wait_trace(lambda t: t["sim_time"] > since + 1, 30)
@@ -136,5 +145,5 @@ def test_a_hold_while_the_pen_goes_back_down_holds(server, plotter):
     assert held["pen"] == "up" and len(held["strokes"]) <= 2  # maybe the lowering began
     assert server.machine()["state"].startswith("Hold")
     assert server.job(job_id)["state"] == "paused"
-    click(plotter, "resume")()
+    go_on()
     assert_drawn_once(server, plotter, job_id, lifts=held["pen_lifts"])
