@@ -13,7 +13,7 @@ from collections.abc import Iterator
 import pytest
 from websockets.sync.client import connect
 
-from tests.e2e.test_pen_change import wait_pen_change
+from tests.e2e.test_pen_change import assert_parked, wait_pen_change
 from tests.e2e.test_server import assert_same_drawing, preview
 from tests.fixtures.server import ServerProcess, running_server
 
@@ -47,14 +47,6 @@ def parked_server(plotter, tmp_path) -> Iterator[ServerProcess]:
         yield proc
 
 
-def assert_parked(plotter) -> dict:
-    trace = plotter.trace()
-    assert trace["pen"] == "up", trace["pen"]
-    x, y = trace["position"]["x"], trace["position"]["y"]
-    assert abs(x - PARK[0]) <= STEP and abs(y - PARK[1]) <= STEP, (x, y)
-    return trace
-
-
 def upload(server, svg: str) -> dict:
     response = server.client.post(
         "/api/jobs", files={"file": ("colours.svg", svg)}, data={"start": "true"}
@@ -85,7 +77,7 @@ def test_three_colours_two_pen_changes(parked_server, plotter):
         changing = wait_pen_change(server, job["id"], layer)
         assert changing["pen_change"]["message"].startswith(f"Layer {layer} of 3, "), changing
         assert changing["pen_change"]["colour"] == COLOURS[layer - 1]
-        trace = assert_parked(plotter)
+        trace = assert_parked(plotter, PARK)
         drawn_before.append(len(trace["strokes"]))
         assert drawn_before[-1] == 3 * (layer - 1), "a layer is not drawn whole at its change"
         if resume == "api":
@@ -119,7 +111,7 @@ def test_the_board_resume_button_ends_a_colour_change(parked_server, plotter):
     plotter.clear()
     job = upload(server, colour_svg(COLOURS[:2], rows=1))
     wait_pen_change(server, job["id"], 2)
-    assert len(assert_parked(plotter)["strokes"]) == 1
+    assert len(assert_parked(plotter, PARK)["strokes"]) == 1
     plotter.press("resume")
     try:
         server.wait_job(job["id"], ("running", "done", "failed", "stopped"), 30)
