@@ -175,6 +175,12 @@ static uint16_t pen_servo(uint8_t down)
 
 static void start_hold(void)
 {
+    if (mach.resuming) {
+        /* held again while the pen goes back down: the hold stays, and the
+         * pen-safe check in machine_poll lifts the pen once more */
+        mach.resuming = 0;
+        return;
+    }
     if (!machine_moving() || mach.hold)
         return;
     mach.hold = 1;

@@ -31,6 +31,8 @@ def test_pick_a_point_on_the_preview_and_resume_from_it(desktop, server, plotter
     job = submit(server, TWO_STROKES)
     assert server.wait_job(job["id"], ("done", "failed"), 120)["state"] == "done"
     login(page, server.url, server.token)
+    # a finished job is previewed only once the user picks it in the queue
+    page.click(f"#queue li[data-key='{job['id']}'] .name")
     page.wait_for_selector("#resume-point:not([hidden])")
     page.wait_for_function("() => window.plotbridge.preview.view !== null")
     assert page.locator("#resume-here").is_disabled()  # nothing picked yet

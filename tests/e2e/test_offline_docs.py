@@ -20,7 +20,9 @@ REFERENCES = (
     re.compile(r"""\b(?:src|href|action)\s*=\s*["']([^"']+)["']""", re.I),  # HTML
     re.compile(r"""url\(\s*["']?([^"')]+)["']?\s*\)""", re.I),  # CSS
     re.compile(r"""@import\s+["']([^"']+)["']"""),  # CSS
-    re.compile(r"""(?:\bfrom|\bimport)\s*\(?\s*["']([^"']+)["']"""),  # ES modules
+    # ES modules: `import ... from "x"`, `export ... from "x"`, `import "x"`, `import("x")`
+    re.compile(r"""^\s*(?:import|export)\b[^"';]*?\bfrom\s*["']([^"']+)["']""", re.M),
+    re.compile(r"""\bimport\s*\(?\s*["']([^"']+)["']"""),
 )
 SAFE_SOURCES = {"'self'", "'unsafe-inline'", "data:", "blob:", "'none'"}
 

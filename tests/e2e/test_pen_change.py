@@ -40,10 +40,13 @@ def wait_pen_change(server, job_id: str, layer: int) -> dict:
     raise AssertionError(f"no pen change before layer {layer}")
 
 
-def assert_parked(plotter) -> None:
+def assert_parked(plotter, at: tuple[float, float] = (0.0, 0.0)) -> dict:
+    """The pen is up and the carriage at `at` (the park position, mm); returns the trace."""
     trace = plotter.trace()
     assert trace["pen"] == "up"
-    assert abs(trace["position"]["x"]) < 0.02 and abs(trace["position"]["y"]) < 0.02, trace
+    x, y = trace["position"]["x"], trace["position"]["y"]
+    assert abs(x - at[0]) < 0.02 and abs(y - at[1]) < 0.02, trace
+    return trace
 
 
 def test_three_inkscape_layers_two_pen_changes(server, plotter):
