@@ -44,6 +44,7 @@ from plotbridge.importing import (  # noqa: E402
 from plotbridge.importing.models import ErrorLog  # noqa: E402
 from plotbridge.importing.optimize import optimize_strokes, time_budget  # noqa: E402
 from plotbridge.importing.svg import read_svg  # noqa: E402
+from plotbridge.motion import library  # noqa: E402
 
 PX_MM = 25.4 / 96
 
@@ -361,7 +362,8 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
     profile = MachineProfile()
     rev = subprocess.run(["git", "log", "-1", "--format=%h %s", "--", "firmware/src"], cwd=REPO,
                          capture_output=True, text=True).stdout.strip()
-    print(f"(c) firmware: {rev or 'unknown'}; planner model: {profile.planner_blocks} blocks, "
+    depth = profile.planner_blocks or library.planner_depth()
+    print(f"(c) firmware: {rev or 'unknown'}; planner model: {depth} blocks, "
           f"{profile.plan_block_s * 1000:.1f} ms to parse and plan a line, {profile.baud} baud "
           f"(the firmware's own motion code via libmotion)")
     for name, src in accuracy_drawings(tmp).items():

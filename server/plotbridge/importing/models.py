@@ -21,7 +21,7 @@ class MachineProfile:
     pen_settle_s: float = 0.15
     steps_per_mm: tuple[float, float] = (80.0, 80.0)
     corexy: bool = False
-    planner_blocks: int = 17   # the firmware's planner ring holds 17 blocks
+    planner_blocks: int = 0    # blocks the board's planner holds; 0: the library's board's depth
     baud: int = 115200  # serial speed: bounds how fast lines reach the planner (0: no bound)
     plan_block_s: float = 0.0022  # firmware time to parse and plan one line (motion/timing.py)
 

@@ -25,7 +25,7 @@ def _config(p: MachineProfile) -> lib.Config:
     c.arc_tolerance = p.arc_tolerance
     c.pen_settle_s = p.pen_settle_s
     c.corexy = int(p.corexy)
-    c.depth = p.planner_blocks
+    c.depth = p.planner_blocks or lib.planner_depth()
     c.byte_s = 10.0 / p.baud if p.baud else 0.0
     c.line_cpu_s = p.plan_block_s
     c.rx_size = 128
