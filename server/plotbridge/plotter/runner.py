@@ -48,12 +48,6 @@ Report = Callable[[Job, bool], None]
 """Called with the job and whether to save it (else only publish it)."""
 
 
-def layer_at(job: Job, line: int) -> int:
-    """The 0-based index of the layer program line `line` belongs to (0 without layers)."""
-    return max((i for i, layer in enumerate(job.layers) if layer.first_line <= line),
-               default=0)  # fmt: skip
-
-
 async def _until(lines: AsyncIterator[tuple[int, str]],
                  stop: int | None) -> AsyncIterator[tuple[int, str]]:  # fmt: skip
     """The lines before program line `stop` (all with None); the preamble (0) passes."""
@@ -291,7 +285,7 @@ class Runner:
                     if not await self._pen_change(job, layer):
                         return  # stopped, cancelled or lost during the change
                     floor, preamble = start, await self._travel(program, start)
-                state = await self._stream_layer(job, program, start, stop, preamble, floor)
+                state = await self._stream_layer(job, program, layer, start, stop, preamble, floor)
                 if state is None:
                     return  # settled meanwhile (estop, cancel)
                 if state != "Idle":
@@ -353,14 +347,15 @@ class Runner:
         starts (the program's travel to it may lie before the `M0`, or in a skipped layer)."""
         return (await asyncio.to_thread(resume_preamble, program, ResumePoint(start)))[1]
 
-    async def _stream_layer(self, job: Job, program: Path, line: int, stop: int | None,
-                            preamble: list[str], floor: int) -> str | None:  # fmt: skip
-        """Stream the program from `line` to `stop` (not sent; None: the end) with the
-        layer's pen, pausing to re-ink where due; `floor`: the earliest line a resume may
-        need. The board's state once it stands (None: the job ended meanwhile: emergency
-        stop, cancel, link lost during a re-ink)."""
+    async def _stream_layer(self, job: Job, program: Path, index: int, line: int,
+                            stop: int | None, preamble: list[str],
+                            floor: int) -> str | None:  # fmt: skip
+        """Stream the program from `line` to `stop` (not sent; None: the end) with the pen
+        of layer `index` (0-based), pausing to re-ink where due; `floor`: the earliest line
+        a resume may need. The board's state once it stands (None: the job ended meanwhile:
+        emergency stop, cancel, link lost during a re-ink)."""
         while True:
-            feed = self._feed = await self._load_pen(job, line)
+            feed = self._feed = await self._load_pen(job, index)
             reader = ProgramReader(program, line, preamble)
             self._motion, self._floor = reader.motion, floor  # motion: filled as it goes
             start_time = time.time()
@@ -374,18 +369,18 @@ class Runner:
             if state != "Idle" or feed.stopped_at is None:
                 return state
             job.lines_done = feed.stopped_at  # due for re-inking, at a stroke's end
-            if not await self._wait_for_pen(job, self._reink_prompt(job, feed)):
+            if not await self._wait_for_pen(job, self._reink_prompt(job, feed, index)):
                 return None
             x, y = feed.position  # back where the pen went up, then on
             line, preamble = feed.stopped_at + 1, [f"G0 X{x:.3f} Y{y:.3f}"]
             floor = line
 
-    async def _load_pen(self, job: Job, line: int) -> PenFeed:
-        """The pen of the layer that `line` is in: its servo positions written to the
+    async def _load_pen(self, job: Job, index: int) -> PenFeed:
+        """The pen of layer `index` (0-based): its servo positions written to the
         board ($60/$61, only those that differ), and its feed for the stream."""
         pen = None
         if self.pens is not None and job.layers:
-            pen = self.pens.layer_pen(job.layers[layer_at(job, line)])
+            pen = self.pens.layer_pen(job.layers[index])
         if pen is not None:
             for setting in servo_lines(pen, self.link.settings):
                 await self.link.command(setting)
@@ -409,10 +404,10 @@ class Runner:
                 "message": f"Layer {index + 1} of {len(job.layers)}, '{name}': {load}, "
                            "then continue"}  # fmt: skip
 
-    def _reink_prompt(self, job: Job, feed: PenFeed) -> dict[str, object]:
-        """The pen went past a multiple of its re-ink interval."""
-        assert feed.pen is not None and feed.stopped_at is not None
-        prompt = self._layer_prompt(job, layer_at(job, feed.stopped_at))
+    def _reink_prompt(self, job: Job, feed: PenFeed, index: int) -> dict[str, object]:
+        """The pen of layer `index` went past a multiple of its re-ink interval."""
+        assert feed.pen is not None
+        prompt = self._layer_prompt(job, index)
         metres = (self.pens.odometer_mm(feed.pen.id) if self.pens else 0.0) / 1000
         prompt.update(reason="reink", message=f"Re-ink pen '{feed.pen.name}': {metres:.1f} m "
                                               "drawn; continue when it is ready")  # fmt: skip
