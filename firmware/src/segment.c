@@ -216,9 +216,10 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     plan_block_motion(b, &p->m);
 }
 
-uint8_t seg_fill(void)
+/* seg_fill once there is room and a block (its register saves are not for
+ * every main-loop pass) */
+static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
 {
-    struct prep_state *const p = prep_at();
     uint8_t added = 0;
     /* one slot fewer than the ring so a step block is never reused while a
      * queued segment still points at it */
@@ -287,4 +288,15 @@ uint8_t seg_fill(void)
         }
     }
     return added;
+}
+
+uint8_t seg_fill(void)
+{
+    if (ring_count(seg_head, seg_tail) >= SEG_SIZE - 1)
+        return 0;
+    if (!plan_current()) {
+        prep.v = 0.0f;
+        return 0;
+    }
+    return fill(prep_at());
 }
