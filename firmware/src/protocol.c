@@ -104,7 +104,7 @@ static void wait_for_line(void)
     set_sleep_mode(SLEEP_MODE_IDLE);
     for (;;) {
         cli();
-        if (serial_rx_woken() || rt_flags || (uint8_t)machine_ms() != tick)
+        if (serial_rx_wake || rt_flags || (uint8_t)machine_ms() != tick)
             break;
         sleep_enable();
         sei(); /* (the instruction after sei still runs first: no wake-up is missed) */
@@ -139,7 +139,7 @@ void protocol_run(void)
         if (mach.abort && !machine_moving())
             mach.abort = 0;
         /* a whole line between polls: polling per byte cost more than parsing */
-        serial_rx_rearm();
+        serial_rx_wake = 0;
         uint8_t r = serial_read_line(&lb);
         if (r == LB_NONE) {
             if (!machine_moving())

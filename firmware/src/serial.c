@@ -18,7 +18,7 @@
 
 static uint8_t rx_buf[RX_SIZE];
 static volatile uint8_t rx_head, rx_tail;
-static volatile uint8_t rx_wake; /* a line end, or half the ring, came in since serial_rx_rearm */
+volatile uint8_t serial_rx_wake;
 static uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head, tx_tail;
 
@@ -47,11 +47,8 @@ ISR(UART_RX_VECT)
     /* the main loop sleeps through a line's bytes: wake it for a whole line,
      * or for half a ring (a line longer than the ring is read in pieces) */
     if (c == '\n' || c == '\r' || n >= RX_SIZE / 2)
-        rx_wake = 1;
+        serial_rx_wake = 1;
 }
-
-void serial_rx_rearm(void) { rx_wake = 0; }
-uint8_t serial_rx_woken(void) { return rx_wake; }
 
 uint8_t serial_read_line(linebuf_t *lb)
 {

@@ -11,10 +11,9 @@ void serial_init(void);
 uint8_t serial_read_line(linebuf_t *lb);
 void serial_write(uint8_t c);       /* blocks (servicing the watchdog) while the ring is full */
 uint8_t serial_rx_free(void);
-/* Receive wake-up: serial_rx_woken() is 1 once a line end or half a ring of
- * bytes came in after the last serial_rx_rearm() (call it before reading). */
-void serial_rx_rearm(void);
-uint8_t serial_rx_woken(void);
+/* Set by the receive interrupt when a line end or half a ring of bytes
+ * comes in; the main loop clears it before it reads. */
+extern volatile uint8_t serial_rx_wake;
 void serial_rx_flush(void);
 uint8_t serial_tx_idle(void);
 #endif
