@@ -293,7 +293,6 @@ static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *u
  * Until the walk reaches the newest block, the others keep their old speeds
  * and junction limits, which were safe (a lowered cruise speed is honoured
  * by the segment preparer within the block). */
-
 uint8_t plan_override_step(void)
 {
     if (!ov_left)
