@@ -165,9 +165,11 @@ void plan_motor_steps(const int32_t *cart, int32_t *motor)
 void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
 {
     if (settings.corexy) {
-        /* A + B and A - B are always even for positions reached by plan_motor_steps */
-        cart[0] = (motor[0] + motor[1]) / 2;
-        cart[1] = (motor[0] - motor[1]) / 2;
+        /* A + B and A - B are always even for positions reached by
+         * plan_motor_steps: halving is a shift (gcc's >> of a signed value
+         * is arithmetic), no division's rounding toward zero */
+        cart[0] = (motor[0] + motor[1]) >> 1;
+        cart[1] = (motor[0] - motor[1]) >> 1;
     } else {
         cart[0] = motor[0];
         cart[1] = motor[1];

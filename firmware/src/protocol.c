@@ -100,11 +100,11 @@ static void soft_reset(void)
  * that stops half way through a line thus only slows polling to 1 kHz. */
 static void wait_for_line(void)
 {
-    uint8_t tick = (uint8_t)machine_ms();
+    uint8_t tick = (uint8_t)timebase_ms();
     set_sleep_mode(SLEEP_MODE_IDLE);
     for (;;) {
         cli();
-        if (serial_rx_wake || rt_flags || (uint8_t)machine_ms() != tick)
+        if (serial_rx_wake || rt_flags || (uint8_t)timebase_ms() != tick)
             break;
         sleep_enable();
         sei(); /* (the instruction after sei still runs first: no wake-up is missed) */

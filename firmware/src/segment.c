@@ -216,8 +216,8 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     plan_block_motion(b, &p->m);
 }
 
-/* seg_fill once there is room and a block (its register saves are not for
- * every main-loop pass) */
+/* seg_fill once there is a block (its register saves are not for every
+ * idle main-loop pass) */
 static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
 {
     uint8_t added = 0;
@@ -292,8 +292,6 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
 
 uint8_t seg_fill(void)
 {
-    if (ring_count(seg_head, seg_tail) >= SEG_SIZE - 1)
-        return 0;
     if (!plan_current()) {
         prep.v = 0.0f;
         return 0;
