@@ -1,0 +1,162 @@
+/* movelines: the normalized program's G0/G1 lines for a run of moves
+ * (server/plotbridge/importing/program.py, ProgramWriter.moves).
+ *
+ * Each point is rounded to the program's 0.001 mm as Python's f"{v:.3f}" rounds it
+ * (the exact binary value, ties to even), the rounded value is the one float() reads
+ * back from that text, points equal to the one before are dropped, and each kept point
+ * is written as `G0 X<x> Y<y>` (rapid) or `G1 X<x> Y<y> F<feed text>`. The feed texts
+ * come from the caller (one per distinct feed), so every number format has one source.
+ * A run with a point outside the work area (or too large to write) is left to the
+ * caller's point-by-point path, which reports or clamps it.
+ */
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#define MAX_ABS 1e12   /* beyond this, v * 1000 is not exact to a quarter unit */
+
+/* v rounded to 3 decimals as text at out; *back: the float the text reads as.
+ * Returns the text's length. |v| <= MAX_ABS. */
+static int fixed3(double v, char *out, double *back)
+{
+    double p = v * 1000.0;
+    double whole = floor(p);
+    double frac = p - whole;    /* exact: |p| < 2^50, so ulp(p) <= 1/8 */
+    int64_t n = (int64_t)whole;
+    /* p is v * 1000 rounded; only an exact half of p needs the product's rounding
+     * error to decide which way the exact value lies (any other frac is at least one
+     * ulp(p) away from the half, more than the error). */
+    if (frac > 0.5)
+        n++;
+    else if (frac == 0.5) {
+        double err = fma(v, 1000.0, -p);
+        if (err > 0 || (err == 0 && (n & 1)))
+            n++;
+    }
+    int neg = signbit(v) != 0;
+    uint64_t m = neg ? (uint64_t)(-n) : (uint64_t)n;
+    *back = neg && n == 0 ? -0.0 : (double)n / 1000.0;
+    char digits[24];
+    int k = 0;
+    uint64_t ip = m / 1000;
+    unsigned fp = (unsigned)(m % 1000);
+    do {
+        digits[k++] = (char)('0' + ip % 10);
+        ip /= 10;
+    } while (ip);
+    char *o = out;
+    if (neg)
+        *o++ = '-';
+    while (k)
+        *o++ = digits[--k];
+    *o++ = '.';
+    *o++ = (char)('0' + fp / 100);
+    *o++ = (char)('0' + fp / 10 % 10);
+    *o++ = (char)('0' + fp % 10);
+    return (int)(o - out);
+}
+
+/* The feed text of feed f: feed_val (n_feeds values, sorted) holds it at index i, whose
+ * text is feed_text[feed_off[i] .. feed_off[i + 1]). */
+static long feed_index(double f, const double *feed_val, long n_feeds)
+{
+    long lo = 0, hi = n_feeds - 1;
+    while (lo < hi) {
+        long mid = (lo + hi) / 2;
+        if (feed_val[mid] < f)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* A writer's buffers (room for as many moves as a run has) and results. */
+typedef struct {
+    double area[4];             /* min x, min y, max x, max y: the work area */
+    uint8_t kind_rapid, kind_line; /* the estimate's codes for G0 and G1 */
+    char *text;                 /* the lines, each ending with a newline */
+    double *xy;                 /* kept points, rounded, x and y interleaved */
+    double *dx, *dy;            /* each kept point minus the one before */
+    uint8_t *kind;              /* the estimate's inputs: kind_rapid or kind_line, */
+    float *x32, *y32, *f32;     /* the point and the feed (0 for a rapid) as floats, */
+    uint16_t *nbytes;           /* and the line's length with its newline */
+    long text_len;
+    double bounds[4];           /* min x, min y, max x, max y of the kept points */
+} movelines_t;
+
+/* Writes the lines of n moves to (x[k], y[k]) from (x0, y0) at feed[k] (NaN: a rapid),
+ * whose feed texts are given for each distinct feed (feed_index), into m's buffers
+ * (text: room for n lines of 48 + the longest feed text bytes). Returns the number of
+ * moves kept, or -1 when a rounded point is outside the area (nothing usable is
+ * written then). Bounds: min and max as Python's min() and max() give them (the first
+ * of equal values, which tells 0.0 from -0.0). */
+long moves_lines(movelines_t *m, long n, const double *x, const double *y,
+                 const double *feed, const double *feed_val, long n_feeds,
+                 const char *feed_text, const int64_t *feed_off, double x0, double y0)
+{
+    char *o = m->text;
+    long kept = 0, fi = 0;
+    double px = x0, py = y0, last_feed = NAN;
+    const double *area = m->area;
+    for (long k = 0; k < n; k++) {
+        char xt[32], yt[32];
+        double rx, ry;
+        if (!(fabs(x[k]) <= MAX_ABS && fabs(y[k]) <= MAX_ABS))
+            return -1;
+        int xl = fixed3(x[k], xt, &rx), yl = fixed3(y[k], yt, &ry);
+        if (!(area[0] <= rx && rx <= area[2] && area[1] <= ry && ry <= area[3]))
+            return -1;
+        if (rx == px && ry == py)
+            continue;
+        char *start = o;
+        int rapid = isnan(feed[k]);
+        memcpy(o, rapid ? "G0 X" : "G1 X", 4);
+        o += 4;
+        memcpy(o, xt, (size_t)xl);
+        o += xl;
+        memcpy(o, " Y", 2);
+        o += 2;
+        memcpy(o, yt, (size_t)yl);
+        o += yl;
+        if (!rapid) {
+            if (feed[k] != last_feed) {
+                last_feed = feed[k];
+                fi = feed_index(last_feed, feed_val, n_feeds);
+            }
+            memcpy(o, " F", 2);
+            o += 2;
+            memcpy(o, feed_text + feed_off[fi], (size_t)(feed_off[fi + 1] - feed_off[fi]));
+            o += feed_off[fi + 1] - feed_off[fi];
+        }
+        *o++ = '\n';
+        m->xy[2 * kept] = rx;
+        m->xy[2 * kept + 1] = ry;
+        m->dx[kept] = rx - px;
+        m->dy[kept] = ry - py;
+        m->kind[kept] = rapid ? m->kind_rapid : m->kind_line;
+        m->x32[kept] = (float)rx;
+        m->y32[kept] = (float)ry;
+        m->f32[kept] = rapid ? 0.0f : (float)feed[k];
+        m->nbytes[kept] = (uint16_t)(o - start);
+        if (!kept) {
+            m->bounds[0] = m->bounds[2] = rx;
+            m->bounds[1] = m->bounds[3] = ry;
+        } else {
+            if (rx < m->bounds[0])
+                m->bounds[0] = rx;
+            if (ry < m->bounds[1])
+                m->bounds[1] = ry;
+            if (rx > m->bounds[2])
+                m->bounds[2] = rx;
+            if (ry > m->bounds[3])
+                m->bounds[3] = ry;
+        }
+        px = rx;
+        py = ry;
+        kept++;
+    }
+    m->text_len = (long)(o - m->text);
+    return kept;
+}

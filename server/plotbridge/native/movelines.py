@@ -1,0 +1,129 @@
+"""movelines.c: the normalized program's lines for a run of G0/G1 moves."""
+
+from __future__ import annotations
+
+import ctypes
+import itertools
+from collections.abc import Callable
+from typing import NamedTuple
+
+import numpy as np
+
+from . import library
+
+_LINE_ROOM = 48     # bytes of a line without its feed text (movelines.c)
+
+
+class _Writer(ctypes.Structure):
+    """movelines.c's movelines_t."""
+    _fields_ = [
+        ("area", ctypes.c_double * 4),
+        ("kind_rapid", ctypes.c_uint8),
+        ("kind_line", ctypes.c_uint8),
+        ("text", ctypes.c_void_p),
+        ("xy", ctypes.c_void_p),
+        ("dx", ctypes.c_void_p),
+        ("dy", ctypes.c_void_p),
+        ("kind", ctypes.c_void_p),
+        ("x32", ctypes.c_void_p),
+        ("y32", ctypes.c_void_p),
+        ("f32", ctypes.c_void_p),
+        ("nbytes", ctypes.c_void_p),
+        ("text_len", ctypes.c_long),
+        ("bounds", ctypes.c_double * 4),
+    ]
+
+
+def _fn():
+    fn = library("movelines").moves_lines
+    if fn.restype is not ctypes.c_long:
+        p = ctypes.c_void_p
+        fn.argtypes = [ctypes.POINTER(_Writer), ctypes.c_long, p, p, p, p, ctypes.c_long,
+                       ctypes.c_char_p, p, ctypes.c_double, ctypes.c_double]
+        fn.restype = ctypes.c_long
+    return fn
+
+
+def _f64(a: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+class Lines(NamedTuple):
+    """The kept moves of a run (arrays valid until the MoveLines' next run): their text
+    (one line each, with newlines); rounded points (n x 2); each point minus the one
+    before; the estimate's inputs (Estimator.moves); min x, min y, max x, max y."""
+
+    text: str
+    xy: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    kind: np.ndarray
+    x32: np.ndarray
+    y32: np.ndarray
+    f32: np.ndarray
+    nbytes: np.ndarray
+    bounds: tuple[float, float, float, float]
+
+
+class MoveLines:
+    """Writes runs of moves through movelines.c with buffers kept from run to run: a file
+    of short strokes is thousands of runs, and each call's own cost counts."""
+
+    def __init__(self, area: tuple[float, float, float, float],
+                 feed_text: Callable[[float], str], kind_rapid: int, kind_line: int) -> None:
+        self.feed_text = feed_text
+        self._w = _Writer()
+        self._w.area[:] = area
+        self._w.kind_rapid, self._w.kind_line = kind_rapid, kind_line
+        self._ref = ctypes.byref(self._w)
+        self._fn = _fn()
+        self._n = 0
+        self._room = 0
+        self._feeds: tuple[list[float], bytes, np.ndarray, np.ndarray, int] | None = None
+
+    def _table(self, feeds: np.ndarray) -> tuple[list[float], bytes, np.ndarray, np.ndarray,
+                                                 int]:
+        """(the distinct feeds, sorted; their texts; their values and text offsets as
+        arrays; the longest text) of a run, the last run's when they are the same."""
+        vals = sorted({f for f in feeds.tolist() if f == f})
+        if self._feeds is None or self._feeds[0] != vals:
+            texts = [self.feed_text(v).encode("ascii") for v in vals]
+            off = np.array([0, *itertools.accumulate(len(t) for t in texts)], np.int64)
+            self._feeds = (vals, b"".join(texts), np.array(vals, np.float64), off,
+                           max(map(len, texts), default=0))
+        return self._feeds
+
+    def _grow(self, n: int, room: int) -> None:
+        w = self._w
+        if n > self._n:
+            self._n = n = max(n, 2 * self._n)
+            self._xy = np.empty((n, 2))
+            self._dx, self._dy = np.empty(n), np.empty(n)
+            self._kind = np.empty(n, np.uint8)
+            self._x32, self._y32, self._f32 = (np.empty(n, np.float32) for _ in range(3))
+            self._nbytes = np.empty(n, np.uint16)
+            for name in ("xy", "dx", "dy", "kind", "x32", "y32", "f32", "nbytes"):
+                setattr(w, name, getattr(self, f"_{name}").ctypes.data)
+        if room > self._room:
+            self._room = max(room, 2 * self._room)
+            self._text = np.empty(self._room, np.uint8)
+            w.text = self._text.ctypes.data
+
+    def run(self, x: np.ndarray, y: np.ndarray, feeds: np.ndarray,
+            start: tuple[float, float]) -> Lines | None:
+        """The lines of moves to (x, y) from `start` (feeds NaN for rapids), points rounded
+        to 0.001 mm and those equal to the one before dropped; None when a rounded point
+        lies outside the area."""
+        n = len(x)
+        _, text, vals, off, longest = self._table(feeds)
+        self._grow(n, n * (_LINE_ROOM + longest))
+        x, y, feeds = _f64(x), _f64(y), _f64(feeds)
+        k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data,
+                     vals.ctypes.data, len(vals), text, off.ctypes.data, start[0], start[1])
+        if k < 0:
+            return None
+        w = self._w
+        out = self._text[:w.text_len].tobytes().decode("ascii")
+        return Lines(out, self._xy[:k], self._dx[:k], self._dy[:k], self._kind[:k],
+                     self._x32[:k], self._y32[:k], self._f32[:k], self._nbytes[:k],
+                     tuple(w.bounds))
