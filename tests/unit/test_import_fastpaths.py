@@ -56,10 +56,19 @@ def test_scan_reads_common_lines_and_leaves_the_rest():
     text = ("G1 X1.5 Y-2 F3000\ng0x.5y+7\n  G01\tX 1. Y 2 ; a note\nG1 X1 Y2 ;(no)\n"
             "G1 X1e3 Y2\nG1 Y2 X1\nN5 G1 X1 Y2\nG10 X1 Y2\nG1 X1 Y2 F\n\nG1 X1 Y2 ; é\n"
             f"G1 X1 Y2 ;{'x' * 300}\n")
-    kind, x, y, f = scan(text, 256)
+    lines = scan(text, 256)
+    kind, x, y, f = lines.kind, lines.x, lines.y, lines.f
     assert kind.tolist() == [LINE, RAPID, LINE] + [OTHER] * 9
     assert x[:3].tolist() == [1.5, 0.5, 1.0] and y[:3].tolist() == [-2.0, 7.0, 2.0]
     assert f[0] == 3000 and np.isnan(f[1:3]).all()
+    assert lines.feed[:3].tolist() == [3000.0] * 3     # the run's last F
+    assert [lines.line(k) for k in (3, 9)] == ["G1 X1 Y2 ;(no)", ""]
+
+
+def test_scan_leaves_feeds_that_are_not_positive_to_the_general_parser():
+    lines = scan("G1 X1 Y2 F100\nG1 X1 Y2 F0\nG1 X1 Y2 F-5\nG1 X1 Y2\nG1 X1 Y2 F.5\n", 256)
+    assert lines.kind.tolist() == [LINE, OTHER, OTHER, LINE, LINE]
+    assert np.isnan(lines.feed[3]) and lines.feed[4] == 0.5    # a run restarts after one
 
 
 @pytest.mark.parametrize("name", sorted(p.name for p in (FIXTURES / "gcode").glob("*.gcode")))

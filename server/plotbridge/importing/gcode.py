@@ -127,66 +127,59 @@ class GcodeReader:
             return
         out: list[tuple] = []
         for first, text in chunks:
-            kind, xs, ys, fs = scan(text, MAX_LINE)
-            raws = text.split("\n")
+            lines = scan(text, MAX_LINE)
+            kind = lines.kind
             common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
             for a, b in itertools.pairwise(cuts):
-                k = a
-                while k < b:
-                    taken = 0
-                    if common[a] and not self.relative and not self.inches:
-                        taken = self._run(out, first + k, kind[k:b], xs[k:b], ys[k:b],
-                                          fs[k:b])
-                    if taken:
-                        k += taken
-                    else:
-                        # any other line, a common one in relative or inch mode, or one
-                        # whose F is not positive (the general parser reports it)
-                        self._line(out, first + k, raws[k])
-                        k += 1
-                    if out:     # before the next line: errors keep the source's order
-                        yield from out
-                        out.clear()
+                if common[a] and not self.relative and not self.inches:
+                    self._run(out, first + a, kind[a:b], lines.x[a:b], lines.y[a:b],
+                              lines.feed[a:b])
+                else:
+                    # any other line, or a common one in relative or inch mode (a run
+                    # of common lines changes neither)
+                    for k in range(a, b):
+                        self._line(out, first + k, lines.line(k))
+                        if out:     # before the next line: errors keep the source's order
+                            yield from out
+                            out.clear()
+                if out:
+                    yield from out
+                    out.clear()
 
     def _run(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
-             y: np.ndarray, f: np.ndarray) -> int:
-        """Appends the ops of consecutive common lines (absolute millimetres) as MOVES
-        ops; returns how many lines it took (all, or those before a non-positive F)."""
-        given = ~np.isnan(f)
-        bad = np.flatnonzero(given & (f <= 0))
-        if len(bad):
-            n = int(bad[0])
-            return self._run(out, first, kind[:n], x[:n], y[:n], f[:n]) if n else 0
+             y: np.ndarray, feed: np.ndarray) -> None:
+        """Appends the ops of consecutive common lines (absolute millimetres) as MOVES ops;
+        `feed`: the last F given in the run at or before each line (NaN when none is)."""
         n = len(kind)
         draw = kind == LINE
         x = x + self.off_x
         y = y + self.off_y
         # The feed of each line: the last F given at or before it, else the one before
         # the run; a G1 with no feed ever given warns once and takes the default.
-        at = np.maximum.accumulate(np.where(given, np.arange(n), -1))
         before = self.feed
         if before is None:
-            unfed = np.flatnonzero(draw & (at < 0))
+            unfed = np.flatnonzero(draw & np.isnan(feed))
             if len(unfed):
                 self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
                 before = self.default_feed
-        feed = np.where(at >= 0, f[np.maximum(at, 0)], np.nan if before is None else before)
-        if at[-1] >= 0 or before is not None:
-            self.feed = float(feed[-1])
+        if before is not None:
+            feed = np.where(np.isnan(feed), before, feed)
+        last = float(feed[-1])
+        if last == last:
+            self.feed = last
         feeds = np.where(draw, feed, np.nan)
         self.motion = 1 if draw[-1] else 0
         self.x, self.y = float(x[-1]), float(y[-1])
         if self.dialect not in MOTION_PEN:
             out.append((MOVES, first, x, y, feeds))
-            return n
+            return
         # The pen follows the motion mode: one MOVES op per stretch of the same pen.
         pen = draw if self.dialect == "none" or self.laser else np.zeros(n, bool)
         cuts = [0, *(np.flatnonzero(pen[1:] != pen[:-1]) + 1).tolist(), n]
         for a, b in itertools.pairwise(cuts):
             self._pen(out, first + a, bool(pen[a]))
             out.append((MOVES, first + a, x[a:b], y[a:b], feeds[a:b]))
-        return n
 
     def _line(self, out: list[tuple], line_no: int, raw: str) -> None:
         """Appends the ops of one line read by the general parser."""
