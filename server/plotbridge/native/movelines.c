@@ -57,11 +57,10 @@ static int fixed3(double v, char *out, double *back)
     return (int)(o - out);
 }
 
-/* The feed text of feed f: feed_val (n_feeds values, sorted) holds it at index i, whose
- * text is feed_text[feed_off[i] .. feed_off[i + 1]). */
+/* Where feed f is in feed_val (n_feeds values, sorted), or where it would go. */
 static long feed_index(double f, const double *feed_val, long n_feeds)
 {
-    long lo = 0, hi = n_feeds - 1;
+    long lo = 0, hi = n_feeds;
     while (lo < hi) {
         long mid = (lo + hi) / 2;
         if (feed_val[mid] < f)
@@ -84,22 +83,51 @@ typedef struct {
     uint16_t *nbytes;           /* and the line's length with its newline */
     long text_len;
     double bounds[4];           /* min x, min y, max x, max y of the kept points */
+    /* The feed texts: feed_val[i] (n_feeds values, sorted) is written as
+     * feed_text[feed_off[i] .. feed_off[i + 1]). */
+    const double *feed_val;
+    long n_feeds;
+    const char *feed_text;
+    const int64_t *feed_off;
+    double *unknown;            /* feeds of a run missing from the texts */
+    long n_unknown;
 } movelines_t;
 
-/* Writes the lines of n moves to (x[k], y[k]) from (x0, y0) at feed[k] (NaN: a rapid),
- * whose feed texts are given for each distinct feed (feed_index), into m's buffers
- * (text: room for n lines of 48 + the longest feed text bytes). Returns the number of
- * moves kept, or -1 when a rounded point is outside the area (nothing usable is
- * written then). Bounds: min and max as Python's min() and max() give them (the first
- * of equal values, which tells 0.0 from -0.0). */
+/* Gathers the feeds of a run that have no text yet; returns how many (repeats
+ * included). */
+static long unknown_feeds(movelines_t *m, long n, const double *feed)
+{
+    double last = NAN;
+    m->n_unknown = 0;
+    for (long k = 0; k < n; k++) {
+        double f = feed[k];
+        if (isnan(f) || f == last)
+            continue;
+        last = f;
+        long i = feed_index(f, m->feed_val, m->n_feeds);
+        if (i == m->n_feeds || m->feed_val[i] != f)
+            m->unknown[m->n_unknown++] = f;
+    }
+    return m->n_unknown;
+}
+
+/* Writes the lines of n moves to (x[k], y[k]) from (x0, y0) at feed[k] (NaN: a rapid)
+ * into m's buffers (text: room for n lines of 48 + the longest feed text bytes).
+ * Returns the number of moves kept; -1 when a rounded point is outside the area, -2
+ * when feeds have no text (m->unknown); nothing usable is written then. Bounds: min
+ * and max as Python's min() and max() give them (the first of equal values, which
+ * tells 0.0 from -0.0). */
 long moves_lines(movelines_t *m, long n, const double *x, const double *y,
-                 const double *feed, const double *feed_val, long n_feeds,
-                 const char *feed_text, const int64_t *feed_off, double x0, double y0)
+                 const double *feed, double x0, double y0)
 {
     char *o = m->text;
     long kept = 0, fi = 0;
     double px = x0, py = y0, last_feed = NAN;
     const double *area = m->area;
+    const char *feed_text = m->feed_text;
+    const int64_t *feed_off = m->feed_off;
+    if (unknown_feeds(m, n, feed))
+        return -2;
     for (long k = 0; k < n; k++) {
         char xt[32], yt[32];
         double rx, ry;
@@ -123,7 +151,7 @@ long moves_lines(movelines_t *m, long n, const double *x, const double *y,
         if (!rapid) {
             if (feed[k] != last_feed) {
                 last_feed = feed[k];
-                fi = feed_index(last_feed, feed_val, n_feeds);
+                fi = feed_index(last_feed, m->feed_val, m->n_feeds);
             }
             memcpy(o, " F", 2);
             o += 2;

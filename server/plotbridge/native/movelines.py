@@ -12,6 +12,7 @@ import numpy as np
 from . import library
 
 _LINE_ROOM = 48     # bytes of a line without its feed text (movelines.c)
+FEEDS_MAX = 4096    # feed texts kept from run to run (a file of ever new feeds)
 
 
 class _Writer(ctypes.Structure):
@@ -31,6 +32,12 @@ class _Writer(ctypes.Structure):
         ("nbytes", ctypes.c_void_p),
         ("text_len", ctypes.c_long),
         ("bounds", ctypes.c_double * 4),
+        ("feed_val", ctypes.c_void_p),
+        ("n_feeds", ctypes.c_long),
+        ("feed_text", ctypes.c_char_p),
+        ("feed_off", ctypes.c_void_p),
+        ("unknown", ctypes.c_void_p),
+        ("n_unknown", ctypes.c_long),
     ]
 
 
@@ -38,8 +45,8 @@ def _fn():
     fn = library("movelines").moves_lines
     if fn.restype is not ctypes.c_long:
         p = ctypes.c_void_p
-        fn.argtypes = [ctypes.POINTER(_Writer), ctypes.c_long, p, p, p, p, ctypes.c_long,
-                       ctypes.c_char_p, p, ctypes.c_double, ctypes.c_double]
+        fn.argtypes = [ctypes.POINTER(_Writer), ctypes.c_long, p, p, p, ctypes.c_double,
+                       ctypes.c_double]
         fn.restype = ctypes.c_long
     return fn
 
@@ -79,19 +86,27 @@ class MoveLines:
         self._fn = _fn()
         self._n = 0
         self._room = 0
-        self._feeds: tuple[list[float], bytes, np.ndarray, np.ndarray, int] | None = None
+        self._set_feeds({})
 
-    def _table(self, feeds: np.ndarray) -> tuple[list[float], bytes, np.ndarray, np.ndarray,
-                                                 int]:
-        """(the distinct feeds, sorted; their texts; their values and text offsets as
-        arrays; the longest text) of a run, the last run's when they are the same."""
-        vals = sorted({f for f in feeds.tolist() if f == f})
-        if self._feeds is None or self._feeds[0] != vals:
-            texts = [self.feed_text(v).encode("ascii") for v in vals]
-            off = np.array([0, *itertools.accumulate(len(t) for t in texts)], np.int64)
-            self._feeds = (vals, b"".join(texts), np.array(vals, np.float64), off,
-                           max(map(len, texts), default=0))
-        return self._feeds
+    def _set_feeds(self, texts: dict[float, bytes]) -> None:
+        """The feed texts movelines.c writes from."""
+        vals = sorted(texts)
+        self._texts = {v: texts[v] for v in vals}
+        self._feed_val = np.array(vals, np.float64)
+        self._feed_off = np.array([0, *itertools.accumulate(map(len, self._texts.values()))],
+                                  np.int64)
+        self._feed_text = b"".join(self._texts.values())
+        self._longest = max(map(len, self._texts.values()), default=0)
+        w = self._w
+        w.feed_val, w.n_feeds = self._feed_val.ctypes.data, len(vals)
+        w.feed_text, w.feed_off = self._feed_text, self._feed_off.ctypes.data
+
+    def _add_feeds(self, fresh: bool) -> None:
+        """Texts for the feeds movelines.c found without one, the others kept unless
+        there are too many and `fresh`."""
+        new = set(self._unknown[:self._w.n_unknown].tolist())
+        texts = {} if fresh and len(self._texts) + len(new) > FEEDS_MAX else self._texts
+        self._set_feeds({**texts, **{v: self.feed_text(v).encode("ascii") for v in new}})
 
     def _grow(self, n: int, room: int) -> None:
         w = self._w
@@ -102,7 +117,8 @@ class MoveLines:
             self._kind = np.empty(n, np.uint8)
             self._x32, self._y32, self._f32 = (np.empty(n, np.float32) for _ in range(3))
             self._nbytes = np.empty(n, np.uint16)
-            for name in ("xy", "dx", "dy", "kind", "x32", "y32", "f32", "nbytes"):
+            self._unknown = np.empty(n)
+            for name in ("xy", "dx", "dy", "kind", "x32", "y32", "f32", "nbytes", "unknown"):
                 setattr(w, name, getattr(self, f"_{name}").ctypes.data)
         if room > self._room:
             self._room = max(room, 2 * self._room)
@@ -115,11 +131,17 @@ class MoveLines:
         to 0.001 mm and those equal to the one before dropped; None when a rounded point
         lies outside the area."""
         n = len(x)
-        _, text, vals, off, longest = self._table(feeds)
-        self._grow(n, n * (_LINE_ROOM + longest))
         x, y, feeds = _f64(x), _f64(y), _f64(feeds)
-        k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data,
-                     vals.ctypes.data, len(vals), text, off.ctypes.data, start[0], start[1])
+        self._grow(n, n * (_LINE_ROOM + self._longest))
+        k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data, start[0],
+                     start[1])
+        fresh = True
+        while k == -2:      # at most twice: once more when the texts started afresh
+            self._add_feeds(fresh)
+            fresh = False
+            self._grow(n, n * (_LINE_ROOM + self._longest))
+            k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data,
+                         start[0], start[1])
         if k < 0:
             return None
         w = self._w
