@@ -27,7 +27,8 @@ setup-test: .stamps/system-test $(VENV)/.stamp-dev native
 
 # The server's C helpers (server/plotbridge/native/), loaded with ctypes.
 NATIVE_DIR := server/plotbridge/native
-native: $(NATIVE_DIR)/build/libgcodescan.so $(NATIVE_DIR)/build/libmovelines.so $(NATIVE_DIR)/build/libsimplify.so
+native: $(NATIVE_DIR)/build/libgcodescan.so $(NATIVE_DIR)/build/libmovelines.so $(NATIVE_DIR)/build/libsimplify.so \
+        $(NATIVE_DIR)/build/libpreviewjson.so
 
 $(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c
 	@mkdir -p $(dir $@)

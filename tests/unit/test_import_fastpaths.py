@@ -1,10 +1,13 @@
 """The importer's fast paths give what the general paths give, byte for byte: G-code's
 common lines (native/gcodescan.c, read a chunk at a time, written in bulk by
-ProgramWriter.moves) against every line through the general parser and each move
-written alone; SVG path data read in bulk against svgelements."""
+ProgramWriter.moves through native/movelines.c) against every line through the general
+parser and each move written alone; the preview's strokes written by
+native/previewjson.c against json.dumps; SVG path data read in bulk against
+svgelements."""
 
 from __future__ import annotations
 
+import json
 import random
 from pathlib import Path
 
@@ -17,7 +20,9 @@ from plotbridge.importing.models import ErrorLog
 from plotbridge.importing.ops import single_moves
 from plotbridge.importing.pipeline import write_program
 from plotbridge.importing.placement import Transform
+from plotbridge.importing.preview import PreviewBuilder
 from plotbridge.native.gcodescan import LINE, OTHER, RAPID, scan
+from plotbridge.native.previewjson import strokes_json
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 PROFILE = MachineProfile(width=300, height=220)
@@ -191,3 +196,25 @@ def test_svg_fixtures_paths_read_in_bulk_as_svgelements_reads_them(monkeypatch):
             assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(bulk, general,
                                                                       strict=True))
     assert seen > 0
+
+
+def test_preview_strokes_written_natively_as_json_dumps_writes_them(tmp_path):
+    rng = np.random.default_rng(5)
+    edge = [0.0, -0.0, -0.0004, 0.0005, 0.0015, 0.0025, 2.675, 1e11 + 0.0625, 299.9995,
+            -12.3456, 1e-9, 100.1, 7.0]
+    strokes = [np.array(edge, float).reshape(-1, 2) if len(edge) % 2 == 0 else
+               np.array(edge[:-1], float).reshape(-1, 2)]
+    strokes += [rng.uniform(-5, 400, (int(rng.integers(1, 50)), 2)) for _ in range(200)]
+    strokes += [np.round(rng.uniform(0, 300, (30, 2)), int(rng.integers(0, 4)))
+                for _ in range(50)]
+    pb = PreviewBuilder()
+    for s in strokes:
+        pb.draw_many(float(s[0, 0]), float(s[0, 1]), s[1:])
+        pb.end_stroke()
+        pb.move(1.0, 2.0, 3.00049, 4.0)
+    bounds = {"min_x": 0.0, "min_y": -0.0, "max_x": 1.5, "max_y": 2.0}
+    pb.write(tmp_path / "p.json", bounds)
+    assert strokes_json(pb.strokes) is not None
+    assert (tmp_path / "p.json").read_text() == json.dumps(pb.finish(bounds),
+                                                           separators=(",", ":"))
+    assert strokes_json([np.array([[1e13, 0.0]])]) is None     # left to json.dumps

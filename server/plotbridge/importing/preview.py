@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..native.previewjson import strokes_json
 from .simplify import simplify_all, simplify_mask
 
 MAX_POINTS = 200_000
@@ -169,14 +170,17 @@ class PreviewBuilder:
             self.travel = self.travel[::step][:room]
             self.points = sum(len(s) for s in self.strokes) + 2 * len(self.travel)
 
-    def finish(self, bounds: dict[str, float]) -> dict:
+    def _settle(self) -> None:
+        """Everything drawn so far simplified and within the budget."""
         self.end_stroke()
         if self._travel_from is not None:
             self._flush_travel()
         self._simplify_pending()
         self._fit()
+
+    def _rest(self, bounds: dict[str, float]) -> dict:
+        """The body after its strokes."""
         return {
-            "strokes": [np.round(s, 3).tolist() for s in self.strokes],
             "colours": self.colours,
             "lines": [list(span) for span in self.lines],
             "travel": [[[round(a, 3), round(b, 3)], [round(c, 3), round(d, 3)]]
@@ -184,6 +188,20 @@ class PreviewBuilder:
             "bounds": bounds,
         }
 
+    def finish(self, bounds: dict[str, float]) -> dict:
+        self._settle()
+        return {"strokes": [np.round(s, 3).tolist() for s in self.strokes], **self._rest(bounds)}
+
     def write(self, path: Path, bounds: dict[str, float]) -> None:
-        # json.dumps uses the C encoder; json.dump to a file would not.
-        path.write_text(json.dumps(self.finish(bounds), separators=(",", ":")), encoding="utf-8")
+        """preview.json: json.dumps(self.finish(bounds)) without spaces, the strokes
+        (up to max_points numbers written by Python one at a time) by
+        native/previewjson.c."""
+        self._settle()
+        strokes = strokes_json(self.strokes)
+        if strokes is None:
+            text = json.dumps(self.finish(bounds), separators=(",", ":"))
+        else:
+            # json.dumps uses the C encoder; json.dump to a file would not.
+            rest = json.dumps(self._rest(bounds), separators=(",", ":"))
+            text = f'{{"strokes":{strokes},{rest[1:]}'
+        path.write_text(text, encoding="utf-8")

@@ -18,6 +18,7 @@ from .preview import PreviewBuilder
 HEADER = ("G21", "G90", "M5")
 EPS = 1e-6
 PREVIEW_ARC_TOL = 0.05
+SHORT_RUN = 4      # moves: fewer cost less written one by one than in bulk
 
 
 def _feed(f: float) -> str:
@@ -216,9 +217,9 @@ class ProgramWriter:
     def moves(self, first: int | None, xs: np.ndarray, ys: np.ndarray,
               feeds: np.ndarray) -> None:
         """`move` for each point in turn (feeds NaN for rapids; source lines from `first`
-        on), done for all at once (native/movelines.c writes the lines); a run that
-        leaves the work area goes point by point."""
-        lines = self._runs.run(xs, ys, feeds, (self.x, self.y))
+        on), done for all at once (native/movelines.c writes the lines); a short run, or
+        one that leaves the work area, goes point by point."""
+        lines = None if len(xs) < SHORT_RUN else self._runs.run(xs, ys, feeds, (self.x, self.y))
         if lines is None:
             for k, (px, py, f) in enumerate(zip(xs.tolist(), ys.tolist(), feeds.tolist(),
                                                 strict=True)):
