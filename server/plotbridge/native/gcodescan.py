@@ -48,10 +48,10 @@ def scan(text: str, max_line: int) -> Scan:
     """The lines of `text` (which ends with a newline); a common line is G0/G1 X Y [F]
     [; comment] of at most `max_line` characters whose F, when given, is positive."""
     data = text.encode("utf-8", "surrogateescape")
-    n = data.count(b"\n")
-    kind = np.empty(n, np.uint8)
-    x, y, f, feed = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    start = np.empty(n + 1, np.int_)
-    got = _scanner()(data, len(data), n, max_line, kind, x, y, f, feed, start)
-    assert got == n
-    return Scan(kind, x, y, f, feed, data, start)
+    # Room for a line per byte (no counting pass; only what the lines use is touched).
+    room = len(data)
+    kind = np.empty(room, np.uint8)
+    x, y, f, feed = np.empty(room), np.empty(room), np.empty(room), np.empty(room)
+    start = np.empty(room + 1, np.int_)
+    n = _scanner()(data, len(data), room, max_line, kind, x, y, f, feed, start)
+    return Scan(kind[:n], x[:n], y[:n], f[:n], feed[:n], data, start[:n + 1])
