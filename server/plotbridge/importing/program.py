@@ -196,7 +196,8 @@ class ProgramWriter:
         else:
             self._write(f"G1 X{xt} Y{yt} F{self._feed_text(feed)}")
         self.planner.move(self.line, x, y, feed)
-        d = math.hypot(x - x0, y - y0)
+        dx, dy = x - x0, y - y0
+        d = math.sqrt(dx * dx + dy * dy)    # as movelines.c sums a run's moves
         if self.down:
             self.pen_down_mm += d
             self.preview.draw(x0, y0, x, y)
@@ -219,7 +220,10 @@ class ProgramWriter:
         """`move` for each point in turn (feeds NaN for rapids; source lines from `first`
         on), done for all at once (native/movelines.c writes the lines); a short run, or
         one that leaves the work area, goes point by point."""
-        lines = None if len(xs) < SHORT_RUN else self._runs.run(xs, ys, feeds, (self.x, self.y))
+        lines = None
+        if len(xs) >= SHORT_RUN:
+            lines = self._runs.run(xs, ys, feeds, (self.x, self.y),
+                                   self.pen_down_mm if self.down else self.travel_mm)
         if lines is None:
             for k, (px, py, f) in enumerate(zip(xs.tolist(), ys.tolist(), feeds.tolist(),
                                                 strict=True)):
@@ -237,17 +241,16 @@ class ProgramWriter:
         self._buffered += n
         if self._buffered >= 4096:
             self.flush()
-        d = np.fromiter(map(math.hypot, lines.dx.tolist(), lines.dy.tolist()), float, n)
         end = lines.xy[-1].tolist()
         if self.down:
-            self.pen_down_mm = float(np.cumsum(np.concatenate(([self.pen_down_mm], d)))[-1])
+            self.pen_down_mm = lines.length
             self.preview.draw_many(self.x, self.y, lines.xy.copy())
             b = self.bounds    # the stroke's first point was added at pen down
             lo_x, lo_y, hi_x, hi_y = lines.bounds
             b[0], b[1] = min(b[0], lo_x), min(b[1], lo_y)
             b[2], b[3] = max(b[2], hi_x), max(b[3], hi_y)
         else:
-            self.travel_mm = float(np.cumsum(np.concatenate(([self.travel_mm], d)))[-1])
+            self.travel_mm = lines.length
             self.preview.move(self.x, self.y, *end)
         self.x, self.y = end
 

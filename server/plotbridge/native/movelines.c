@@ -77,7 +77,8 @@ typedef struct {
     uint8_t kind_rapid, kind_line; /* the estimate's codes for G0 and G1 */
     char *text;                 /* the lines, each ending with a newline */
     double *xy;                 /* kept points, rounded, x and y interleaved */
-    double *dx, *dy;            /* each kept point minus the one before */
+    double length;              /* in: a running total; out: plus the run's length,
+                                 * summed move by move as ProgramWriter.move sums */
     uint8_t *kind;              /* the estimate's inputs: kind_rapid or kind_line, */
     float *x32, *y32, *f32;     /* the point and the feed (0 for a rapid) as floats, */
     uint16_t *nbytes;           /* and the line's length with its newline */
@@ -161,8 +162,8 @@ long moves_lines(movelines_t *m, long n, const double *x, const double *y,
         *o++ = '\n';
         m->xy[2 * kept] = rx;
         m->xy[2 * kept + 1] = ry;
-        m->dx[kept] = rx - px;
-        m->dy[kept] = ry - py;
+        double dx = rx - px, dy = ry - py;
+        m->length += sqrt(dx * dx + dy * dy);
         m->kind[kept] = rapid ? m->kind_rapid : m->kind_line;
         m->x32[kept] = (float)rx;
         m->y32[kept] = (float)ry;

@@ -23,8 +23,7 @@ class _Writer(ctypes.Structure):
         ("kind_line", ctypes.c_uint8),
         ("text", ctypes.c_void_p),
         ("xy", ctypes.c_void_p),
-        ("dx", ctypes.c_void_p),
-        ("dy", ctypes.c_void_p),
+        ("length", ctypes.c_double),
         ("kind", ctypes.c_void_p),
         ("x32", ctypes.c_void_p),
         ("y32", ctypes.c_void_p),
@@ -57,13 +56,12 @@ def _f64(a: np.ndarray) -> np.ndarray:
 
 class Lines(NamedTuple):
     """The kept moves of a run (arrays valid until the MoveLines' next run): their text
-    (one line each, with newlines); rounded points (n x 2); each point minus the one
-    before; the estimate's inputs (Estimator.moves); min x, min y, max x, max y."""
+    (one line each, with newlines); rounded points (n x 2); the running length given
+    plus theirs; the estimate's inputs (Estimator.moves); min x, min y, max x, max y."""
 
     text: str
     xy: np.ndarray
-    dx: np.ndarray
-    dy: np.ndarray
+    length: float
     kind: np.ndarray
     x32: np.ndarray
     y32: np.ndarray
@@ -113,24 +111,24 @@ class MoveLines:
         if n > self._n:
             self._n = n = max(n, 2 * self._n)
             self._xy = np.empty((n, 2))
-            self._dx, self._dy = np.empty(n), np.empty(n)
             self._kind = np.empty(n, np.uint8)
             self._x32, self._y32, self._f32 = (np.empty(n, np.float32) for _ in range(3))
             self._nbytes = np.empty(n, np.uint16)
             self._unknown = np.empty(n)
-            for name in ("xy", "dx", "dy", "kind", "x32", "y32", "f32", "nbytes", "unknown"):
+            for name in ("xy", "kind", "x32", "y32", "f32", "nbytes", "unknown"):
                 setattr(w, name, getattr(self, f"_{name}").ctypes.data)
         if room > self._room:
             self._room = max(room, 2 * self._room)
             self._text = np.empty(self._room, np.uint8)
             w.text = self._text.ctypes.data
 
-    def run(self, x: np.ndarray, y: np.ndarray, feeds: np.ndarray,
-            start: tuple[float, float]) -> Lines | None:
+    def run(self, x: np.ndarray, y: np.ndarray, feeds: np.ndarray, start: tuple[float, float],
+            length: float) -> Lines | None:
         """The lines of moves to (x, y) from `start` (feeds NaN for rapids), points rounded
-        to 0.001 mm and those equal to the one before dropped; None when a rounded point
-        lies outside the area."""
+        to 0.001 mm and those equal to the one before dropped, and `length` plus the
+        moves' length; None when a rounded point lies outside the area."""
         n = len(x)
+        self._w.length = length
         x, y, feeds = _f64(x), _f64(y), _f64(feeds)
         self._grow(n, n * (_LINE_ROOM + self._longest))
         k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data, start[0],
@@ -146,6 +144,6 @@ class MoveLines:
             return None
         w = self._w
         out = self._text[:w.text_len].tobytes().decode("ascii")
-        return Lines(out, self._xy[:k], self._dx[:k], self._dy[:k], self._kind[:k],
+        return Lines(out, self._xy[:k], w.length, self._kind[:k],
                      self._x32[:k], self._y32[:k], self._f32[:k], self._nbytes[:k],
                      tuple(w.bounds))
