@@ -152,6 +152,10 @@ class GcodeReader:
         """Appends the ops of consecutive common lines (absolute millimetres) as MOVES ops;
         `feed`: the last F given in the run at or before each line (NaN when none is)."""
         n = len(kind)
+        if n == 1 and self.dialect not in MOTION_PEN:
+            self._one(out, first, int(kind[0]) == LINE, float(x[0]) + self.off_x,
+                      float(y[0]) + self.off_y, float(feed[0]))
+            return
         draw = kind == LINE
         x = x + self.off_x
         y = y + self.off_y
@@ -180,6 +184,22 @@ class GcodeReader:
         for a, b in itertools.pairwise(cuts):
             self._pen(out, first + a, bool(pen[a]))
             out.append((MOVES, first + a, x[a:b], y[a:b], feeds[a:b]))
+
+    def _one(self, out: list[tuple], line_no: int, draw: bool, x: float, y: float,
+             feed: float) -> None:
+        """`_run` for a run of one line, with Python's floats (the same arithmetic) rather
+        than arrays: a stroke's travel is such a run."""
+        before = self.feed
+        if before is None and draw and feed != feed:
+            self.errors.warn(line_no, _no_feed(1, self.default_feed))
+            before = self.default_feed
+        if before is not None and feed != feed:
+            feed = before
+        if feed == feed:
+            self.feed = feed
+        self.motion = 1 if draw else 0
+        self.x, self.y = x, y
+        out.append((MOVE, line_no, x, y, feed if draw else None))
 
     def _line(self, out: list[tuple], line_no: int, raw: str) -> None:
         """Appends the ops of one line read by the general parser."""
