@@ -142,8 +142,9 @@ class PreviewBuilder:
         ends = np.cumsum(sizes)
         fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
         keep = simplify_mask(pts, self.tolerance, fixed)
-        for (_, _, continues, colour, lines), lo, hi in zip(self._pending, ends - np.array(sizes),
-                                                         ends, strict=True):
+        starts = (ends - np.array(sizes)).tolist()
+        for (_, _, continues, colour, lines), lo, hi in zip(self._pending, starts,
+                                                            ends.tolist(), strict=True):
             piece = pts[lo:hi][keep[lo:hi]]
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])

@@ -29,7 +29,7 @@ def simplify_all(polylines: list[np.ndarray], tolerance: float) -> list[np.ndarr
     starts = ends - sizes
     pts = np.concatenate(polylines)
     keep = simplify_mask(pts, tolerance, np.unique(np.concatenate([starts, ends - 1])))
-    return [pts[a:b][keep[a:b]] for a, b in zip(starts, ends, strict=True)]
+    return [pts[a:b][keep[a:b]] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)]
 
 
 def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np.ndarray:
