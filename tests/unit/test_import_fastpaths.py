@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import random
+import re
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +22,7 @@ from plotbridge.importing.ops import single_moves
 from plotbridge.importing.pipeline import write_program
 from plotbridge.importing.placement import Transform
 from plotbridge.importing.preview import PreviewBuilder
+from plotbridge.native import movelines
 from plotbridge.native.gcodescan import LINE, OTHER, RAPID, scan
 from plotbridge.native.previewjson import strokes_json
 
@@ -218,3 +220,43 @@ def test_preview_strokes_written_natively_as_json_dumps_writes_them(tmp_path):
     assert (tmp_path / "p.json").read_text() == json.dumps(pb.finish(bounds),
                                                            separators=(",", ":"))
     assert strokes_json([np.array([[1e13, 0.0]])]) is None     # left to json.dumps
+
+
+def _python_lines(x, y, feeds, start, feed_text) -> str:
+    """What ProgramWriter.move writes for each point, repeats skipped."""
+    out, last = [], start
+    for a, b, f in zip(x.tolist(), y.tolist(), feeds.tolist(), strict=True):
+        at = (float(f"{a:.3f}"), float(f"{b:.3f}"))
+        if at != last:
+            out.append(f"G0 X{a:.3f} Y{b:.3f}\n" if f != f else
+                       f"G1 X{a:.3f} Y{b:.3f} F{feed_text(f)}\n")
+        last = at
+    return "".join(out)
+
+
+def test_move_lines_round_as_python_formats_and_keep_feed_texts(monkeypatch):
+    monkeypatch.setattr(movelines, "FEEDS_MAX", 8)    # the texts start afresh often
+    rng = np.random.default_rng(11)
+    texts = []
+
+    def feed_text(f: float) -> str:
+        texts.append(f)
+        return f"{round(f, 1):g}"
+
+    run = movelines.MoveLines((-1.0, -1.0, 1e6, 1e6), feed_text, 0, 1)
+    # exact halves of the third decimal (ties to even), values rounding to -0.000,
+    # long random ones, repeats
+    ties = np.array([k / 16 for k in range(-8, 400)] + [k / 2048 for k in range(-2, 3000, 7)])
+    for trial in range(150):
+        n = int(rng.integers(1, 60))
+        x = rng.choice(np.r_[ties, rng.uniform(-0.9, 500, 50), -0.0004, -0.0], n)
+        y = rng.choice(np.r_[ties, rng.uniform(0, 300, 50)], n)
+        if trial % 3 == 0:
+            x[1::2], y[1::2] = x[:-1:2], y[:-1:2]
+        feeds = rng.choice(np.r_[rng.uniform(1, 9000, 20), [np.nan, 1500.0]], n)
+        lines = run.run(x, y, feeds, (0.0, 0.0), 0.0)
+        assert lines is not None
+        assert lines.text == _python_lines(x, y, feeds, (0.0, 0.0), feed_text)
+        assert [str(v) for v in lines.xy.ravel()] == [
+            str(float(t)) for t in re.findall(r"[XY](\S+)", lines.text)]
+    assert run.run(np.array([5.0, 2e6]), np.zeros(2), np.ones(2), (0.0, 0.0), 0.0) is None
