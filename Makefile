@@ -30,7 +30,7 @@ NATIVE_DIR := server/plotbridge/native
 native: $(NATIVE_DIR)/build/libgcodescan.so $(NATIVE_DIR)/build/libmovelines.so $(NATIVE_DIR)/build/libsimplify.so \
         $(NATIVE_DIR)/build/libpreviewjson.so
 
-$(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c
+$(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c $(NATIVE_DIR)/thousandths.h
 	@mkdir -p $(dir $@)
 	$(CC) -std=gnu11 -O2 -ffp-contract=off -Wall -Wextra -Werror -fPIC -shared $< -o $@.tmp -lm && mv $@.tmp $@
 

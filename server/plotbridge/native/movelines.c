@@ -14,6 +14,8 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "thousandths.h"
+
 #define MAX_ABS 1e12   /* beyond this, v * 1000 is not exact to a quarter unit */
 
 /* v rounded to 3 decimals as text at out; *back: the float the text reads as.
@@ -35,25 +37,8 @@ static int fixed3(double v, char *out, double *back)
             n++;
     }
     int neg = signbit(v) != 0;
-    uint64_t m = neg ? (uint64_t)(-n) : (uint64_t)n;
     *back = neg && n == 0 ? -0.0 : (double)n / 1000.0;
-    char digits[24];
-    int k = 0;
-    uint64_t ip = m / 1000;
-    unsigned fp = (unsigned)(m % 1000);
-    do {
-        digits[k++] = (char)('0' + ip % 10);
-        ip /= 10;
-    } while (ip);
-    char *o = out;
-    if (neg)
-        *o++ = '-';
-    while (k)
-        *o++ = digits[--k];
-    *o++ = '.';
-    *o++ = (char)('0' + fp / 100);
-    *o++ = (char)('0' + fp / 10 % 10);
-    *o++ = (char)('0' + fp % 10);
+    char *o = write_thousandths(neg ? (uint64_t)(-n) : (uint64_t)n, neg, 0, out);
     return (int)(o - out);
 }
 

@@ -13,6 +13,8 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "thousandths.h"
+
 #define MAX_UNITS 1e15   /* thousandths: values below 1e12 */
 
 /* Writes v as described above at o; returns the end, NULL when v is too large. */
@@ -21,28 +23,7 @@ static char *value(double v, char *o)
     double r = rint(v * 1000.0);
     if (!(fabs(r) < MAX_UNITS))
         return 0;
-    double q = r / 1000.0;
-    uint64_t m = (uint64_t)fabs(r);
-    uint64_t ip = m / 1000;
-    unsigned fp = (unsigned)(m % 1000);
-    char digits[24];
-    int k = 0;
-    if (signbit(q))
-        *o++ = '-';
-    do {
-        digits[k++] = (char)('0' + ip % 10);
-        ip /= 10;
-    } while (ip);
-    while (k)
-        *o++ = digits[--k];
-    *o++ = '.';
-    *o++ = (char)('0' + fp / 100);
-    if (fp % 100) {
-        *o++ = (char)('0' + fp / 10 % 10);
-        if (fp % 10)
-            *o++ = (char)('0' + fp % 10);
-    }
-    return o;
+    return write_thousandths((uint64_t)fabs(r), signbit(r / 1000.0) != 0, 1, o);
 }
 
 /* n strokes of sizes[i] points, their x, y interleaved at xy, as
