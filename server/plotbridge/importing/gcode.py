@@ -39,6 +39,7 @@ _NOOP_M = {2.0, 30.0, 7.0, 8.0, 9.0}
 # M words dropped with a warning: motors on and off (the server manages the motors).
 _MOTOR_M = {17.0, 18.0, 84.0}
 _AXIS_WORDS = frozenset("XYZIJRFSPNT")
+PLAIN_LINES = 256       # plain lines whose words GcodeReader keeps
 ARC_RADIUS_ABS = 0.005
 ARC_RADIUS_REL = 0.001
 
@@ -116,6 +117,9 @@ class GcodeReader:
         self.pending_layer: str | None = None
         self.tool: float | None = None
         self.default_feed = options.feed
+        # The words of plain lines read before (M3, M5, ...: a file repeats a few of them
+        # thousands of times), each read the same way every time.
+        self._plain: dict[str, list[tuple[str, str]]] = {}
 
     def ops(self, chunks: Iterable[tuple[int, str]]) -> Iterator[tuple]:
         """The ops of the source, given as chunks of whole lines: (number of the chunk's
@@ -203,6 +207,10 @@ class GcodeReader:
 
     def _line(self, out: list[tuple], line_no: int, raw: str) -> None:
         """Appends the ops of one line read by the general parser."""
+        words = self._plain.get(raw)
+        if words is not None:
+            self._block(out, line_no, words)
+            return
         if len(raw) > MAX_LINE:
             if len(raw) > MAX_RAW_LINE:
                 self.errors.add(line_no, f"line longer than {MAX_RAW_LINE} characters")
@@ -221,16 +229,21 @@ class GcodeReader:
             message = _COMMENT.sub("", pause.group(2)).strip() or None
             self._boundary(message)
             return
-        if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
-            text = strip_line(raw, line_no, self.errors)
-        else:   # the common plain line
+        plain = not ("*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw
+                     or "%" in raw)
+        if plain:
             text = raw.replace(" ", "").replace("\t", "").upper()
+        else:
+            text = strip_line(raw, line_no, self.errors)
         if not text:
             return
         if _BLOCK.fullmatch(text) is None:
             self.errors.add(line_no, f"cannot parse '{raw.strip()[:60]}'")
             return
-        self._block(out, line_no, _WORD.findall(text))
+        words = _WORD.findall(text)
+        if plain and len(self._plain) < PLAIN_LINES:
+            self._plain[raw] = words
+        self._block(out, line_no, words)
 
     def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
         if down and self.pending_layer is not None:
