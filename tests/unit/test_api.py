@@ -688,7 +688,7 @@ def test_ws_snapshot_and_commands(sync_client):
 
 def test_ws_estop_is_not_held_back_by_a_slow_command(sync_client):
     release = threading.Event()
-    threading.Timer(2.0, release.set).start()  # without it the test would hang, not fail
+    threading.Timer(60.0, release.set).start()  # without it the test would hang, not fail
     sent: list[str] = []
 
     async def slow_command(line: str, timeout: float = 10) -> list[str]:  # noqa: ASYNC109
