@@ -23,7 +23,9 @@
 static int fixed3(double v, char *out, double *back)
 {
     double p = v * 1000.0;
-    double whole = floor(p);
+    double whole = (double)(int64_t)p;  /* floor(p), without a call into libm */
+    if (whole > p)
+        whole -= 1.0;
     double frac = p - whole;    /* exact: |p| < 2^50, so ulp(p) <= 1/8 */
     int64_t n = (int64_t)whole;
     /* p is v * 1000 rounded; only an exact half of p needs the product's rounding
@@ -58,6 +60,7 @@ static long feed_index(double f, const double *feed_val, long n_feeds)
 
 /* A writer's buffers (room for as many moves as a run has) and results. */
 typedef struct {
+    const double *x, *y, *feed; /* the run: points and feeds (NaN: a rapid) */
     double area[4];             /* min x, min y, max x, max y: the work area */
     uint8_t kind_rapid, kind_line; /* the estimate's codes for G0 and G1 */
     char *text;                 /* the lines, each ending with a newline */
@@ -97,15 +100,15 @@ static long unknown_feeds(movelines_t *m, long n, const double *feed)
     return m->n_unknown;
 }
 
-/* Writes the lines of n moves to (x[k], y[k]) from (x0, y0) at feed[k] (NaN: a rapid)
- * into m's buffers (text: room for n lines of 48 + the longest feed text bytes).
+/* Writes the lines of n moves of m's run (to x[k], y[k] at feed[k]) from (x0, y0) into
+ * m's buffers (text: room for n lines of 48 + the longest feed text bytes).
  * Returns the number of moves kept; -1 when a rounded point is outside the area, -2
  * when feeds have no text (m->unknown); nothing usable is written then. Bounds: min
  * and max as Python's min() and max() give them (the first of equal values, which
  * tells 0.0 from -0.0). */
-long moves_lines(movelines_t *m, long n, const double *x, const double *y,
-                 const double *feed, double x0, double y0)
+long moves_lines(movelines_t *m, long n, double x0, double y0)
 {
+    const double *x = m->x, *y = m->y, *feed = m->feed;
     char *o = m->text;
     long kept = 0, fi = 0;
     double px = x0, py = y0, last_feed = NAN;

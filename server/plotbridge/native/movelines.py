@@ -18,6 +18,9 @@ FEEDS_MAX = 4096    # feed texts kept from run to run (a file of ever new feeds)
 class _Writer(ctypes.Structure):
     """movelines.c's movelines_t."""
     _fields_ = [
+        ("x", ctypes.c_void_p),
+        ("y", ctypes.c_void_p),
+        ("feed", ctypes.c_void_p),
         ("area", ctypes.c_double * 4),
         ("kind_rapid", ctypes.c_uint8),
         ("kind_line", ctypes.c_uint8),
@@ -43,15 +46,10 @@ class _Writer(ctypes.Structure):
 def _fn():
     fn = library("movelines").moves_lines
     if fn.restype is not ctypes.c_long:
-        p = ctypes.c_void_p
-        fn.argtypes = [ctypes.POINTER(_Writer), ctypes.c_long, p, p, p, ctypes.c_double,
+        fn.argtypes = [ctypes.POINTER(_Writer), ctypes.c_long, ctypes.c_double,
                        ctypes.c_double]
         fn.restype = ctypes.c_long
     return fn
-
-
-def _f64(a: np.ndarray) -> np.ndarray:
-    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 class Lines(NamedTuple):
@@ -115,7 +113,10 @@ class MoveLines:
             self._x32, self._y32, self._f32 = (np.empty(n, np.float32) for _ in range(3))
             self._nbytes = np.empty(n, np.uint16)
             self._unknown = np.empty(n)
-            for name in ("xy", "kind", "x32", "y32", "f32", "nbytes", "unknown"):
+            # the run is copied in (a copy costs less than asking an array's address)
+            self._x, self._y, self._feed = np.empty(n), np.empty(n), np.empty(n)
+            for name in ("x", "y", "feed", "xy", "kind", "x32", "y32", "f32", "nbytes",
+                         "unknown"):
                 setattr(w, name, getattr(self, f"_{name}").ctypes.data)
         if room > self._room:
             self._room = max(room, 2 * self._room)
@@ -129,17 +130,17 @@ class MoveLines:
         moves' length; None when a rounded point lies outside the area."""
         n = len(x)
         self._w.length = length
-        x, y, feeds = _f64(x), _f64(y), _f64(feeds)
         self._grow(n, n * (_LINE_ROOM + self._longest))
-        k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data, start[0],
-                     start[1])
+        self._x[:n] = x
+        self._y[:n] = y
+        self._feed[:n] = feeds
+        k = self._fn(self._ref, n, start[0], start[1])
         fresh = True
         while k == -2:      # at most twice: once more when the texts started afresh
             self._add_feeds(fresh)
             fresh = False
             self._grow(n, n * (_LINE_ROOM + self._longest))
-            k = self._fn(self._ref, n, x.ctypes.data, y.ctypes.data, feeds.ctypes.data,
-                         start[0], start[1])
+            k = self._fn(self._ref, n, start[0], start[1])
         if k < 0:
             return None
         w = self._w
