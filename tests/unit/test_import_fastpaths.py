@@ -69,7 +69,7 @@ def test_scan_reads_common_lines_and_leaves_the_rest():
     assert x[:3].tolist() == [1.5, 0.5, 1.0] and y[:3].tolist() == [-2.0, 7.0, 2.0]
     assert f[0] == 3000 and np.isnan(f[1:3]).all()
     assert lines.feed[:3].tolist() == [3000.0] * 3     # the run's last F
-    assert [lines.line(k) for k in (3, 9)] == ["G1 X1 Y2 ;(no)", ""]
+    assert [lines.line(k) for k in (3, 9, 10)] == ["G1 X1 Y2 ;(no)", "", "G1 X1 Y2 ; é"]
 
 
 def test_scan_leaves_feeds_that_are_not_positive_to_the_general_parser():
