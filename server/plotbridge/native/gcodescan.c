@@ -114,10 +114,10 @@ static uint8_t scan_line(const char *p, const char *end, double *x, double *y, d
  * and for common lines x[k], y[k], f[k] (NaN without F) and feed[k], the last F given
  * at or before line k in its run of consecutive common lines (NaN when none is);
  * start[k]: where line k begins, start[n]: len. Lines holding bytes outside ASCII are
- * OTHER (max_line counts characters). Returns the number of lines n, at most
- * max_lines. */
-long gcode_scan(const char *text, long len, long max_lines, long max_line, uint8_t *kind,
-                double *x, double *y, double *f, double *feed, long *start)
+ * OTHER (max_line counts characters); ascii: the caller knows there are none. Returns
+ * the number of lines n, at most max_lines. */
+long gcode_scan(const char *text, long len, int ascii, long max_lines, long max_line,
+                uint8_t *kind, double *x, double *y, double *f, double *feed, long *start)
 {
     const char *p = text, *end = text + len;
     long n = 0;
@@ -130,7 +130,7 @@ long gcode_scan(const char *text, long len, long max_lines, long max_line, uint8
         start[n] = p - text;
         kind[n] = OTHER;
         if (eol - p <= max_line) {
-            for (c = p; c < eol && (unsigned char)*c < 0x80; c++)
+            for (c = ascii ? eol : p; c < eol && (unsigned char)*c < 0x80; c++)
                 ;
             if (c == eol)
                 kind[n] = scan_line(p, eol, &x[n], &y[n], &f[n]);

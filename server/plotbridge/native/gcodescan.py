@@ -19,7 +19,8 @@ def _scanner():
     lib = library("gcodescan")
     fn = lib.gcode_scan
     if fn.restype is not ctypes.c_long:
-        fn.argtypes = [ctypes.c_char_p, ctypes.c_long, ctypes.c_long, ctypes.c_long, _u8,
+        fn.argtypes = [ctypes.c_char_p, ctypes.c_long, ctypes.c_int, ctypes.c_long,
+                       ctypes.c_long, _u8,
                        _f64, _f64, _f64, _f64, _long]
         fn.restype = ctypes.c_long
     return fn
@@ -53,5 +54,6 @@ def scan(text: str, max_line: int) -> Scan:
     kind = np.empty(room, np.uint8)
     x, y, f, feed = np.empty(room), np.empty(room), np.empty(room), np.empty(room)
     start = np.empty(room + 1, np.int_)
-    n = _scanner()(data, len(data), room, max_line, kind, x, y, f, feed, start)
+    n = _scanner()(data, len(data), text.isascii(), room, max_line, kind, x, y, f, feed,
+                   start)
     return Scan(kind[:n], x[:n], y[:n], f[:n], feed[:n], data, start[:n + 1])
