@@ -20,8 +20,7 @@ def _scanner():
     fn = lib.gcode_scan
     if fn.restype is not ctypes.c_long:
         fn.argtypes = [ctypes.c_char_p, ctypes.c_long, ctypes.c_int, ctypes.c_long,
-                       ctypes.c_long, _u8,
-                       _f64, _f64, _f64, _f64, _long]
+                       ctypes.c_long, _u8, _f64, _f64, _f64, _f64, _long]
         fn.restype = ctypes.c_long
     return fn
 
