@@ -6,13 +6,11 @@ from __future__ import annotations
 
 import pytest
 
+from tests.fixtures.text_glyphs import I_ADVANCE, I_TOP, I_X
 from tests.unit.import_helpers import drawn_strokes, program_lines, run_import
 
 HEAD = ('<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" '
         'viewBox="0 0 100 100">')
-# Hershey futural's "I" at font-size 32 (one glyph unit a user unit): one vertical
-# stroke 4 units right of the glyph's origin, from the baseline 21 units up; 8 wide.
-I_X, I_TOP, I_ADVANCE = 4.0, 21.0, 8.0
 
 
 def glyph_origins(tmp_path, body: str) -> list[tuple[float, float]]:

@@ -5,26 +5,14 @@ what is not a number skips the text with a warning naming it."""
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
 import pytest
 from plotbridge.importing import svgtext
 
+from tests.fixtures.text_glyphs import I_ADVANCE, i_pose, turned
 from tests.unit.import_helpers import drawn_strokes, program_lines, run_import
 
 HEAD = ('<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" '
         'viewBox="0 0 100 100">')
-# Hershey futural's "I" at font-size 32 (one glyph unit a user unit): one stroke from
-# 21 units above the baseline down to it, 4 units right of the glyph's origin; 8 wide.
-I_X, I_TOP, I_ADVANCE = 4.0, 21.0, 8.0
-
-
-def turned(points: np.ndarray, about: tuple[float, float], degrees: float) -> np.ndarray:
-    """`points` turned clockwise on a y-down page about `about`."""
-    a = math.radians(degrees)
-    rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
-    return (points - about) @ rot.T + about
 
 
 def test_each_glyph_is_the_upright_glyph_turned_about_its_own_start_point():
@@ -54,16 +42,8 @@ def glyph_poses(tmp_path, body: str) -> list[tuple[float, float, float]]:
     clockwise) in SVG user units (y down), from its one stroke drawn top to baseline."""
     doc = HEAD + f'<g font-size="32" font-family="Hershey Sans">{body}</g></svg>'
     r = run_import(tmp_path, doc, "d.svg", optimize=False)
-    out = []
-    for s in drawn_strokes(program_lines(r)):
-        top, foot = (np.array([x, 100 - y]) for x, y in (s[0], s[-1]))   # page flip
-        assert np.hypot(*(foot - top)) == pytest.approx(I_TOP, abs=0.01)
-        # upright the stroke points down the page: (0, 1) turned by the angle
-        down = (foot - top) / I_TOP
-        degrees = math.degrees(math.atan2(-down[0], down[1]))
-        origin = foot - turned(np.array([I_X, 0.0]), (0.0, 0.0), degrees)
-        out.append((round(origin[0], 2), round(origin[1], 2), round(degrees, 2)))
-    return out
+    return [i_pose(*((x, 100 - y) for x, y in (s[0], s[-1])))   # the page flip undone
+            for s in drawn_strokes(program_lines(r))]
 
 
 def test_a_rotate_list_turns_each_glyph_and_leaves_the_advance_alone(tmp_path):
