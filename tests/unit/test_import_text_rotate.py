@@ -72,7 +72,7 @@ def test_glyphs_outside_any_rotate_list_stay_upright(tmp_path):
     assert got == [0, 45, 0]
 
 
-@pytest.mark.parametrize("bad", ["10 abc", "10deg", "5, nan", "1e999"])
+@pytest.mark.parametrize("bad", ["10 abc", "10deg", "5, nan", "1e999", "1_0"])
 def test_a_bad_rotate_list_skips_the_text_with_a_warning(tmp_path, bad):
     doc = (HEAD + f'<text id="t" x="10" y="40">I<tspan rotate="{bad}">II</tspan></text>'
            '<line x1="0" y1="0" x2="10" y2="0" stroke="black"/></svg>')

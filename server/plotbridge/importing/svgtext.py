@@ -22,6 +22,7 @@ BASELINE = 9.0
 DEFAULT_FONT = "futural"
 # font-family names that the Hershey fonts stand for without substitution
 HERSHEY_NAMES = re.compile(r"hershey|futura|rowman|scripts|timesr|gothic", re.I)
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 
 
 @dataclass
@@ -95,11 +96,8 @@ def angles(raw: str) -> list[float]:
     for v in re.split(r"[\s,]+", raw.strip()):
         if not v:
             continue
-        try:
-            a = float(v)
-        except ValueError:
-            a = math.nan
-        if not math.isfinite(a):
+        a = float(v) if _NUMBER.fullmatch(v) else math.nan
+        if not math.isfinite(a):   # not SVG's number syntax, or too large for a float
             raise ValueError(f"rotate '{raw.strip()[:40]}': '{v[:20]}' is not a number of "
                              "degrees")
         out.append(a)
