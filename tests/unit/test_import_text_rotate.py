@@ -8,11 +8,8 @@ from __future__ import annotations
 import pytest
 from plotbridge.importing import svgtext
 
-from tests.fixtures.text_glyphs import I_ADVANCE, i_pose, turned
+from tests.fixtures.text_glyphs import HEAD, I_ADVANCE, glyph_poses, turned
 from tests.unit.import_helpers import drawn_strokes, program_lines, run_import
-
-HEAD = ('<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" '
-        'viewBox="0 0 100 100">')
 
 
 def test_each_glyph_is_the_upright_glyph_turned_about_its_own_start_point():
@@ -35,15 +32,6 @@ def test_each_glyph_is_the_upright_glyph_turned_about_its_own_start_point():
         for _ in range(count):
             assert got[n] == pytest.approx(turned(upright[n], (start, 40.0), angle))
             n += 1
-
-
-def glyph_poses(tmp_path, body: str) -> list[tuple[float, float, float]]:
-    """Where each "I" was set and how it was turned: (origin x, origin y, degrees
-    clockwise) in SVG user units (y down), from its one stroke drawn top to baseline."""
-    doc = HEAD + f'<g font-size="32" font-family="Hershey Sans">{body}</g></svg>'
-    r = run_import(tmp_path, doc, "d.svg", optimize=False)
-    return [i_pose(*((x, 100 - y) for x, y in (s[0], s[-1])))   # the page flip undone
-            for s in drawn_strokes(program_lines(r))]
 
 
 def test_a_rotate_list_turns_each_glyph_and_leaves_the_advance_alone(tmp_path):
