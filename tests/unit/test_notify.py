@@ -265,6 +265,18 @@ async def test_more_events_kept_than_the_bound_drop_the_oldest_at_start(outbox, 
     await again.close()
 
 
+async def test_an_event_that_cannot_be_kept_is_logged_and_still_delivered(outbox, caplog):
+    with sqlite3.connect(outbox.path) as conn:
+        conn.execute("DROP TABLE webhook_outbox")  # the file went bad under the server
+    receiver = FakeReceiver()
+    delivery = await running(receiver, outbox)
+    delivery.put("job_done", {"n": 0})
+    await settle(lambda: delivery.figures.delivered == 1)
+    await settle(lambda: "could not be kept" in caplog.text)
+    assert "no such table: webhook_outbox" in caplog.text and receiver.numbers() == [0]
+    await delivery.close()
+
+
 async def test_events_of_a_url_no_longer_configured_are_dropped(tmp_path, caplog):
     db, kept_url, gone_url = tmp_path / "plotbridge.db", "http://127.0.0.1:9/kept", \
         "http://127.0.0.1:9/gone"  # fmt: skip
