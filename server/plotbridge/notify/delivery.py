@@ -8,9 +8,9 @@ been down so long that `limit` events wait. A queue starts with the events a
 previous run left waiting (the oldest dropped the same way beyond `limit`).
 The task posts the events one at a time in order; each event leaves the queue
 once its receiver answered 2xx (or refused it for good), so it is delivered
-once, in order. A receiver that errs (5xx, 408, 429,
-connection refused, timeout) gets the same event again after a delay doubling
-from `first_delay` to `max_delay`. A timed-out request may have arrived: every
+once, in order. A receiver that errs (5xx, 408, 429, connection refused,
+timeout) gets the same event again after a delay doubling from `first_delay`
+to `max_delay`. A timed-out request may have arrived: every
 event carries an `id` for the receiver to recognise a repeat.
 """
 
