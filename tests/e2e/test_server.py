@@ -14,7 +14,8 @@ import pytest
 from plotbridge.plotter.runner import JOB_POLL_HZ
 from websockets.sync.client import connect
 
-from tests.fixtures.drawings import FEED, drawing
+from tests.fixtures.attacks import import_workers
+from tests.fixtures.drawings import FEED, drawing, many_circles_svg
 from tests.fixtures.server import running_server
 from tests.fixtures.trace import (
     ESTOP_REDRAW_MM,
@@ -23,6 +24,7 @@ from tests.fixtures.trace import (
     drawn_once_mm,
     stroke_length,
 )
+from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
 
@@ -73,12 +75,13 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
     server.home()
     job = server.submit(drawing(circles=15))  # long enough to outlast the upload's start
     server.wait_progress(job["id"], 20)
-    big = drawing(circles=1).encode() * 1000  # ~3 MB of G-code: seconds of import work
+    big = many_circles_svg(20_000)  # seconds of import work
     with ThreadPoolExecutor(1) as pool:
         uploading = pool.submit(
-            server.client.post, "/api/jobs", files={"file": ("big.gcode", big)}
+            server.client.post, "/api/jobs", files={"file": ("big.svg", big)}, timeout=300
         )
-        time.sleep(0.5)  # the upload is received and being imported
+        assert server.proc is not None
+        wait_until(lambda: import_workers(server.proc.pid), bool, 30, "an import worker")
         assert not uploading.done()
         assert server.job(job["id"])["lines_done"] < 600, "the job ran out before the stop"
         sent_at = time.monotonic()
