@@ -105,16 +105,14 @@ static void print_build_info(void)
     eeline_load(EELINE_BUILD_INFO, info);
     report_str(info);
 #endif
-    /* GRBL's letters for what this build leaves out */
-    RPT("]\r\n[OPT:"
+    /* GRBL's letters, in its order: N (line numbers, every board has them),
+     * then what this build leaves out */
+    RPT("]\r\n[OPT:N"
 #if !GRBL_WCS
         "#"
 #endif
 #if !GRBL_LINES
         "I"
-#endif
-#if GRBL_LINE_NUMBERS
-        "N"
 #endif
         ",");
     report_uint(PLAN_SIZE - 1); /* the same count as Bf: when idle */

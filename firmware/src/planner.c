@@ -19,10 +19,8 @@ static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
 static float last_feed;        /* the last block's feed, and as stored in blocks */
 static uint16_t last_feed_u16;
-#if GRBL_LINE_NUMBERS
-static int32_t line_number;    /* for the blocks queued next */
-void plan_set_line_number(int32_t n) { line_number = n; }
-#endif
+static plan_line_t line_number; /* for the blocks queued next */
+void plan_set_line_number(plan_line_t n) { line_number = n; }
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
@@ -332,9 +330,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
 
     plan_block_t *b = &ring[head];
     b->flags = flags;
-#if GRBL_LINE_NUMBERS
     b->line = line_number;
-#endif
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
     if (feed != last_feed) { /* F is modal: converted once per change */
