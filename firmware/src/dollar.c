@@ -16,9 +16,9 @@ static void print_settings(void)
         uint8_t id = settings_id(i);
         float v = 0.0f;
         settings_get(&settings, id, &v);
-        RPT("$");
+        report_char('$');
         report_uint(id);
-        RPT("=");
+        report_char('=');
         report_fixed(v, settings_is_integer(id) ? 0 : 3);
         RPT("\r\n");
     }
@@ -59,7 +59,7 @@ static void print_offsets(void)
 #endif
         RPT("[G");
         report_uint(i < GC_SLOT_G28 ? 54 + i : i == GC_SLOT_G28 ? 28 : 30);
-        RPT(":");
+        report_char(':');
         report_xyz(v);
         RPT("]\r\n");
     }
@@ -90,7 +90,7 @@ static void print_startup_lines(void)
         eeline_load(n, line);
         RPT("$N");
         report_uint(n);
-        RPT("=");
+        report_char('=');
         report_str(line);
         RPT("\r\n");
     }

@@ -2,7 +2,11 @@
 
 /* v in decimal, with a point before its last `point` digits (0: none) and
  * at least one digit before the point: the one digit loop behind both
- * fmt_uint and fmt_fixed (a fraction printed on its own would be a second). */
+ * fmt_uint and fmt_fixed (a fraction printed on its own would be a second).
+ * Loop invariants stay in the loop: hoisted, the divisor 10 takes four
+ * call-saved registers and their saves (60 B more on the 328P) to spare four
+ * ldi a digit beside a ~600-cycle division. */
+__attribute__((optimize("no-move-loop-invariants")))
 static uint8_t fmt_digits(char *out, uint32_t v, uint8_t point)
 {
     char tmp[FMT_MAX];

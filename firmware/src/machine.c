@@ -101,7 +101,7 @@ void machine_report_status(void)
         state = hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1");
     else if (busy)
         state = mach.jog ? PSTR("Jog") : PSTR("Run");
-    RPT("<");
+    report_char('<');
     report_pstr(state);
     int32_t motor[N_AXIS], cart[N_AXIS];
     stepper_get_position(motor);
@@ -114,7 +114,7 @@ void machine_report_status(void)
     if (settings.report_mask & 2) {
         RPT("|Bf:");
         report_uint(plan_free());
-        RPT(",");
+        report_char(',');
         report_uint(serial_rx_free());
     }
     /* the executing block's line, as GRBL: only a positive one */
@@ -149,7 +149,7 @@ void machine_report_status(void)
         RPT("|Ov:");
         for (uint8_t i = 0; i < 3; i++) {
             if (i)
-                RPT(",");
+                report_char(',');
             report_uint(rt_ov[i]);
         }
     }
