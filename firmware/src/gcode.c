@@ -69,7 +69,6 @@ float gc_wco(const gc_state_t *st, uint8_t a)
 #endif
 }
 
-
 /* Centre of an R-form arc: on the perpendicular bisector of the chord;
  * negative R picks the long way round. */
 static uint8_t arc_center_from_radius(const float *s, const float *t, float r, uint8_t cw, float *c)
