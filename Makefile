@@ -9,18 +9,23 @@ SIM_SPEED ?= 1
 BOARD ?= uno-cnc-shield
 DATA_DIR ?= data
 ARGS ?=
+# pytest-xdist workers for `make test` (the board profiles and servers are independent;
+# --dist loadfile keeps a file's tests, and its module fixtures, on one worker)
+TEST_JOBS ?= $(shell nproc)
+BOARDS := $(shell sed -n "s/^BOARDS := //p" firmware/Makefile)
 
 INKSCAPE_EXTENSIONS ?= $(HOME)/.config/inkscape/extensions
 
-.PHONY: run test setup setup-test native firmware sim lint flash install-service bench clean inkscape-extension
+.PHONY: run test setup setup-test native firmware boards sim lint flash install-service bench clean inkscape-extension
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
 	  $(if $(SERIAL),--serial $(SERIAL),--virtual --sim-speed $(SIM_SPEED) --board $(BOARD)) $(ARGS)
 
-test: setup-test firmware sim
+test: setup-test sim
+	$(MAKE) -j$(TEST_JOBS) boards
 	$(MAKE) -C firmware test
-	$(VENV)/bin/pytest
+	$(VENV)/bin/pytest -n $(TEST_JOBS) --dist loadfile
 
 setup: .stamps/system-run $(VENV)/.stamp native
 setup-test: .stamps/system-test $(VENV)/.stamp-dev native
@@ -50,6 +55,11 @@ $(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt requirements-inkex.txt
 
 firmware:
 	$(MAKE) -C firmware BOARD=$(BOARD) all
+
+# every board profile's firmware (each builds in its own directory, so in parallel)
+boards: $(addprefix board-,$(BOARDS))
+board-%:
+	$(MAKE) -C firmware BOARD=$* all
 
 sim:
 	$(MAKE) -C firmware sim

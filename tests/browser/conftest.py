@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import functools
 import http.server
-import json
 import threading
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,9 +17,10 @@ from typing import Any, ClassVar
 import pytest
 from playwright.sync_api import Browser, Page, sync_playwright
 
+from tests.fixtures.artifacts import ARTIFACTS
+
 REPO = Path(__file__).resolve().parents[2]
 WEB = REPO / "web"
-ARTIFACTS = REPO / "tests" / "artifacts"
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
     "--no-sandbox", "--disable-gpu", "--disable-background-networking",
@@ -30,9 +30,11 @@ DESKTOP = {"width": 1280, "height": 800}
 PHONE = {"width": 360, "height": 740}
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def browser() -> Iterator[Browser]:
-    (ARTIFACTS / "measurements.json").unlink(missing_ok=True)  # this run's figures only
+    """Chromium for one test file: Playwright's sync API runs an event loop in this thread
+    while it is open, which the asyncio tests that pytest-xdist runs next on the same
+    worker could not start beside."""
     with sync_playwright() as pw:
         chromium = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         try:
@@ -95,15 +97,6 @@ class QuietHandler(http.server.SimpleHTTPRequestHandler):
 def screenshot(page: Page, name: str) -> None:
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / f"{name}.png"))
-
-
-def record(name: str, values: dict[str, Any]) -> None:
-    """Keep a measurement in tests/artifacts/measurements.json (merged by name)."""
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    path = ARTIFACTS / "measurements.json"
-    data = json.loads(path.read_text()) if path.exists() else {}
-    data[name] = values
-    path.write_text(json.dumps(data, indent=2) + "\n")
 
 
 def login(page: Page, url: str, token: str) -> None:

@@ -13,11 +13,10 @@ from plotbridge.importing import ImportOptions, MachineProfile, import_file
 from tests.browser.conftest import login, screenshot
 from tests.browser.test_ui_logic import modules, run  # noqa: F401 (a fixture)
 from tests.browser.test_ui_plot import upload, wait_job_state
-from tests.e2e.test_pen_change import wait_pen_change
+from tests.fixtures.drawings import INK
 
 pytestmark = pytest.mark.browser
 
-INK = 'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"'
 COLOURS = ("red", "green", "blue")
 
 
@@ -99,13 +98,13 @@ def test_layers_in_their_colours_and_progress_across_each_pen_change(desktop, se
 
     job = next(j for j in server.client.get("/api/jobs").json() if j["name"] == "layers.svg")
     assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
-    wait_pen_change(server, job["id"], 2)
+    server.wait_pen_change(job["id"], 2)
     # the first layer is drawn, all of it, and nothing of the second
     at2 = pixels(page, lambda n: n["red"] < before["red"] * 0.02 and n["done"] > 300)
     assert at2["green"] > before["green"] * 0.9 and at2["blue"] > before["blue"] * 0.9
     screenshot(page, "preview-at-pen-change-2")
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
-    wait_pen_change(server, job["id"], 3)
+    server.wait_pen_change(job["id"], 3)
     at3 = pixels(page, lambda n: n["green"] < before["green"] * 0.02 and n["done"] > 600)
     assert at3["blue"] > before["blue"] * 0.9
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200

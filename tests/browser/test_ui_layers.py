@@ -10,7 +10,7 @@ import pytest
 
 from tests.browser.conftest import PHONE, login, new_page, screenshot
 from tests.browser.test_ui_plot import job_row, upload, wait_job_state
-from tests.e2e.test_pen_change import THREE_LAYERS, wait_pen_change
+from tests.fixtures.drawings import THREE_LAYERS
 
 pytestmark = pytest.mark.browser
 
@@ -79,7 +79,7 @@ def test_layers_show_progress_and_background_notices(browser, server, plotter, v
         page.evaluate("window.__hidden = true")  # the user switches to another tab
         job_row(page, NAME).locator("button[data-verb=start]").click()
         job = server.client.get("/api/jobs").json()[-1]
-        wait_pen_change(server, job["id"], 2)
+        server.wait_pen_change(job["id"], 2)
         changing = wait_layers(page, [1, 0, 0])
         assert changing[0]["info"].startswith("100 %")
         assert [row["current"] for row in changing] == [None, "step", None]  # the pen due
@@ -88,7 +88,7 @@ def test_layers_show_progress_and_background_notices(browser, server, plotter, v
 
         page.evaluate("window.__hidden = false")  # back on the page: nothing to notify
         assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
-        wait_pen_change(server, job["id"], 3)
+        server.wait_pen_change(job["id"], 3)
         wait_layers(page, [1, 1, 0])
         page.evaluate("window.__hidden = true")  # away again when the job ends
         assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200

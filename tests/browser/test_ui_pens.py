@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import login, screenshot
-from tests.e2e.test_pen_change import THREE_LAYERS, wait_pen_change
+from tests.fixtures.drawings import THREE_LAYERS
 
 pytestmark = pytest.mark.browser
 SERVO_US = 8  # the servo timer ticks 4 µs (firmware/src/servo.c)
@@ -41,7 +41,7 @@ def test_pens_page_and_layer_pickers(desktop, server, plotter):
     page.click("#pen-save")
     row = pen_row(page, "fineliner")
     row.locator(".servo", has_text="1200 / 1800 µs").wait_for()
-    assert page.locator("#pen-form").is_hidden()
+    page.locator("#pen-form").wait_for(state="hidden")  # when the POST answers: after the row
 
     row.locator("button[data-verb=try-down]").click()  # $60/$61 written, then M3
     wait_pen_us(plotter, "down", 1800)
@@ -65,11 +65,11 @@ def test_pens_page_and_layer_pickers(desktop, server, plotter):
     assert [layer["pen"] for layer in server.job(job["id"])["layers"]] == [None, 1, None]
 
     server.client.post(f"/api/jobs/{job['id']}/start")
-    wait_pen_change(server, job["id"], 2)
+    server.wait_pen_change(job["id"], 2)
     page.click(".tab[data-tab=pens]")
     assert row.locator("button[data-verb=try-down]").is_disabled()  # not while a job runs
     server.client.post(f"/api/jobs/{job['id']}/resume")
-    wait_pen_change(server, job["id"], 3)
+    server.wait_pen_change(job["id"], 3)
     server.client.post(f"/api/jobs/{job['id']}/resume")
     assert server.wait_job(job["id"], ("done", "failed"), 120)["state"] == "done"
     row = pen_row(page, "fineliner 0.3")

@@ -10,7 +10,8 @@ import time
 
 import pytest
 
-from tests.browser.conftest import DESKTOP, PHONE, login, record, screenshot
+from tests.browser.conftest import DESKTOP, PHONE, login, screenshot
+from tests.fixtures.artifacts import record
 
 pytestmark = pytest.mark.browser
 

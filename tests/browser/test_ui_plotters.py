@@ -5,8 +5,7 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import login
-from tests.e2e.test_plotters import wait_plotter
-from tests.e2e.test_server import drawing
+from tests.fixtures.drawings import drawing
 from tests.fixtures.server import running_server
 
 pytestmark = pytest.mark.browser
@@ -26,7 +25,7 @@ def test_cards_stop_one_then_all_and_select(desktop, tmp_path):
     args = ["--virtual", "2", "--sim-speed", "1"]
     with running_server(tmp_path / "server-data", args) as server:
         for name in ("plotter1", "plotter2"):
-            wait_plotter(server, name, lambda m: m["connected"], 30)
+            server.wait_plotter(name, lambda m: m["connected"], 30)
             home = server.client.post(f"/api/plotters/{name}/machine/home", timeout=130)
             assert home.status_code == 200, home.text
         login(page, server.url, server.token)

@@ -9,8 +9,7 @@ import math
 import pytest
 
 from tests.browser.conftest import login, screenshot
-from tests.e2e.test_resume_from_point import TWO_STROKES
-from tests.e2e.test_server import submit
+from tests.fixtures.drawings import TWO_STROKES
 
 pytestmark = pytest.mark.browser
 
@@ -28,7 +27,7 @@ def click_at_mm(page, x: float, y: float) -> None:
 def test_pick_a_point_on_the_preview_and_resume_from_it(desktop, server, plotter):
     page, errors = desktop
     server.home()
-    job = submit(server, TWO_STROKES)
+    job = server.submit(TWO_STROKES)
     assert server.wait_job(job["id"], ("done", "failed"), 120)["state"] == "done"
     login(page, server.url, server.token)
     # a finished job is previewed only once the user picks it in the queue

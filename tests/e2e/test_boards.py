@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import subprocess
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -21,7 +20,7 @@ from typing import Any
 import pytest
 
 from tests.fixtures.grbl import Grbl
-from tests.fixtures.plotsim import FIRMWARE_DIR, PLOTSIM, REPO, Plotter
+from tests.fixtures.plotsim import FIRMWARE_DIR, PLOTSIM, REPO, Plotter, board_firmware
 from tests.fixtures.server import running_server
 
 pytestmark = pytest.mark.e2e
@@ -50,8 +49,7 @@ def parallel(fn: Callable[[str], Any]) -> dict[str, Any]:
 @pytest.fixture(scope="module")
 def builds(sim_build) -> None:
     for board in BOARDS:
-        subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={board}", "all"],
-                       check=True, capture_output=True, timeout=600)
+        board_firmware(board)
 
 
 @pytest.fixture(scope="module")

@@ -11,19 +11,12 @@ import sys
 
 import pytest
 
-from tests.e2e.test_client import LONG
-
-
-def cli(server, *args: str, token_file=None) -> subprocess.CompletedProcess[str]:
-    env = {k: v for k, v in os.environ.items() if not k.startswith("PLOTBRIDGE_")}
-    env["PLOTBRIDGE_URL"] = server.url
-    auth = ["--token-file", str(token_file)] if token_file else ["--token", server.token]
-    return subprocess.run([sys.executable, "-m", "plotbridge", *args, *auth], env=env,
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+from tests.fixtures.cli import run_cli
+from tests.fixtures.drawings import LONG
 
 
 def answer(server, *args: str, **kwargs) -> dict | list:
-    done = cli(server, *args, "--json", **kwargs)
+    done = run_cli(server, *args, "--json", **kwargs)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
 
@@ -42,19 +35,19 @@ def test_verbs_drive_a_job_through_pause_resume_and_stop(server_virtual, tmp_pat
                                      data={"start": "true"}).json()  # fmt: skip
     server_virtual.wait_job(job["id"], "running", 60)
     assert answer(server_virtual, "pause")["state"] == "paused"
-    text = cli(server_virtual, "status")
+    text = run_cli(server_virtual, "status")
     assert f"job {job['id']}  paused" in text.stdout, text.stdout
     assert answer(server_virtual, "resume", job["id"])["state"] == "running"
     assert answer(server_virtual, "stop", "--all")["status"] == "stopped"
     server_virtual.wait_job(job["id"], "stopped", 30)
     [listed] = answer(server_virtual, "queue")
     assert listed["id"] == job["id"] and listed["state"] == "stopped"
-    assert f"{job['id']}  stopped" in cli(server_virtual, "queue").stdout
+    assert f"{job['id']}  stopped" in run_cli(server_virtual, "queue").stdout
 
 
 @pytest.mark.e2e
 def test_verbs_report_failures_clearly(server_virtual):
-    nothing = cli(server_virtual, "pause")
+    nothing = run_cli(server_virtual, "pause")
     assert nothing.returncode == 1 and "no job is running" in nothing.stderr
     refused = subprocess.run(
         [sys.executable, "-m", "plotbridge", "queue", "--url", server_virtual.url,
@@ -67,6 +60,6 @@ def test_verbs_report_failures_clearly(server_virtual):
                                server_virtual.url], env=env, capture_output=True, text=True,
                               timeout=60)  # fmt: skip
     assert no_token.returncode == 2 and "no token" in no_token.stderr
-    unknown = cli(server_virtual, "home", "--plotter", "nope")
+    unknown = run_cli(server_virtual, "home", "--plotter", "nope")
     # 404 from a server with several plotters; 405 from one without per-plotter paths
     assert unknown.returncode == 1 and re.search(r"homing failed \(40[45]\)", unknown.stderr)

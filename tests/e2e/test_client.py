@@ -8,15 +8,11 @@ from typing import Any
 import pytest
 from plotbridge.client import Plotbridge, PlotbridgeError, SetupError
 
+from tests.fixtures.drawings import LONG
 from tests.fixtures.server import running_server
 
 SQUARE_SVG = b"""<svg xmlns="http://www.w3.org/2000/svg" width="40mm" height="40mm"
 viewBox="0 0 40 40"><path d="M 5 5 L 35 5 L 35 35 L 5 35 Z" stroke="black" fill="none"/></svg>"""
-LONG = "G21\nG90\nG0 X10 Y10\nM3\n" + "".join(
-    f"G1 X{10 + (i % 2) * 150} Y{10 + i * 0.5:.1f} F1500\n" for i in range(200)
-) + "M5\n"
-
-
 @pytest.fixture
 def pb(server_virtual):
     with Plotbridge(server_virtual.url, server_virtual.token) as client:

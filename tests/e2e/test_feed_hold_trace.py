@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.e2e.test_server import assert_same_drawing, preview, stroke_length
+from tests.fixtures.trace import assert_same_drawing, stroke_length
 
 pytestmark = pytest.mark.e2e
 
@@ -77,7 +77,7 @@ def assert_drawn_once(server, plotter, job_id: str, lifts: int) -> None:
     is the preview's one stroke exactly once; `lifts` pen lifts came before the end."""
     done = server.wait_job(job_id, ("done", "failed", "stopped", "interrupted"), 60)
     assert done["state"] == "done", done
-    expected = preview(server, job_id)["strokes"]
+    expected = server.preview(job_id)["strokes"]
     trace = plotter.trace()
     drawn = joined(trace["strokes"])
     assert len(drawn) == len(expected) == 1

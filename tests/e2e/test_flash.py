@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from tests.fixtures.grbl import Grbl
-from tests.fixtures.plotsim import FIRMWARE_DIR, PLOTSIM, Plotter
+from tests.fixtures.plotsim import FIRMWARE_DIR, PLOTSIM, Plotter, board_firmware
 
 pytestmark = pytest.mark.e2e
 
@@ -32,8 +32,7 @@ CASES = {
 def test_make_flash_through_the_real_bootloader(sim_build, tmp_path, board: str) -> None:
     bootloader = CASES[board]
     assert bootloader.exists(), "scripts/setup-system test installs arduino-core-avr"
-    subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={board}", "all"],
-                   check=True, capture_output=True, timeout=600)
+    board_firmware(board)
     # real time: the bootloader waits about a second for the programmer
     # the command line ends "--bootloader HEX": no ELF, the flash starts erased
     chip = Plotter(PLOTSIM, bootloader, tmp_path / "ee.bin", 1, (0, 0),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.e2e.test_server import drawing, submit
+from tests.fixtures.drawings import drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -12,7 +12,7 @@ pytestmark = pytest.mark.e2e
 def test_frame_goes_around_the_bounds_without_ink(server, plotter):
     server.home()
     plotter.clear()
-    job = submit(server, drawing(), start=False)
+    job = server.submit(drawing(), start=False)
     bounds = job["bounds"]
     response = server.client.post(f"/api/jobs/{job['id']}/frame", timeout=120)
     assert response.status_code == 200, response.text

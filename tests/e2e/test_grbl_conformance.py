@@ -11,7 +11,6 @@ from __future__ import annotations
 import csv
 import math
 import re
-import subprocess
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -20,7 +19,7 @@ from pathlib import Path
 import pytest
 
 from tests.fixtures.grbl import Grbl, clean, mpos
-from tests.fixtures.plotsim import FIRMWARE_DIR, PLOTSIM, Plotter
+from tests.fixtures.plotsim import PLOTSIM, Plotter, board_firmware
 
 pytestmark = pytest.mark.e2e
 
@@ -319,9 +318,7 @@ MEGA = "mega-ramps14"
 
 @pytest.fixture(scope="module")
 def mega_elf(sim_build) -> Path:
-    subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={MEGA}", "all"],
-                   check=True, capture_output=True)
-    return FIRMWARE_DIR / "build" / MEGA / "plotbridge.elf"
+    return board_firmware(MEGA)
 
 
 @pytest.fixture

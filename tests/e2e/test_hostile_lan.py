@@ -19,9 +19,10 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 from websockets.sync.client import connect
 
-from tests.e2e.test_server import assert_same_drawing, drawing, preview, submit
 from tests.fixtures import attacks
+from tests.fixtures.drawings import drawing
 from tests.fixtures.server import ServerProcess, running_server
+from tests.fixtures.trace import assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -47,11 +48,11 @@ def run_beside(server: ServerProcess, attack: attacks.Attack) -> None:
     attack.start()
     try:
         time.sleep(0.5)  # the attack at full tilt
-        job = submit(server, drawing(circles=2))
+        job = server.submit(drawing(circles=2))
         done = server.wait_job(job["id"], ("done", "failed", "stopped"), 120)
         assert done["state"] == "done", done
         trace = server.client.get("/api/sim/trace").json()
-        assert_same_drawing(preview(server, job["id"])["strokes"], trace["strokes"])
+        assert_same_drawing(server.preview(job["id"])["strokes"], trace["strokes"])
         url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
         with connect(url) as ws:
             assert json.loads(ws.recv(10))["type"] == "machine"

@@ -11,8 +11,7 @@ import json
 
 import pytest
 
-from tests.e2e.test_pen_change import wait_pen_change
-from tests.e2e.test_server import assert_same_drawing, preview
+from tests.fixtures.trace import assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -75,7 +74,7 @@ def test_hatch_per_layer_and_colour_plots_layer_by_layer(server, plotter):
     assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
     # the orange rectangle has no entry and the import's fill is none: not drawn
     assert [lay["name"] for lay in job["layers"]] == ["rows", "columns", "#008000"]
-    data = preview(server, job["id"])
+    data = server.preview(job["id"])
     expected = [layer_strokes(data, lay) for lay in job["layers"]]
     assert long_segments(expected[0]) == {"h", "v"}      # the red outline and its rows
     assert long_segments(expected[1]) == {"v"}
@@ -83,7 +82,7 @@ def test_hatch_per_layer_and_colour_plots_layer_by_layer(server, plotter):
 
     drawn_before = 0
     for n in (2, 3):
-        wait_pen_change(server, job["id"], n)
+        server.wait_pen_change(job["id"], n)
         drawn = plotter.trace()["strokes"]
         assert_same_drawing(expected[n - 2], drawn[drawn_before:])   # that layer only
         drawn_before = len(drawn)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.e2e.test_server import assert_same_drawing, preview
+from tests.fixtures.trace import assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -61,7 +61,7 @@ def test_svg_upload_plots_what_the_import_shows(server, plotter):
     assert job["substitutions"][0]["font"] == "Helvetica"
     assert [lay["name"] for lay in job["layers"]] == ["#000000"]
     trace = plot(server, plotter, job)
-    expected = preview(server, job["id"])
+    expected = server.preview(job["id"])
     assert_same_drawing(expected["strokes"], trace["strokes"])
     assert trace["draw_mm"] == pytest.approx(job["stats"]["pen_down_mm"], rel=0.01)
     assert sum(trace["violations"].values()) == 0

@@ -7,8 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.e2e.test_pen_change import wait_pen_change
-from tests.e2e.test_server import drawing, submit
+from tests.fixtures.drawings import drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -22,7 +21,7 @@ PROGRAM = (drawing(circles=2, radius=8) + "M0 red pen\n" + "\n".join(SQUARE) + "
 def test_layers_carry_estimate_length_and_progress(server, plotter):
     server.home()
     plotter.clear()
-    job = submit(server, PROGRAM)
+    job = server.submit(PROGRAM)
     layers = job["layers"]
     assert len(layers) == 3
     # the layers' times leave out only the travel between them and the pen changes
@@ -42,7 +41,7 @@ def test_layers_carry_estimate_length_and_progress(server, plotter):
     assert abs(first["lines_done"] - (at - first["first_line"] + 1)) <= 1
     assert second["progress"] == third["progress"] == 0 and second["lines_done"] == 0
 
-    changing = wait_pen_change(server, job["id"], 2)
+    changing = server.wait_pen_change(job["id"], 2)
     first, second, third = changing["layers"]
     total = first["last_line"] - first["first_line"] + 1
     assert first["progress"] == 1 and first["lines_done"] == total
@@ -51,7 +50,7 @@ def test_layers_carry_estimate_length_and_progress(server, plotter):
     assert drawn == pytest.approx(first["pen_down_mm"], rel=0.01)  # the length it announced
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
 
-    changing = wait_pen_change(server, job["id"], 3)
+    changing = server.wait_pen_change(job["id"], 3)
     assert [layer["progress"] for layer in changing["layers"]] == [1, 1, 0]
     assert plotter.trace()["draw_mm"] - drawn == pytest.approx(80, rel=0.01)
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200

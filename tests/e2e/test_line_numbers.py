@@ -7,14 +7,13 @@ nothing drawn twice."""
 
 from __future__ import annotations
 
-import subprocess
 import time
 
 import pytest
 
-from tests.e2e.test_server import ESTOP_REDRAW_MM, assert_same_drawing, preview, submit
-from tests.fixtures.plotsim import FIRMWARE_DIR
+from tests.fixtures.plotsim import board_firmware
 from tests.fixtures.server import running_server
+from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -38,8 +37,7 @@ def short_segments() -> tuple[str, int, float]:
 
 @pytest.fixture(scope="module")
 def mega_build(sim_build) -> None:
-    subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={MEGA}", "all"],
-                   check=True, capture_output=True)
+    board_firmware(MEGA)
 
 
 @pytest.fixture(params=[UNO, MEGA])
@@ -56,7 +54,7 @@ def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(board, tmp_p
     with running_server(tmp_path / "data", link) as server:
         server.home()
         assert server.machine()["line"] is None  # idle: nothing executes
-        job = submit(server, gcode)
+        job = server.submit(gcode)
         seen: list[int] = []
         deadline = time.monotonic() + 60
         while len(seen) < 5 and time.monotonic() < deadline:
@@ -77,7 +75,7 @@ def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(board, tmp_p
         done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
         assert done["state"] == "done", done
         trace = server.client.get("/api/sim/trace").json()
-        assert_same_drawing(preview(server, job["id"])["strokes"], trace["strokes"])
+        assert_same_drawing(server.preview(job["id"])["strokes"], trace["strokes"])
         redrawn = trace["draw_mm"] - length
         print(f"{board}: estop on 0.5 mm segments, resumed from Ln: {redrawn:.4f} mm drawn twice")
         assert -ESTOP_REDRAW_MM <= redrawn <= ESTOP_REDRAW_MM, f"{redrawn:.3f} mm drawn twice"

@@ -11,43 +11,10 @@ import time
 import pytest
 from websockets.sync.client import connect
 
-from tests.e2e.test_server import assert_same_drawing, preview
+from tests.fixtures.drawings import THREE_LAYERS, layer
+from tests.fixtures.trace import assert_parked, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
-
-INK = 'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape"'
-
-
-def layer(label: str, x: int) -> str:
-    return (f'<g inkscape:groupmode="layer" inkscape:label="{label}">'
-            f'<rect x="{x}" y="10" width="15" height="15" fill="none" stroke="black"/></g>')
-
-
-THREE_LAYERS = (
-    f'<svg xmlns="http://www.w3.org/2000/svg" {INK} width="80mm" height="40mm" '
-    f'viewBox="0 0 80 40">{layer("outline", 5)}{layer("shade", 30)}{layer("detail", 55)}</svg>'
-)
-
-
-def wait_pen_change(server, job_id: str, layer: int) -> dict:
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        job = server.job(job_id)
-        if job["state"] == "pen_change" and job["pen_change"]["layer"] == layer:
-            return job
-        assert job["state"] in ("running", "pen_change"), job
-        time.sleep(0.05)
-    raise AssertionError(f"no pen change before layer {layer}")
-
-
-def assert_parked(plotter, at: tuple[float, float] = (0.0, 0.0)) -> dict:
-    """The pen is up and the carriage at `at` (the park position, mm); returns the trace."""
-    trace = plotter.trace()
-    assert trace["pen"] == "up"
-    x, y = trace["position"]["x"], trace["position"]["y"]
-    assert abs(x - at[0]) < 0.02 and abs(y - at[1]) < 0.02, trace
-    return trace
-
 
 def test_three_inkscape_layers_two_pen_changes(server, plotter):
     server.home()
@@ -59,14 +26,14 @@ def test_three_inkscape_layers_two_pen_changes(server, plotter):
     job = response.json()
     assert [layer["name"] for layer in job["layers"]] == ["outline", "shade", "detail"]
 
-    changing = wait_pen_change(server, job["id"], 2)
+    changing = server.wait_pen_change(job["id"], 2)
     assert changing["pen_change"]["message"].startswith("Layer 2 of 3, 'shade'")
     assert_parked(plotter)
     assert len(plotter.trace()["strokes"]) == 1  # only the first layer is drawn
     resumed = server.client.post(f"/api/jobs/{job['id']}/resume")  # by the API
     assert resumed.status_code == 200, resumed.text
 
-    wait_pen_change(server, job["id"], 3)
+    server.wait_pen_change(job["id"], 3)
     assert_parked(plotter)
     assert len(plotter.trace()["strokes"]) == 2
     url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
@@ -78,7 +45,7 @@ def test_three_inkscape_layers_two_pen_changes(server, plotter):
 
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
-    expected = preview(server, job["id"])["strokes"]
+    expected = server.preview(job["id"])["strokes"]
     drawn = plotter.trace()["strokes"]
     assert len(drawn) == len(expected) == 3
     for want, got in zip(expected, drawn, strict=True):  # in layer order, each in place
@@ -91,7 +58,7 @@ def test_the_board_resume_button_ends_a_pen_change(server, plotter):
     job = server.client.post(
         "/api/jobs", files={"file": ("two.svg", two)}, data={"start": "true"}
     ).json()
-    wait_pen_change(server, job["id"], 2)
+    server.wait_pen_change(job["id"], 2)
     plotter.press("resume")
     try:
         deadline = time.monotonic() + 20

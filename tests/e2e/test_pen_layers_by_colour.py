@@ -13,9 +13,8 @@ from collections.abc import Iterator
 import pytest
 from websockets.sync.client import connect
 
-from tests.e2e.test_pen_change import assert_parked, wait_pen_change
-from tests.e2e.test_server import assert_same_drawing, preview
 from tests.fixtures.server import ServerProcess, running_server
+from tests.fixtures.trace import assert_parked, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -74,7 +73,7 @@ def test_three_colours_two_pen_changes(parked_server, plotter):
 
     drawn_before = [0]  # trace strokes drawn when each layer starts
     for layer, resume in ((2, "api"), (3, "websocket")):
-        changing = wait_pen_change(server, job["id"], layer)
+        changing = server.wait_pen_change(job["id"], layer)
         assert changing["pen_change"]["message"].startswith(f"Layer {layer} of 3, "), changing
         assert changing["pen_change"]["colour"] == COLOURS[layer - 1]
         trace = assert_parked(plotter, PARK)
@@ -88,7 +87,7 @@ def test_three_colours_two_pen_changes(parked_server, plotter):
 
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
-    shown = preview(server, job["id"])
+    shown = server.preview(job["id"])
     drawn = plotter.trace()["strokes"]
     assert len(drawn) == len(shown["strokes"]) == 9
     drawn_before.append(len(drawn))
@@ -110,7 +109,7 @@ def test_the_board_resume_button_ends_a_colour_change(parked_server, plotter):
     server.home()
     plotter.clear()
     job = upload(server, colour_svg(COLOURS[:2], rows=1))
-    wait_pen_change(server, job["id"], 2)
+    server.wait_pen_change(job["id"], 2)
     assert len(assert_parked(plotter, PARK)["strokes"]) == 1
     plotter.press("resume")
     try:

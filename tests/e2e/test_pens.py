@@ -14,9 +14,9 @@ import time
 
 import pytest
 
-from tests.e2e.test_pen_change import INK, THREE_LAYERS, assert_parked, layer, wait_pen_change
-from tests.e2e.test_server import assert_same_drawing, preview
-from tests.e2e.test_submit import submit
+from tests.fixtures.cli import start_submit
+from tests.fixtures.drawings import INK, THREE_LAYERS, layer
+from tests.fixtures.trace import assert_parked, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -68,7 +68,7 @@ def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
     job = response.json()
     assert [lay["pen"] for lay in job["layers"]] == [1, 2]  # "outline": by colour #000000
 
-    changing = wait_pen_change(server, job["id"], 2)
+    changing = server.wait_pen_change(job["id"], 2)
     assert changing["pen_change"]["message"] == (
         "Layer 2 of 2, 'shade': load pen 'red marker', then continue")
     assert_parked(plotter)
@@ -81,7 +81,7 @@ def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
     dollars = board_settings(server)
     assert (dollars["$60"], dollars["$61"]) == (str(MARKER["up_us"]), str(MARKER["down_us"]))
     drawn = plotter.trace()["strokes"]
-    assert_same_drawing(preview(server, job["id"])["strokes"], drawn)
+    assert_same_drawing(server.preview(job["id"])["strokes"], drawn)
     seconds = [stroke[-1][2] - stroke[0][2] for stroke in drawn]  # simulated time
     assert seconds[0] >= 60 / (1200 / 60) * 0.99, seconds  # 60 mm at the fineliner's 20 mm/s
     assert seconds[1] < 60 / (1200 / 60) * 0.8, seconds  # the marker: the program's 50 mm/s
@@ -101,7 +101,7 @@ def test_two_layers_two_pens_servo_positions_and_odometer(server, plotter):
     written = {name: mm * 2 for name, mm in got.items()}
     server.home()  # the restarted server may find the board not yet connected, or in Alarm
     server.client.post(f"/api/jobs/{job['id']}/restart")
-    wait_pen_change(server, job["id"], 2)
+    server.wait_pen_change(job["id"], 2)
     server.client.post(f"/api/jobs/{job['id']}/resume")
     server.wait_job(job["id"], ("done",), 120)
     deadline = time.monotonic() + 10
@@ -124,7 +124,7 @@ def test_a_pen_past_its_reink_interval_pauses_at_a_stroke_end(server, plotter):
     job = server.client.post("/api/jobs", files={"file": ("reink.svg", drawing)},
                              data={"start": "true", "pens": "red=red marker",
                                    "optimize": "false"}).json()  # fmt: skip
-    wait_pen_change(server, job["id"], 2)
+    server.wait_pen_change(job["id"], 2)
     server.client.post(f"/api/jobs/{job['id']}/resume")
 
     reink = server.wait_job(job["id"], ("pen_change", "done", "failed"), 120)
@@ -142,7 +142,7 @@ def test_a_pen_past_its_reink_interval_pauses_at_a_stroke_end(server, plotter):
     assert done["state"] == "done", done
     drawn = plotter.trace()["strokes"]
     assert len(drawn) == 4  # the third square once, not a part of any again
-    assert_same_drawing(preview(server, job["id"])["strokes"], drawn)
+    assert_same_drawing(server.preview(job["id"])["strokes"], drawn)
     assert odometers(server)["red marker"] == pytest.approx(180, rel=0.005)
 
 
@@ -152,7 +152,7 @@ def test_submit_picks_layers_and_pens_and_shows_the_prompts(server, plotter, tmp
     plotter.clear()
     drawing = tmp_path / "three.svg"
     drawing.write_text(THREE_LAYERS)
-    proc = submit(server, str(drawing), "--layers", "1,3", "--pen", "3=red marker",
+    proc = start_submit(server, str(drawing), "--layers", "1,3", "--pen", "3=red marker",
                   "--pen", "outline=red marker", "--start", "--wait", "--json")  # fmt: skip
     errors: list[str] = []
     reader = threading.Thread(target=lambda: errors.extend(proc.stderr), daemon=True)

@@ -11,8 +11,9 @@ import time
 
 import pytest
 
-from tests.e2e.test_server import assert_same_drawing, drawing, preview
+from tests.fixtures.drawings import drawing
 from tests.fixtures.server import ServerProcess, running_server
+from tests.fixtures.trace import assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
@@ -34,25 +35,10 @@ def three(plotter_factory, tmp_path):
 
 
 def home(server: ServerProcess, name: str) -> None:
-    wait_plotter(server, name, lambda m: m["connected"], 30)
+    server.wait_plotter(name, lambda m: m["connected"], 30)
     response = server.client.post(f"/api/plotters/{name}/machine/home", timeout=130)
     assert response.status_code == 200, response.text
-    wait_plotter(server, name, lambda m: m["state"] == "Idle", 30)
-
-
-def plotters(server: ServerProcess) -> dict[str, dict]:
-    return {p["name"]: p for p in server.client.get("/api/plotters").json()}
-
-
-def wait_plotter(server: ServerProcess, name: str, pred, timeout: float) -> dict:
-    deadline = time.monotonic() + timeout
-    machine: dict = {}
-    while time.monotonic() < deadline:
-        machine = plotters(server)[name]["machine"]
-        if pred(machine):
-            return machine
-        time.sleep(0.05)
-    raise AssertionError(f"{name}: condition not met in {timeout} s: {machine}")
+    server.wait_plotter(name, lambda m: m["state"] == "Idle", 30)
 
 
 def upload(server: ServerProcess, gcode: str, **fields: str) -> dict:
@@ -77,7 +63,7 @@ def test_three_at_once_then_the_fourth_when_one_frees(three):
     assert last["state"] == "done" and last["plotter"] in NAMES, last
     drawn_by: dict[str, list] = {name: [] for name in NAMES}
     for job in [*finished, last]:
-        drawn_by[job["plotter"]] += preview(server, job["id"])["strokes"]
+        drawn_by[job["plotter"]] += server.preview(job["id"])["strokes"]
     for name, expected in drawn_by.items():
         assert_same_drawing(expected, sims[name].trace()["strokes"])
 
@@ -124,7 +110,7 @@ def test_a_plotter_that_drops_out_interrupts_only_its_job_which_resumes(three):
     assert resumed.json()["plotter"] == "plotter2"
     for job in jobs.values():
         assert server.wait_job(job["id"], ENDED, 180)["state"] == "done"
-    expected = preview(server, jobs["plotter2"]["id"])["strokes"]
+    expected = server.preview(jobs["plotter2"]["id"])["strokes"]
     assert_same_drawing(expected, before["strokes"] + sims["plotter2"].trace()["strokes"])
 
 
@@ -138,7 +124,7 @@ def test_virtual_n_runs_n_simulators(tmp_path):
             "/api/plotters/plotter2/machine/command", json={"line": "G0 X5 Y7"}
         )
         assert answer.json() == {"responses": ["ok"]}
-        wait_plotter(server, "plotter2", lambda m: m["position"] == {"x": 5.0, "y": 7.0}, 10)
+        server.wait_plotter("plotter2", lambda m: m["position"] == {"x": 5.0, "y": 7.0}, 10)
         assert server.machine()["position"] == {"x": 0.0, "y": 0.0}  # /api/machine: plotter1
         trace = server.client.get("/api/plotters/plotter2/sim/trace").json()
         assert trace["position"]["x"] == pytest.approx(5.0, abs=0.05)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.e2e.test_server import drawing
+from tests.fixtures.drawings import drawing
 from tests.fixtures.server import running_server
 
 pytestmark = pytest.mark.e2e

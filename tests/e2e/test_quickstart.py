@@ -13,10 +13,10 @@ from pathlib import Path
 import httpx
 import pytest
 
+from tests.fixtures.artifacts import ARTIFACTS
 from tests.fixtures.server import free_port
 
 ROOT = Path(__file__).resolve().parents[2]
-ARTIFACTS = ROOT / "tests" / "artifacts"
 LOGIN_LINE = re.compile(r"plotbridge: open (http://\S+/login\?token=(\S+))")
 SQUARE = "G21\nG90\nG0 X10 Y10\nM3\nG1 X30 Y10 F3000\nG1 X30 Y30\nG1 X10 Y30\nG1 X10 Y10\nM5\n"
 

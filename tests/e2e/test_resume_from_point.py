@@ -19,20 +19,15 @@ import pytest
 from plotbridge.plotter.runner import JOB_POLL_HZ
 from websockets.sync.client import connect
 
-from tests.e2e.test_server import ESTOP_REDRAW_MM, FEED, assert_same_drawing, preview, submit
+from tests.fixtures.drawings import FEED, TWO_STROKES
 from tests.fixtures.server import running_server
+from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
 TOL = 0.05  # mm: a few steps
 
 # Two strokes: an L (20,20)-(60,20)-(60,40) and a bar (80,20)-(120,20).
-TWO_STROKES = "\n".join([
-    "G21", "G90", "G0 X20 Y20", "M3", f"G1 X60 Y20 F{FEED}", f"G1 X60 Y40 F{FEED}", "M5",
-    "G0 X80 Y20", "M3", f"G1 X120 Y20 F{FEED}", "M5",
-]) + "\n"  # fmt: skip
-
-
 def layered(count: int) -> str:
     """G-code of `count` layers (an M0 between them), layer k a bar at y = 10 k."""
     lines = ["G21", "G90"]
@@ -64,7 +59,7 @@ def finish(server, job_id: str, pen_changes: int = 0) -> dict:
 
 def plotted(server, plotter, gcode: str, pen_changes: int = 0) -> dict:
     plotter.clear()
-    return finish(server, submit(server, gcode)["id"], pen_changes)
+    return finish(server, server.submit(gcode)["id"], pen_changes)
 
 
 def next_answer(ws) -> dict:
@@ -124,7 +119,7 @@ def test_resume_from_a_layer_and_bad_points(server, plotter):
 def test_start_at_a_layer_and_skip_layers(server, plotter):
     server.home()
     plotter.clear()
-    job = submit(server, layered(3), start=False)
+    job = server.submit(layered(3), start=False)
     bad = server.client.post(f"/api/jobs/{job['id']}/start", json={"layers": [1, 4]})
     assert bad.status_code == 422 and "layer 4: job" in bad.text, bad.text
     started = server.client.post(f"/api/jobs/{job['id']}/start", json={"layers": [1, 3]})
@@ -170,7 +165,7 @@ def test_home_then_resume_after_an_emergency_stop(server, plotter):
                       + ["M5"]) + "\n"  # fmt: skip
     once = plotted(server, plotter, gcode) and plotter.trace()["draw_mm"]
     plotter.clear()
-    job = submit(server, gcode)
+    job = server.submit(gcode)
     server.wait_progress(job["id"], 15)
     server.wait_machine(lambda m: m["line"] is not None, 10)  # Ln: names the executing line
     assert server.client.post("/api/machine/estop").status_code == 202
@@ -180,7 +175,7 @@ def test_home_then_resume_after_an_emergency_stop(server, plotter):
     assert resumed["state"] == "running", resumed
     finish(server, job["id"])
     trace = plotter.trace()
-    assert_same_drawing(preview(server, job["id"])["strokes"], trace["strokes"])
+    assert_same_drawing(server.preview(job["id"])["strokes"], trace["strokes"])
     redrawn = trace["draw_mm"] - once
     print(f"home-then-resume: {redrawn:.4f} mm drawn twice")
     assert redrawn <= ESTOP_REDRAW_MM, f"{redrawn:.3f} mm drawn twice"
@@ -195,7 +190,7 @@ def test_server_killed_mid_stroke_redraws_at_most_one_report(plotter_factory, tm
         server.home()
         once = plotted(server, plotter, gcode) and plotter.trace()["draw_mm"]
         plotter.clear()
-        job = submit(server, gcode)
+        job = server.submit(gcode)
         server.wait_progress(job["id"], 20)
         server.wait_machine(lambda m: m["line"] is not None, 10)  # Ln: names the executing line
         killed = server.proc.pid if server.proc else None

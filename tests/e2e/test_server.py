@@ -7,103 +7,33 @@ then drives it only through the REST and WebSocket API.
 from __future__ import annotations
 
 import json
-import math
 import time
 from concurrent.futures import ThreadPoolExecutor
 
-import numpy as np
 import pytest
 from plotbridge.plotter.runner import JOB_POLL_HZ
 from websockets.sync.client import connect
 
+from tests.fixtures.drawings import FEED, drawing
 from tests.fixtures.server import running_server
+from tests.fixtures.trace import (
+    ESTOP_REDRAW_MM,
+    assert_same_drawing,
+    assert_stopped,
+    drawn_once_mm,
+    stroke_length,
+)
 
 pytestmark = pytest.mark.e2e
-
-FEED = 3000  # mm/min in the test drawings
-TOLERANCE = 0.15  # mm: a step is 0.0125 mm; the trace keeps vertices bending > ~1 step
-STEP_MM = 1 / 80
-ESTOP_REDRAW_MM = 2 * STEP_MM  # one step, and one more for the trace's rounding of the ends
-
-
-def drawing(circles: int = 1, radius: float = 15.0, segments: int = 72) -> str:
-    """G-code: a square and `circles` circles of short segments, pen by M3/M5."""
-    lines = ["G21", "G90", "M5", "G0 X20 Y20", "M3"]
-    lines += [f"G1 X{x} Y{y} F{FEED}" for x, y in ((60, 20), (60, 60), (20, 60), (20, 20))]
-    lines.append("M5")
-    for index in range(circles):
-        cx, cy = 100 + (index % 5) * 35, 40 + (index // 5) * 35
-        points = [
-            (cx + radius * math.cos(2 * math.pi * k / segments),
-             cy + radius * math.sin(2 * math.pi * k / segments))
-            for k in range(segments + 1)
-        ]  # fmt: skip
-        lines.append(f"G0 X{points[0][0]:.3f} Y{points[0][1]:.3f}")
-        lines.append("M3")
-        lines += [f"G1 X{x:.3f} Y{y:.3f} F{FEED}" for x, y in points[1:]]
-        lines.append("M5")
-    return "\n".join(lines) + "\n"
-
-
-def submit(server, gcode: str, start: bool = True) -> dict:
-    response = server.client.post("/api/jobs", files={"file": ("drawing.gcode", gcode)})
-    assert response.status_code == 201, response.text
-    job = response.json()
-    if start:
-        started = server.client.post(f"/api/jobs/{job['id']}/start")
-        assert started.status_code == 200, started.text
-    return job
-
-
-def preview(server, job_id: str) -> dict:
-    return server.client.get(f"/api/jobs/{job_id}/preview").json()
-
-
-def deviation(points: list, strokes: list) -> float:
-    """Largest distance from any of `points` to the nearest segment of `strokes` (mm)."""
-    segments = []
-    for stroke in strokes:
-        xy = np.asarray([p[:2] for p in stroke], dtype=float)
-        if len(xy) == 1:
-            xy = np.vstack([xy, xy])
-        segments.append(np.hstack([xy[:-1], xy[1:]]))
-    if not segments:
-        return math.inf
-    seg = np.vstack(segments)
-    a, b = seg[:, :2], seg[:, 2:]
-    ab = b - a
-    length2 = np.maximum((ab**2).sum(axis=1), 1e-12)
-    worst = 0.0
-    for point in np.asarray([p[:2] for p in points], dtype=float):
-        t = np.clip(((point - a) * ab).sum(axis=1) / length2, 0, 1)
-        nearest = a + ab * t[:, None]
-        worst = max(worst, float(np.sqrt(((nearest - point) ** 2).sum(axis=1)).min()))
-    return worst
-
-
-def stroke_length(strokes: list) -> float:
-    total = 0.0
-    for stroke in strokes:
-        xy = np.asarray([p[:2] for p in stroke], dtype=float)
-        total += float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum())
-    return total
-
-
-def assert_same_drawing(expected: list, drawn: list) -> None:
-    expected_points = [p for stroke in expected for p in stroke]
-    drawn_points = [p for stroke in drawn for p in stroke]
-    assert deviation(expected_points, drawn) < TOLERANCE, "part of the drawing is missing"
-    assert deviation(drawn_points, expected) < TOLERANCE, "the pen drew where it should not"
-
 
 def test_plot_matches_preview(server, plotter):
     server.home()
     plotter.clear()
-    job = submit(server, drawing(circles=2))
+    job = server.submit(drawing(circles=2))
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
     assert done["lines_done"] == done["lines_total"] and done["progress"] == 1.0
-    expected = preview(server, job["id"])["strokes"]
+    expected = server.preview(job["id"])["strokes"]
     trace = plotter.trace()
     assert len(trace["strokes"]) == len(expected)
     assert_same_drawing(expected, trace["strokes"])
@@ -111,38 +41,18 @@ def test_plot_matches_preview(server, plotter):
     assert sum(trace["violations"].values()) == 0
 
 
-def _assert_stopped(server, plotter, job_id: str, sent_at: float) -> None:
-    job = server.wait_job(job_id, ("stopped",), 5)
-    assert 0 < job["lines_done"] < job["lines_total"] and job["error"]
-    server.wait_machine(lambda m: m["state"] == "Alarm", 5)
-    trace = plotter.trace()
-    assert trace["last_step_monotonic"] - sent_at < 0.1, "steps went on after the stop"
-    time.sleep(0.3)
-    assert plotter.trace()["steps"] == trace["steps"]
-
-
-def drawn_once_mm(server, plotter, gcode: str) -> float:
-    """The pen-down length the simulator traces for `gcode` plotted without a stop: the
-    reference a resumed plot's trace is measured against (the trace's own rounding of
-    the vertices is the same in both)."""
-    plotter.clear()
-    job = submit(server, gcode)
-    assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
-    return plotter.trace()["draw_mm"]
-
-
 def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
     once = drawn_once_mm(server, plotter, drawing(circles=6))
     plotter.clear()
-    job = submit(server, drawing(circles=6))
+    job = server.submit(drawing(circles=6))
     server.wait_progress(job["id"], 40)
     sent_at = time.monotonic()
     response = server.client.post("/api/machine/estop")
     assert response.status_code == 202
-    _assert_stopped(server, plotter, job["id"], sent_at)
+    assert_stopped(server, plotter, job["id"], sent_at)
     # the next job waits until the alarm is cleared, saying why
-    other = submit(server, drawing(), start=False)
+    other = server.submit(drawing(), start=False)
     waiting = server.client.post(f"/api/jobs/{other['id']}/start").json()
     assert waiting["state"] == "waiting" and "$H" in waiting["waiting"]
     assert server.client.post(f"/api/jobs/{other['id']}/cancel").status_code == 200
@@ -150,7 +60,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
     assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
     assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
-    expected = preview(server, job["id"])["strokes"]
+    expected = server.preview(job["id"])["strokes"]
     trace = plotter.trace()
     assert_same_drawing(expected, trace["strokes"])
     # resumed where the steps stopped (the first report after the reset tells it)
@@ -161,7 +71,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
 
 def test_estop_does_not_wait_for_an_import(server, plotter):
     server.home()
-    job = submit(server, drawing(circles=15))  # long enough to outlast the upload's start
+    job = server.submit(drawing(circles=15))  # long enough to outlast the upload's start
     server.wait_progress(job["id"], 20)
     big = drawing(circles=1).encode() * 1000  # ~3 MB of G-code: seconds of import work
     with ThreadPoolExecutor(1) as pool:
@@ -175,13 +85,13 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
         response = server.client.post("/api/machine/estop")
         answered = time.monotonic() - sent_at
         assert response.status_code == 202 and answered < 0.2
-        _assert_stopped(server, plotter, job["id"], sent_at)
+        assert_stopped(server, plotter, job["id"], sent_at)
         assert uploading.result().status_code in (201, 422)
 
 
 def test_estop_websocket_mid_job(server, plotter):
     server.home()
-    job = submit(server, drawing(circles=6))
+    job = server.submit(drawing(circles=6))
     url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
     with connect(url) as ws:
         first = json.loads(ws.recv(5))
@@ -196,13 +106,13 @@ def test_estop_websocket_mid_job(server, plotter):
             seen_ack |= message == {"type": "ack", "command": "estop"}
             seen_stopped |= message["type"] == "job" and message["job"]["state"] == "stopped"
         assert seen_ack and seen_stopped
-    _assert_stopped(server, plotter, job["id"], sent_at)
+    assert_stopped(server, plotter, job["id"], sent_at)
 
 
 def test_pause_resume(server, plotter):
     server.home()
     plotter.clear()
-    job = submit(server, drawing(circles=10))
+    job = server.submit(drawing(circles=10))
     server.wait_progress(job["id"], 30)
     paused = server.client.post(f"/api/jobs/{job['id']}/pause")
     assert paused.status_code == 200 and paused.json()["state"] == "paused"
@@ -224,12 +134,12 @@ def test_pause_resume(server, plotter):
     plotter.release("resume")
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
-    assert_same_drawing(preview(server, job["id"])["strokes"], plotter.trace()["strokes"])
+    assert_same_drawing(server.preview(job["id"])["strokes"], plotter.trace()["strokes"])
 
 
 def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
     server.home()
-    job = submit(server, drawing(circles=6))
+    job = server.submit(drawing(circles=6))
     server.wait_progress(job["id"], 40)
     plotter.press("estop")
     failed = server.wait_job(job["id"], ("failed", "stopped", "interrupted", "done"), 5)
@@ -244,7 +154,7 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     server.home()
     once = drawn_once_mm(server, plotter, drawing(circles=6))
     plotter.clear()
-    job = submit(server, drawing(circles=6))
+    job = server.submit(drawing(circles=6))
     started = time.monotonic()
     sim_start = plotter.trace()["sim_time"]
     server.wait_progress(job["id"], 150)
@@ -266,7 +176,7 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
     after = plotter.trace()
-    expected = preview(server, job["id"])["strokes"]
+    expected = server.preview(job["id"])["strokes"]
     assert_same_drawing(expected, before["strokes"] + after["strokes"])
     # Redrawn: the travel since the last status report, at most one report interval
     # (two, for a report that a busy machine delays), nothing of the strokes before it.
@@ -284,8 +194,8 @@ def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
     plotter = plotter_factory(speed=3)
     with running_server(tmp_path / "server-data", ["--serial", str(plotter.port)]) as server:
         server.home()
-        job = submit(server, drawing(circles=15))
-        waiting = [submit(server, drawing(), start=False)["id"] for _ in range(2)]
+        job = server.submit(drawing(circles=15))
+        waiting = [server.submit(drawing(), start=False)["id"] for _ in range(2)]
         moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
         assert moved.status_code == 200
         server.wait_progress(job["id"], 60)
@@ -314,7 +224,7 @@ def test_virtual_mode_serves_the_trace(server_virtual):
     answer = server_virtual.client.post("/api/machine/command", json={"line": "G0 X5 Y5"})
     assert answer.json() == {"responses": ["ok"]}
     server_virtual.wait_machine(lambda m: m["position"] == {"x": 5.0, "y": 5.0}, 10)
-    job = submit(server_virtual, drawing())
+    job = server_virtual.submit(drawing())
     assert server_virtual.wait_job(job["id"], ("done", "failed"), 120)["state"] == "done"
     trace = server_virtual.client.get("/api/sim/trace").json()
-    assert_same_drawing(preview(server_virtual, job["id"])["strokes"], trace["strokes"])
+    assert_same_drawing(server_virtual.preview(job["id"])["strokes"], trace["strokes"])

@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from tests.e2e.test_firmware import Grbl, clean, mpos
+from tests.fixtures.grbl import Grbl, clean, mpos
 
 pytestmark = pytest.mark.e2e
 

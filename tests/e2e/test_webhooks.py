@@ -15,9 +15,9 @@ from typing import Any
 
 import pytest
 
-from tests.e2e.test_pen_change import THREE_LAYERS, wait_pen_change
-from tests.e2e.test_server import _assert_stopped, drawing, submit
+from tests.fixtures.drawings import THREE_LAYERS, drawing
 from tests.fixtures.server import running_server
+from tests.fixtures.trace import assert_stopped
 
 pytestmark = pytest.mark.e2e
 
@@ -100,9 +100,9 @@ def test_layered_job_events_arrive_once_in_order_after_a_500(plotter, tmp_path, 
         shown = server.client.get("/api/settings/webhooks").json()
         assert shown["fixed"] == [receiver.url] and shown["urls"] == []
         server.home()
-        job = submit(server, THREE_LAYERS)  # an SVG: the content tells, not the name
+        job = server.submit(THREE_LAYERS)  # an SVG: the content tells, not the name
         for layer in (2, 3):
-            wait_pen_change(server, job["id"], layer)
+            server.wait_pen_change(job["id"], layer)
             assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
         assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
         events = receiver.wait_for("job_done")
@@ -132,7 +132,7 @@ def test_estop_is_not_delayed_by_a_hanging_receiver(server, plotter, receiver):
     assert refused.status_code == 422 and "only http:// and https://" in refused.text
     server.home()
     receiver.go.clear()  # from now on the receiver takes the request and never answers
-    job = submit(server, drawing(circles=6))
+    job = server.submit(drawing(circles=6))
     server.wait_progress(job["id"], 40)
     deadline = time.monotonic() + 10
     while receiver.pending == 0:  # the job_started post hangs at the receiver
@@ -142,7 +142,7 @@ def test_estop_is_not_delayed_by_a_hanging_receiver(server, plotter, receiver):
     response = server.client.post("/api/machine/estop")
     answered = time.monotonic() - sent_at
     assert response.status_code == 202 and answered < 0.25, answered
-    _assert_stopped(server, plotter, job["id"], sent_at)
+    assert_stopped(server, plotter, job["id"], sent_at)
     assert server.client.get("/api/settings/webhooks").json()["webhooks"][0]["queued"] >= 2
     receiver.go.set()
     events = [e["event"] for e in receiver.wait_for("job_stopped")]

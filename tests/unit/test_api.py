@@ -23,6 +23,8 @@ from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.model import Imported
 from plotbridge.plotter.board import BoardFacts
 from plotbridge.plotter.link import LinkEvent, MachineStatus
+from plotbridge.plotter.runner import MARK_FILE
+from plotbridge.resume import Mark
 from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
@@ -46,6 +48,7 @@ class FakeLink:
         self.commands: list[str] = []
         self.realtime_bytes: list[bytes] = []
         self.estop_calls = 0
+        self.awaiting_banner = False
         self.subscribers: list[Any] = []
         self.streamed: list[tuple[int, str]] = []
         self.auto_ack = False
@@ -171,7 +174,7 @@ async def upload(client: httpx.AsyncClient, text: str = "G1 X1 Y1\n", **data: st
     return await client.post("/api/jobs", files={"file": ("drawing.gcode", text)}, data=data)
 
 
-async def settle(predicate, within: float = 2.0) -> None:
+async def settle(predicate, within: float = 15.0) -> None:
     deadline = time.time() + within
     while not predicate():
         assert time.time() < deadline, "condition not reached"
@@ -439,6 +442,24 @@ async def test_estop_stops_running_job_at_last_ack(api):
     assert (await api.client.get("/api/machine")).json()["state"] == "Alarm"
 
 
+async def test_the_stop_point_is_the_first_report_after_the_resets_banner(api, tmp_path):
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    for n in range(1, 4):
+        api.link.step()
+        await settle(lambda n=n: api.queue.jobs[job["id"]].lines_done == n)
+    api.link.set_state("Run", x=1.0, y=0.0)
+    await api.client.post("/api/machine/estop")
+    await settle(lambda: api.queue.jobs[job["id"]].state == "stopped")
+    api.link.awaiting_banner = True
+    api.link.set_state("Alarm", x=2.0, y=0.0)  # sent before the reset, read after it
+    api.link.awaiting_banner = False
+    api.link.set_state("Alarm", x=3.0, y=0.0)  # the first one after the banner: kept
+    api.link.set_state("Alarm", x=4.0, y=0.0)  # later ones are not the stop point
+    mark = tmp_path / "jobs" / job["id"] / MARK_FILE
+    await settle(lambda: (m := Mark.load(mark)) is not None and m.x == 3.0)
+
+
 async def test_estop_does_not_wait_for_a_stuck_disk(api, monkeypatch):
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
@@ -688,7 +709,7 @@ def test_ws_snapshot_and_commands(sync_client):
 
 def test_ws_estop_is_not_held_back_by_a_slow_command(sync_client):
     release = threading.Event()
-    threading.Timer(2.0, release.set).start()  # without it the test would hang, not fail
+    threading.Timer(60.0, release.set).start()  # without it the test would hang, not fail
     sent: list[str] = []
 
     async def slow_command(line: str, timeout: float = 10) -> list[str]:  # noqa: ASYNC109

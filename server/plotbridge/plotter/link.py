@@ -212,6 +212,12 @@ class Link:
     def connected(self) -> bool:
         return self._ready
 
+    @property
+    def awaiting_banner(self) -> bool:
+        """A soft reset went out and its banner has not come: a report now is from before
+        the reset (the board answers a reset with its banner first)."""
+        return self._await_banner
+
     def subscribe(self, callback: Callable[[LinkEvent], None]) -> Callable[[], None]:
         """Call `callback` synchronously for every event; it must not block."""
         self._subscribers.append(callback)

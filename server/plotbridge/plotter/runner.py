@@ -215,9 +215,11 @@ class Runner:
     def _exact_stop(self, status: MachineStatus) -> None:
         """The first report after an emergency stop's reset: where the steps stopped (Alarm
         after a reset in motion, Idle if the planner had run dry). Commands wait for it
-        (`exact_stop_known`), so it is never a report from after a `$H`."""
+        (`exact_stop_known`), so it is never a report from after a `$H`; one read before
+        the reset's banner was sent before the reset (late only on a busy host)."""
         job = self._stopped_job
         if (job is None or job.state != "stopped" or status.updated_at <= self._stopped_at
+                or self.link.awaiting_banner
                 or status.state not in ("Alarm", "Idle") or status.x is None
                 or status.y is None or self._mark is None):
             return
