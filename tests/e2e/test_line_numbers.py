@@ -17,7 +17,7 @@ from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
-UNO = "uno-cnc-shield"  # the default build (sim_build makes it)
+UNO = "uno-cnc-shield"
 MEGA = "mega-ramps14"
 FEED = 3000  # mm/min
 SEGMENT = 0.5  # mm: one planner block a line
@@ -35,16 +35,10 @@ def short_segments() -> tuple[str, int, float]:
     return "\n".join([*lines, "M5"]) + "\n", len(lines), SEGMENT * len(points)
 
 
-@pytest.fixture(scope="module")
-def mega_build(sim_build) -> None:
-    board_firmware(MEGA)
-
-
-@pytest.fixture(params=[UNO, MEGA])
+@pytest.fixture(scope="module", params=[UNO, MEGA])
 def board(request, sim_build) -> str:
     """Each profile, its firmware built."""
-    if request.param == MEGA:
-        request.getfixturevalue("mega_build")
+    board_firmware(request.param)
     return request.param
 
 
