@@ -32,11 +32,12 @@ setup-test: .stamps/system-test $(VENV)/.stamp-dev native
 
 # The server's C helpers (server/plotbridge/native/), loaded with ctypes.
 NATIVE_DIR := server/plotbridge/native
-native: $(NATIVE_DIR)/build/libgcodescan.so
+native: $(NATIVE_DIR)/build/libgcodescan.so $(NATIVE_DIR)/build/libmovelines.so $(NATIVE_DIR)/build/libsimplify.so \
+        $(NATIVE_DIR)/build/libpreviewjson.so
 
-$(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c
+$(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c $(NATIVE_DIR)/thousandths.h
 	@mkdir -p $(dir $@)
-	$(CC) -std=gnu11 -O2 -Wall -Wextra -Werror -fPIC -shared $< -o $@.tmp -lm && mv $@.tmp $@
+	$(CC) -std=gnu11 -O2 -ffp-contract=off -Wall -Wextra -Werror -fPIC -shared $< -o $@.tmp -lm && mv $@.tmp $@
 
 .stamps/system-%: scripts/setup-system
 	scripts/setup-system $*

@@ -25,8 +25,9 @@ board profile measured: uno-cnc-shield (ATmega328P) and mega-ramps14
 pulse-end interrupt).
 
 Run: .venv/bin/python bench/firmware_bench.py [--board NAME ...]
-     .venv/bin/python bench/firmware_bench.py --profile   (where the cycles of
-     the CPU-bound throughput run go, per function, from program-counter samples)
+     .venv/bin/python bench/firmware_bench.py --profile [--check]  (where the
+     cycles of the CPU-bound throughput run, or of the check-mode run, go, per
+     function, from program-counter samples)
 """
 
 from __future__ import annotations
@@ -214,9 +215,10 @@ def lookahead_cap(accel: float, depth: int) -> float:
 
 
 def profile(harness: Path, elf: Path, tmp: Path, feed: float = 24000, accel: float = CPU_ACCEL,
-            top: int = 25, board: Board = BOARDS["uno-cnc-shield"]) -> None:
-    """Cycles per streamed line by function, between the first and last ack."""
-    pre, body = circle_program(feed, False, accel)
+            top: int = 25, board: Board = BOARDS["uno-cnc-shield"], check: bool = False) -> None:
+    """Cycles per streamed line by function, between the first and last ack
+    (the CPU-bound run, or with check the $C run; asleep: `(asleep)`)."""
+    pre, body = circle_program(feed, check, accel)
     samples = tmp / "profile.txt"
     res = simulate(harness, elf, pre + body, tmp, profile=samples, profile_from=len(pre),
                    board=board)
@@ -333,7 +335,7 @@ def main() -> int:
         if "--profile" in args:
             board = BOARDS[names[0]]
             elf, harness = build(board, tmp)
-            profile(harness, elf, tmp, board=board)
+            profile(harness, elf, tmp, board=board, check="--check" in args)
             return 0
         met = [measure(BOARDS[n], tmp) for n in names]
     print("all targets met" if all(met) else "SHORTFALL: see the figures above")

@@ -41,8 +41,11 @@ from plotbridge.importing import (  # noqa: E402
     import_file,
     import_pattern,
 )
+from plotbridge.importing.detect import check_text, detect_format, line_chunks  # noqa: E402
+from plotbridge.importing.gcode import read_ops, sniff_dialect  # noqa: E402
 from plotbridge.importing.models import ErrorLog  # noqa: E402
 from plotbridge.importing.optimize import optimize_strokes, time_budget  # noqa: E402
+from plotbridge.importing.pipeline import SNIFF_CHARS  # noqa: E402
 from plotbridge.importing.svg import read_svg  # noqa: E402
 from plotbridge.motion import library  # noqa: E402
 
@@ -75,8 +78,19 @@ def _import_in_child(src: str, dest: str, queue) -> None:
     t = time.perf_counter()
     cpu = time.process_time()
     r = import_file(Path(src), "big.gcode", Path(dest), ImportOptions(), MachineProfile())
-    queue.put((time.perf_counter() - t, time.process_time() - cpu, r.estimate_s,
-               resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+    took, cpu = time.perf_counter() - t, time.process_time() - cpu
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    # The shares of the steps before the writer, each run again on its own.
+    start = time.process_time()
+    encoding = check_text(Path(src))
+    detect_format(Path(src), "big.gcode", encoding)
+    checked = time.process_time() - start
+    start = time.process_time()
+    with Path(src).open(encoding=encoding) as f:
+        options = ImportOptions(pen_dialect=sniff_dialect(f.read(SNIFF_CHARS)))
+    for _ in read_ops(line_chunks(Path(src), encoding), options, ErrorLog()):
+        pass
+    queue.put((took, cpu, r.estimate_s, rss, checked, time.process_time() - start))
 
 
 def bench_throughput(tmp: Path, lines: int) -> None:
@@ -98,7 +112,7 @@ def bench_throughput(tmp: Path, lines: int) -> None:
     child = multiprocessing.get_context("fork").Process(
         target=_import_in_child, args=(str(src), str(tmp / "big"), queue))
     child.start()
-    took, cpu, estimate, rss = queue.get()
+    took, cpu, estimate, rss, checked, reading = queue.get()
     child.join()
     print(f"(a) {count} lines, {size:.1f} MB: wc -l {floor:.3f} s "
           f"({count / floor:,.0f} lines/s; a Python line count {py_count:.2f} s); "
@@ -112,6 +126,11 @@ def bench_throughput(tmp: Path, lines: int) -> None:
     motion = bench_motion_library(count)
     print(f"    the import without the motion library: CPU {cpu - motion:.2f} s, "
           f"{(cpu - motion) / floor:.1f}x wc -l (the library alone is {motion / floor:.1f}x)")
+    rest = cpu - motion - checked - reading
+    print(f"    where the CPU time goes: checking the text and its format {checked:.2f} s, "
+          f"reading the G-code (gcodescan, GcodeReader) {reading:.2f} s, the motion library "
+          f"{motion:.2f} s, the rest (ProgramWriter: program text, estimate input, preview; "
+          f"preview.json) {rest:.2f} s")
 
 
 def bench_motion_library(lines: int) -> None:

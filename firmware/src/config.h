@@ -70,10 +70,9 @@
  * takes the value of the board it is built for from here. */
 #ifndef PLAN_SIZE
 #if defined(__AVR_ATmega2560__)
-#define PLAN_SIZE 64         /* 63 blocks, 1.3 KiB: not more, because an override
-                              * change re-derives every queued block's speed in
-                              * one go (~5,000 cycles each) while the 7 prepared
-                              * segments keep the steppers fed */
+#define PLAN_SIZE 64         /* 63 blocks, 1.5 KiB (an override change re-derives
+                              * the queue's speeds 4 blocks per main-loop pass,
+                              * so depth no longer starves the steppers then) */
 #else
 #define PLAN_SIZE 34         /* 33 blocks, 792 B: what 2 KiB less the stack's 512 B holds */
 #endif

@@ -7,17 +7,8 @@ void linebuf_reset(linebuf_t *lb)
     lb->text[0] = 0;
 }
 
-uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
+uint8_t linebuf_feed_rest(linebuf_t *lb, uint8_t c)
 {
-    /* the common byte first, in one test of each: an upper-case letter,
-     * digit or sign outside a comment, with room left (the line is
-     * NUL-terminated at its end, not after every byte) */
-    if (c > ' ' && c <= 'Z' && c != '(' && c != ';' && !(lb->in_paren | lb->in_semicolon) &&
-        lb->len < LINE_SIZE) {
-        lb->after_cr = 0;
-        lb->text[lb->len++] = (char)c;
-        return LB_NONE;
-    }
     if (c == '\n' || c == '\r') {
         if (c == '\n' && lb->after_cr) {
             lb->after_cr = 0;

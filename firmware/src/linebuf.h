@@ -19,5 +19,21 @@ void linebuf_reset(linebuf_t *lb);
 /* Feed one byte; LB_LINE / LB_OVERFLOW / LB_BAD_BYTE at a line end: text is
  * then NUL-terminated (a blank line gives LB_LINE with len 0) and stays valid
  * until the next byte is fed. */
-uint8_t linebuf_feed(linebuf_t *lb, uint8_t c);
+static inline uint8_t linebuf_feed(linebuf_t *lb, uint8_t c);
+/* linebuf_feed for every byte but the common one below */
+uint8_t linebuf_feed_rest(linebuf_t *lb, uint8_t c);
+
+static inline uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
+{
+    /* the common byte inline, in one test of each: an upper-case letter,
+     * digit or sign outside a comment, with room left (the line is
+     * NUL-terminated at its end, not after every byte) */
+    if (c > ' ' && c <= 'Z' && c != '(' && c != ';' && !(lb->in_paren | lb->in_semicolon) &&
+        lb->len < LINE_SIZE) {
+        lb->after_cr = 0;
+        lb->text[lb->len++] = (char)c;
+        return LB_NONE;
+    }
+    return linebuf_feed_rest(lb, c);
+}
 #endif

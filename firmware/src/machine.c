@@ -240,6 +240,7 @@ void machine_poll(void)
         pen_servo(0);
         mach.pen_lifted = 1;
     }
+    plan_override_step(); /* an override change's recompute, a slice per pass */
     seg_fill();
     if (!(mach.hold && seg_hold_reached() && seg_head == seg_tail))
         stepper_start();

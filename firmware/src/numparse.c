@@ -3,6 +3,15 @@
 #define MAX_MAGNITUDE 1.0e9f
 #define MAX_SIG_DIGITS 9 /* what a uint32 holds exactly; more cannot change a float */
 
+/* m * 10 + d in shifts and adds (a multiply here is a libgcc call: twice
+ * the cycles per digit) */
+static inline uint32_t times10_plus(uint32_t m, uint8_t d)
+{
+    uint32_t m2 = m + m;
+    __asm__("" : "+r"(m2)); /* (or gcc folds it back into the multiply) */
+    return (m2 << 2) + m2 + d;
+}
+
 uint8_t read_number(const char *line, uint8_t *pos, float *out)
 {
     uint8_t i = *pos;
@@ -20,7 +29,7 @@ uint8_t read_number(const char *line, uint8_t *pos, float *out)
     for (uint8_t d; (d = (uint8_t)(line[i] - '0')) <= 9; i++) {
         digits++;
         if (sig < MAX_SIG_DIGITS) {
-            mantissa = mantissa * 10u + d;
+            mantissa = times10_plus(mantissa, d);
             sig += mantissa != 0; /* leading zeros are not significant */
         } else if (exponent < 100) {
             exponent++; /* a dropped integer digit still scales */
@@ -31,7 +40,7 @@ uint8_t read_number(const char *line, uint8_t *pos, float *out)
         for (uint8_t d; (d = (uint8_t)(line[i] - '0')) <= 9; i++) {
             digits++;
             if (sig < MAX_SIG_DIGITS) {
-                mantissa = mantissa * 10u + d;
+                mantissa = times10_plus(mantissa, d);
                 sig += mantissa != 0;
                 exponent--;
             }

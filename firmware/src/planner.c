@@ -1,4 +1,5 @@
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 #include "planner.h"
 #include "settings.h"
@@ -19,6 +20,10 @@ static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
 static float last_feed;        /* the last block's feed, and as stored in blocks */
 static uint16_t last_feed_u16;
+/* an override change's recompute under way (plan_override_step) */
+#define OV_SLICE 4
+static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
+static float ov_prev_nominal;      /* the cruise speed^2 of the block before ov_at */
 static plan_line_t line_number; /* for the blocks queued next */
 void plan_set_line_number(plan_line_t n) { line_number = n; }
 
@@ -26,21 +31,23 @@ void plan_set_line_number(plan_line_t n) { line_number = n; }
  * it would divide (a float division costs ~500 cycles here); recomputed
  * whenever one of the settings they come from has changed. */
 static struct {
-    float steps_per_mm[N_AXIS], max_rate[N_AXIS], accel[N_AXIS]; /* as last seen */
+    float seen[3 * N_AXIS];       /* $100.., $110.., $120.. as last seen (adjacent in settings_t) */
     float mm_per_step[N_AXIS];
     float s_per_mm[N_AXIS];       /* 1 / max rate in mm/s */
     float inv_accel[N_AXIS];
 } axis;
+_Static_assert(offsetof(settings_t, accel) - offsetof(settings_t, steps_per_mm) ==
+                   2 * sizeof(settings.steps_per_mm) &&
+               offsetof(settings_t, max_rate) - offsetof(settings_t, steps_per_mm) ==
+                   sizeof(settings.steps_per_mm),
+               "refresh_axis compares the three per-axis settings as one run of floats");
 
 static void refresh_axis(void)
 {
-    if (!memcmp(axis.steps_per_mm, settings.steps_per_mm, sizeof(axis.steps_per_mm)) &&
-        !memcmp(axis.max_rate, settings.max_rate, sizeof(axis.max_rate)) &&
-        !memcmp(axis.accel, settings.accel, sizeof(axis.accel)))
+    const void *now = (const char *)&settings + offsetof(settings_t, steps_per_mm);
+    if (!memcmp(axis.seen, now, sizeof(axis.seen)))
         return;
-    memcpy(axis.steps_per_mm, settings.steps_per_mm, sizeof(axis.steps_per_mm));
-    memcpy(axis.max_rate, settings.max_rate, sizeof(axis.max_rate));
-    memcpy(axis.accel, settings.accel, sizeof(axis.accel));
+    memcpy(axis.seen, now, sizeof(axis.seen));
     for (uint8_t a = 0; a < N_AXIS; a++) {
         axis.mm_per_step[a] = 1.0f / settings.steps_per_mm[a];
         axis.s_per_mm[a] = 60.0f / settings.max_rate[a];
@@ -53,7 +60,7 @@ static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 
 
 void plan_reset(void)
 {
-    head = tail = count = 0;
+    head = tail = count = ov_left = 0;
     prev_nominal_sqr = 0.0f;
     exec_exit_limit = 0;
     memset(prev_unit, 0, sizeof(prev_unit));
@@ -116,6 +123,10 @@ void plan_discard_current(void)
 {
     if (!count)
         return;
+    if (ov_left && ov_at == tail) { /* executed before the override walk got to it */
+        ov_at = next_index(ov_at);
+        ov_left--;
+    }
     tail = next_index(tail);
     count--;
     exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0;
@@ -152,9 +163,11 @@ void plan_motor_steps(const int32_t *cart, int32_t *motor)
 void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
 {
     if (settings.corexy) {
-        /* A + B and A - B are always even for positions reached by plan_motor_steps */
-        cart[0] = (motor[0] + motor[1]) / 2;
-        cart[1] = (motor[0] - motor[1]) / 2;
+        /* A + B and A - B are always even for positions reached by
+         * plan_motor_steps: halving is a shift (gcc's >> of a signed value
+         * is arithmetic), no division's rounding toward zero */
+        cart[0] = (motor[0] + motor[1]) >> 1;
+        cart[1] = (motor[0] - motor[1]) >> 1;
     } else {
         cart[0] = motor[0];
         cart[1] = motor[1];
@@ -272,37 +285,50 @@ static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *u
     return plan_f16_to_float(b->nominal_sqr);
 }
 
+/* An override change recomputes every queued block (~5,000 cycles each:
+ * the geometry and the cruise speed) in slices of OV_SLICE blocks, one per
+ * plan_override_step, so that the main loop keeps the segment ring fed in
+ * between (all 63 Mega blocks at once were ~20 ms, longer than 7 short
+ * segments last). From the oldest block on: the executing one slows first.
+ * Until the walk reaches the newest block, the others keep their old speeds
+ * and junction limits, which were safe (a lowered cruise speed is honoured
+ * by the segment preparer within the block). */
+uint8_t plan_override_step(void)
+{
+    if (!ov_left)
+        return 0;
+    refresh_axis();
+    for (uint8_t n = OV_SLICE; n && ov_left; n--, ov_left--) {
+        plan_block_t *b = &ring[ov_at];
+        plan_motion_t m;
+        float unit[N_AXIS];
+        geometry(b, &m, unit);
+        float nominal = set_nominal(b, &m, unit);
+        /* a junction is never faster than the cruise speeds on either side */
+        if (ov_at != tail) {
+            float cap = ov_prev_nominal < nominal ? ov_prev_nominal : nominal;
+            plan_sqr_t c = plan_sqr_from_float(cap);
+            if (b->max_entry_sqr > c)
+                b->max_entry_sqr = c;
+        }
+        ov_prev_nominal = nominal;
+        ov_at = next_index(ov_at);
+    }
+    if (!ov_left)
+        prev_nominal_sqr = ov_prev_nominal; /* the newest block's: plan_line's next junction */
+    recalculate(1);
+    return ov_left != 0;
+}
+
 void planner_set_overrides(uint8_t feed, uint8_t rapid)
 {
     if (feed == feed_pct && rapid == rapid_pct)
         return;
     feed_pct = feed;
     rapid_pct = rapid;
-    if (!count)
-        return;
-    refresh_axis();
-    plan_block_t *const last = &ring[RING_SLOTS - 1];
-    plan_block_t *const end = &ring[head];
-    plan_block_t *const oldest = &ring[tail];
-    float prev_nominal = 0.0f;
-    plan_block_t *b = oldest;
-    do { /* (a full ring has end == oldest) */
-        plan_motion_t m;
-        float unit[N_AXIS];
-        geometry(b, &m, unit);
-        float nominal = set_nominal(b, &m, unit);
-        /* a junction is never faster than the cruise speeds on either side */
-        if (b != oldest) {
-            float cap = prev_nominal < nominal ? prev_nominal : nominal;
-            plan_sqr_t c = plan_sqr_from_float(cap);
-            if (b->max_entry_sqr > c)
-                b->max_entry_sqr = c;
-        }
-        prev_nominal = nominal;
-        b = b == last ? ring : b + 1;
-    } while (b != end);
-    prev_nominal_sqr = prev_nominal;
-    recalculate(1);
+    ov_at = tail;
+    ov_left = count;
+    plan_override_step();
 }
 
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
@@ -374,6 +400,8 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     prev_nominal_sqr = nominal;
     memcpy(position, cart, sizeof(cart));
     head = next_index(head);
+    if (ov_left)
+        ov_left++; /* the walk also caps its junction by the block before's new speed */
     if (count++ == 0)
         exec_exit_limit = b->accel_dist2; /* starts from rest */
     recalculate(0);

@@ -96,8 +96,13 @@ void plan_set_exec_exit_limit(float v_sqr);
  * G0/G28; jogs keep theirs), junction limits are capped by the new speeds,
  * and the queue is replanned. Later blocks are planned with them too. A
  * junction capped by a lower speed is not raised again when the speed
- * rises (it stays safe, merely slower, for the blocks already queued). */
+ * rises (it stays safe, merely slower, for the blocks already queued).
+ * The recompute is done a few blocks at a time, oldest first: the first
+ * slice here, the rest by plan_override_step, once per main-loop pass. */
 void planner_set_overrides(uint8_t feed_pct, uint8_t rapid_pct);
+/* The next slice of an override change's recompute (a no-op when none is
+ * under way); 1 while blocks are left. */
+uint8_t plan_override_step(void);
 /* Motor steps for cartesian steps (CoreXY: A = X + Y, B = X - Y). */
 void plan_motor_steps(const int32_t *cart, int32_t *motor);
 void plan_cart_from_motor(const int32_t *motor, int32_t *cart);

@@ -1,3 +1,5 @@
+#include <avr/interrupt.h>
+#include <avr/sleep.h>
 #include "dollar.h"
 #include "gcode.h"
 #include "inputs.h"
@@ -90,6 +92,28 @@ static void soft_reset(void)
         protocol_startup_lines();
 }
 
+/* Idle with part of a line in (or none): sleep on through the receive
+ * interrupts of its bytes (a machine_poll after each cost more than parsing
+ * the line) until the receive interrupt has a line end or half a ring, a
+ * realtime request comes, or the 1 ms clock ticks (machine_poll's timed
+ * work: the $1 motor delay, a resume's settle; and the watchdog). A sender
+ * that stops half way through a line thus only slows polling to 1 kHz. */
+static void wait_for_line(void)
+{
+    uint8_t tick = (uint8_t)timebase_ms();
+    set_sleep_mode(SLEEP_MODE_IDLE);
+    for (;;) {
+        cli();
+        if (serial_rx_wake || rt_flags || (uint8_t)timebase_ms() != tick)
+            break;
+        sleep_enable();
+        sei(); /* (the instruction after sei still runs first: no wake-up is missed) */
+        sleep_cpu();
+        sleep_disable();
+    }
+    sei();
+}
+
 void protocol_run(void)
 {
     linebuf_reset(&lb);
@@ -115,13 +139,11 @@ void protocol_run(void)
         if (mach.abort && !machine_moving())
             mach.abort = 0;
         /* a whole line between polls: polling per byte cost more than parsing */
-        uint8_t r = LB_NONE;
-        uint16_t c;
-        while (r == LB_NONE && (c = serial_read()) != SERIAL_NO_DATA)
-            r = linebuf_feed(&lb, (uint8_t)c);
+        serial_rx_wake = 0;
+        uint8_t r = serial_read_line(&lb);
         if (r == LB_NONE) {
             if (!machine_moving())
-                machine_idle_wait();
+                wait_for_line();
             continue;
         }
         uint8_t e;

@@ -2,6 +2,7 @@
 #include <avr/io.h>
 #include <avr/wdt.h>
 #include "config.h"
+#include "linebuf.h"
 #include "realtime.h"
 #include "ring.h"
 #include "serial.h"
@@ -17,6 +18,7 @@
 
 static uint8_t rx_buf[RX_SIZE];
 static volatile uint8_t rx_head, rx_tail;
+volatile uint8_t serial_rx_wake;
 static uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head, tx_tail;
 
@@ -33,21 +35,28 @@ void serial_init(void)
 ISR(UART_RX_VECT)
 {
     uint8_t c = UDR0;
-    if (realtime_byte(c))
+    /* realtime_byte only for the bytes it may take ('?', '!', '~', 0x18 and
+     * 0x7E..0xFF): a line's letters and digits skip the call */
+    if ((c >= '~' || c == '?' || c == '!' || c == 0x18) && realtime_byte(c))
         return;
-    if (ring_count(rx_head, rx_tail) < RX_SIZE) {
+    uint8_t n = ring_count(rx_head, rx_tail);
+    if (n < RX_SIZE) {
         rx_buf[ring_slot(rx_head, RX_SIZE)] = c;
         rx_head++;
     } /* a full ring drops the byte: a sender that counts never gets here */
+    /* the main loop sleeps through a line's bytes: wake it for a whole line,
+     * or for half a ring (a line longer than the ring is read in pieces) */
+    if (c == '\n' || c == '\r' || n >= RX_SIZE / 2)
+        serial_rx_wake = 1;
 }
 
-uint16_t serial_read(void)
+uint8_t serial_read_line(linebuf_t *lb)
 {
-    if (rx_head == rx_tail)
-        return SERIAL_NO_DATA;
-    uint8_t c = rx_buf[ring_slot(rx_tail, RX_SIZE)];
-    rx_tail++;
-    return c;
+    uint8_t r = LB_NONE, tail = rx_tail;
+    while (r == LB_NONE && tail != rx_head)
+        r = linebuf_feed(lb, rx_buf[ring_slot(tail++, RX_SIZE)]);
+    rx_tail = tail; /* once: the bytes taken are free for the interrupt now */
+    return r;
 }
 
 uint8_t serial_rx_free(void) { return ring_free(rx_head, rx_tail, RX_SIZE); }

@@ -70,10 +70,11 @@ static inline __attribute__((always_inline)) void fold_counts(void)
 
 void stepper_start(void)
 {
-    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
-    {
-        fold_counts();
-    }
+    if (running || done[0] || done[1]) /* (stopped, the interrupt leaves them alone) */
+        ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+        {
+            fold_counts();
+        }
     if (running || seg_head == seg_tail)
         return;
     if (!enabled)

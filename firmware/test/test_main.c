@@ -28,6 +28,7 @@ static const test_case cases[] = {
     {"segments_profile", test_segments_profile},
     {"segments_hold", test_segments_hold},
     {"planner_overrides", test_planner_overrides},
+    {"planner_override_slices", test_planner_override_slices},
     {"settings", test_settings},
     {"fuzz_replay", test_fuzz_replay},
 };

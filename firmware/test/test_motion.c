@@ -362,6 +362,8 @@ void test_planner_overrides(void)
     CHECK_NEAR(plan_sqr_to_float(q[1].max_entry_sqr), 2500, 2500.0 / 128); /* the 16-bit cruise cap */
     /* feed 50 %, rapids 25 %: every queued block, the oldest too */
     planner_set_overrides(50, 25);
+    while (plan_override_step())
+        ;
     for (int i = 0; i < 3; i++)
         CHECK_SPEED(&q[i], 25);
     CHECK_SPEED(&q[3], 100 * 0.25); /* $110 6000 mm/min */
@@ -377,6 +379,8 @@ void test_planner_overrides(void)
     CHECK_SPEED(&q[5], 25);
     /* back to 100 %: programmed speeds again */
     planner_set_overrides(100, 100);
+    while (plan_override_step())
+        ;
     CHECK_SPEED(&q[0], 50);
     CHECK_SPEED(&q[3], 100);
     /* the segment preparer follows a lowered speed inside the executing block */
@@ -402,6 +406,52 @@ void test_planner_overrides(void)
         drain(&r, 1.0 / 80.0);
     }
     CHECK(r.events == 8000);
+}
+
+/* An override change recomputes the queue a slice at a time, oldest first;
+ * blocks executed before the walk gets to them are skipped, and the end
+ * result is the queue planned with the override from the start. */
+void test_planner_override_slices(void)
+{
+    enum { N = 30, DONE = 6 };
+    float p[N][2];
+    for (int i = 0; i < N; i++) { /* 2 mm chords of a gentle curve: real junctions */
+        double a = i * 0.05;
+        p[i][0] = (float)(20 + 40 * sin(a));
+        p[i][1] = (float)(60 - 40 * cos(a));
+    }
+    fresh_planner();
+    for (int i = 0; i < N; i++)
+        CHECK(plan_line(p[i], 3000, 0) == 1);
+    plan_block_t *q = plan_current();
+    plan_f16_t before = q[10].nominal_sqr;
+    planner_set_overrides(50, 100);
+    CHECK_SPEED(&q[0], 25);
+    CHECK_SPEED(&q[3], 25);
+    CHECK(q[4].nominal_sqr == before && q[10].nominal_sqr == before); /* not yet */
+    for (int i = 0; i < DONE; i++) /* the steppers overtake the walk */
+        plan_discard_current();
+    int slices = 0;
+    while (plan_override_step())
+        slices++;
+    CHECK(slices == (N - DONE) / 4 - 1);
+    for (int i = 1; i < N - DONE; i++)
+        CHECK(plan_current()[i].entry_sqr <= plan_current()[i].max_entry_sqr);
+    /* the same lines planned with the override already set */
+    plan_block_t walked[N];
+    memcpy(walked, plan_current(), sizeof(plan_block_t) * (N - DONE));
+    fresh_planner();
+    int32_t from[2] = {lroundf(p[DONE - 1][0] * 80), lroundf(p[DONE - 1][1] * 80)};
+    plan_set_position(from);
+    for (int i = DONE; i < N; i++)
+        CHECK(plan_line(p[i], 3000, 0) == 1);
+    q = plan_current();
+    for (int i = 1; i < N - DONE; i++) {
+        CHECK(walked[i].nominal_sqr == q[i].nominal_sqr);
+        CHECK(walked[i].max_entry_sqr == q[i].max_entry_sqr);
+    }
+    plan_reset();
+    planner_set_overrides(100, 100);
 }
 
 void test_settings(void)

@@ -287,6 +287,27 @@ def test_bad_input_gives_errors_and_keeps_working(plotter, grbl: Grbl) -> None:
     assert mpos(grbl.status()) == (1.0, 0.0)
 
 
+def test_half_a_line_in_keeps_the_board_serviced(plotter, grbl: Grbl) -> None:
+    """The main loop sleeps through a line's bytes until its end: with half a
+    line waiting, status requests are still answered, the $1 idle delay still
+    switches the motors off, and the line runs once its end comes."""
+    unlocked(grbl)
+    grbl.ok("$1=30")
+    grbl.ok("G0 X5 Y5")
+    grbl.wait_state("Idle")
+    plotter.wait_trace(lambda t: t["enabled"] is False, 20)  # the idle delay, nothing pending
+    grbl.ok("G0 X2")
+    grbl.wait_state("Idle")
+    grbl.ser.write(b"G0 X1")  # no line end yet
+    assert grbl.status().startswith("<Idle|")
+    plotter.wait_trace(lambda t: t["enabled"] is False, 20)  # the 1 ms tick still polls
+    grbl.ser.write(b"2.5 Y3\n")
+    assert grbl.wait_for(r"^(ok|error:\d+)$")[-1] == "ok"
+    grbl.wait_state("Idle")
+    assert mpos(grbl.status()) == (12.5, 3.0)
+    grbl.ok("$1=255")
+
+
 def test_check_mode_moves_nothing(plotter, grbl: Grbl) -> None:
     unlocked(grbl)
     grbl.ok("$C")

@@ -6,20 +6,14 @@ import asyncio
 import contextlib
 import math
 import time
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator
 
 import pytest
 from plotbridge.plotter.link import Link, LinkEvent, StreamAborted
 
+from tests.fixtures.waits import settle
+
 pytestmark = pytest.mark.e2e
-
-
-async def until(predicate: Callable[[], bool], limit: float, what: str) -> None:
-    deadline = time.monotonic() + limit
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"{what}: not within {limit} s")
-        await asyncio.sleep(0.01)
 
 
 @contextlib.asynccontextmanager
@@ -27,7 +21,7 @@ async def link_to(port: str) -> AsyncIterator[Link]:
     link = Link(port)
     task = asyncio.create_task(link.run())
     try:
-        await until(lambda: link.connected, 10, "connected")
+        await settle(lambda: link.connected, 10, "connected")
         yield link
     finally:
         task.cancel()
@@ -39,7 +33,7 @@ async def unlocked(link: Link) -> None:
     """Clear the power-up alarm (homing is enabled by default) and wait for Idle."""
     if link.status.state == "Alarm":
         await link.command("$X")
-    await until(lambda: link.status.state == "Idle", 5, "Idle")
+    await settle(lambda: link.status.state == "Idle", 5, "Idle")
 
 
 def circle_program(cx: float, cy: float, r: float, segments: int) -> list[str]:
@@ -80,7 +74,7 @@ async def test_stream_few_hundred_segments_and_trace_completes(plotter):
         acked: list[int] = []
         await link.stream(iter(enumerate(program, 1)), acked.append)
         assert acked == list(range(1, len(program) + 1))
-        await until(lambda: link.status.state == "Idle", 20, "Idle after the stream")
+        await settle(lambda: link.status.state == "Idle", 20, "Idle after the stream")
         t = await trace(plotter)
         assert t["pen"] == "up"
         assert (round(t["position"]["x"], 1), round(t["position"]["y"], 1)) == (140.0, 100.0)
@@ -101,19 +95,19 @@ async def test_estop_mid_stream_stops_motion(plotter):
             f"G1 X{10 + (i % 2) * 200} Y{10 + i} F3000" for i in range(60)]
         acked: list[int] = []
         stream = asyncio.create_task(link.stream(iter(enumerate(program, 1)), acked.append))
-        await until(lambda: link.status.state == "Run" and len(acked) > 5, 10, "running")
+        await settle(lambda: link.status.state == "Run" and len(acked) > 5, 10, "running")
         link.estop()
         with pytest.raises(StreamAborted) as info:
             await asyncio.wait_for(stream, 5)
         assert info.value.reason == "estop" and info.value.last_acked < len(program)
-        await until(lambda: link.status.state == "Alarm", 5, "Alarm after estop")
+        await settle(lambda: link.status.state == "Alarm", 5, "Alarm after estop")
         first = await trace(plotter)
         await asyncio.sleep(0.5)
         second = await trace(plotter)
         assert first["steps"] == second["steps"], "the steppers kept moving after estop"
         # Unlock works and the link is in step again.
         assert await link.command("$X") is not None
-        await until(lambda: link.status.state == "Idle", 5, "Idle after unlock")
+        await settle(lambda: link.status.state == "Idle", 5, "Idle after unlock")
 
 
 async def test_link_loss_and_reconnect(plotter):
@@ -122,11 +116,11 @@ async def test_link_loss_and_reconnect(plotter):
         link.subscribe(lambda e: events.append(e.kind))
         plotter.kill()
         t0 = time.monotonic()
-        await until(lambda: not link.connected, 2, "loss noticed")
+        await settle(lambda: not link.connected, 2, "loss noticed")
         assert time.monotonic() - t0 < 1.0
         assert link.status.state == "Disconnected" and "disconnected" in events
         await asyncio.to_thread(plotter.restart)
-        await until(lambda: link.connected, 10, "reconnected")
+        await settle(lambda: link.connected, 10, "reconnected")
         assert events.count("connected") == 1
         assert link.settings[130] == 300
         await unlocked(link)

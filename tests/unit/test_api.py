@@ -29,6 +29,8 @@ from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
+from tests.fixtures.waits import settle
+
 TOKEN = "test-token-0123456789"
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 
@@ -172,13 +174,6 @@ async def api(tmp_path, monkeypatch):
 
 async def upload(client: httpx.AsyncClient, text: str = "G1 X1 Y1\n", **data: str):
     return await client.post("/api/jobs", files={"file": ("drawing.gcode", text)}, data=data)
-
-
-async def settle(predicate, within: float = 15.0) -> None:
-    deadline = time.time() + within
-    while not predicate():
-        assert time.time() < deadline, "condition not reached"
-        await asyncio.sleep(0.01)
 
 
 # ---- auth -----------------------------------------------------------------------

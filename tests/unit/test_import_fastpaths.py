@@ -1,11 +1,15 @@
 """The importer's fast paths give what the general paths give, byte for byte: G-code's
 common lines (native/gcodescan.c, read a chunk at a time, written in bulk by
-ProgramWriter.moves) against every line through the general parser and each move
-written alone; SVG path data read in bulk against svgelements."""
+ProgramWriter.moves through native/movelines.c) against every line through the general
+parser and each move written alone; the preview's strokes written by
+native/previewjson.c against json.dumps; SVG path data read in bulk against
+svgelements."""
 
 from __future__ import annotations
 
+import json
 import random
+import re
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +21,10 @@ from plotbridge.importing.models import ErrorLog
 from plotbridge.importing.ops import single_moves
 from plotbridge.importing.pipeline import write_program
 from plotbridge.importing.placement import Transform
+from plotbridge.importing.preview import PreviewBuilder
+from plotbridge.native import movelines
 from plotbridge.native.gcodescan import LINE, OTHER, RAPID, scan
+from plotbridge.native.previewjson import strokes_json
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 PROFILE = MachineProfile(width=300, height=220)
@@ -56,10 +63,19 @@ def test_scan_reads_common_lines_and_leaves_the_rest():
     text = ("G1 X1.5 Y-2 F3000\ng0x.5y+7\n  G01\tX 1. Y 2 ; a note\nG1 X1 Y2 ;(no)\n"
             "G1 X1e3 Y2\nG1 Y2 X1\nN5 G1 X1 Y2\nG10 X1 Y2\nG1 X1 Y2 F\n\nG1 X1 Y2 ; é\n"
             f"G1 X1 Y2 ;{'x' * 300}\n")
-    kind, x, y, f = scan(text, 256)
+    lines = scan(text, 256)
+    kind, x, y, f = lines.kind, lines.x, lines.y, lines.f
     assert kind.tolist() == [LINE, RAPID, LINE] + [OTHER] * 9
     assert x[:3].tolist() == [1.5, 0.5, 1.0] and y[:3].tolist() == [-2.0, 7.0, 2.0]
     assert f[0] == 3000 and np.isnan(f[1:3]).all()
+    assert lines.feed[:3].tolist() == [3000.0] * 3     # the run's last F
+    assert [lines.line(k) for k in (3, 9, 10)] == ["G1 X1 Y2 ;(no)", "", "G1 X1 Y2 ; é"]
+
+
+def test_scan_leaves_feeds_that_are_not_positive_to_the_general_parser():
+    lines = scan("G1 X1 Y2 F100\nG1 X1 Y2 F0\nG1 X1 Y2 F-5\nG1 X1 Y2\nG1 X1 Y2 F.5\n", 256)
+    assert lines.kind.tolist() == [LINE, OTHER, OTHER, LINE, LINE]
+    assert np.isnan(lines.feed[3]) and lines.feed[4] == 0.5    # a run restarts after one
 
 
 @pytest.mark.parametrize("name", sorted(p.name for p in (FIXTURES / "gcode").glob("*.gcode")))
@@ -182,3 +198,65 @@ def test_svg_fixtures_paths_read_in_bulk_as_svgelements_reads_them(monkeypatch):
             assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(bulk, general,
                                                                       strict=True))
     assert seen > 0
+
+
+def test_preview_strokes_written_natively_as_json_dumps_writes_them(tmp_path):
+    rng = np.random.default_rng(5)
+    edge = [0.0, -0.0, -0.0004, 0.0005, 0.0015, 0.0025, 2.675, 1e11 + 0.0625, 299.9995,
+            -12.3456, 1e-9, 100.1, 7.0]
+    strokes = [np.array(edge, float).reshape(-1, 2) if len(edge) % 2 == 0 else
+               np.array(edge[:-1], float).reshape(-1, 2)]
+    strokes += [rng.uniform(-5, 400, (int(rng.integers(1, 50)), 2)) for _ in range(200)]
+    strokes += [np.round(rng.uniform(0, 300, (30, 2)), int(rng.integers(0, 4)))
+                for _ in range(50)]
+    pb = PreviewBuilder()
+    for s in strokes:
+        pb.draw_many(float(s[0, 0]), float(s[0, 1]), s[1:])
+        pb.end_stroke()
+        pb.move(1.0, 2.0, 3.00049, 4.0)
+    bounds = {"min_x": 0.0, "min_y": -0.0, "max_x": 1.5, "max_y": 2.0}
+    pb.write(tmp_path / "p.json", bounds)
+    assert strokes_json(pb.strokes) is not None
+    assert (tmp_path / "p.json").read_text() == json.dumps(pb.finish(bounds),
+                                                           separators=(",", ":"))
+    assert strokes_json([np.array([[1e13, 0.0]])]) is None     # left to json.dumps
+
+
+def _python_lines(x, y, feeds, start, feed_text) -> str:
+    """What ProgramWriter.move writes for each point, repeats skipped."""
+    out, last = [], start
+    for a, b, f in zip(x.tolist(), y.tolist(), feeds.tolist(), strict=True):
+        at = (float(f"{a:.3f}"), float(f"{b:.3f}"))
+        if at != last:
+            out.append(f"G0 X{a:.3f} Y{b:.3f}\n" if f != f else
+                       f"G1 X{a:.3f} Y{b:.3f} F{feed_text(f)}\n")
+        last = at
+    return "".join(out)
+
+
+def test_move_lines_round_as_python_formats_and_keep_feed_texts(monkeypatch):
+    monkeypatch.setattr(movelines, "FEEDS_MAX", 8)    # the texts start afresh often
+    rng = np.random.default_rng(11)
+    texts = []
+
+    def feed_text(f: float) -> str:
+        texts.append(f)
+        return f"{round(f, 1):g}"
+
+    run = movelines.MoveLines((-1.0, -1.0, 1e6, 1e6), feed_text, 0, 1)
+    # exact halves of the third decimal (ties to even), values rounding to -0.000,
+    # long random ones, repeats
+    ties = np.array([k / 16 for k in range(-8, 400)] + [k / 2048 for k in range(-2, 3000, 7)])
+    for trial in range(150):
+        n = int(rng.integers(1, 60))
+        x = rng.choice(np.r_[ties, rng.uniform(-0.9, 500, 50), -0.0004, -0.0], n)
+        y = rng.choice(np.r_[ties, rng.uniform(0, 300, 50)], n)
+        if trial % 3 == 0:
+            x[1::2], y[1::2] = x[:-1:2], y[:-1:2]
+        feeds = rng.choice(np.r_[rng.uniform(1, 9000, 20), [np.nan, 1500.0]], n)
+        lines = run.run(x, y, feeds, (0.0, 0.0), 0.0)
+        assert lines is not None
+        assert lines.text == _python_lines(x, y, feeds, (0.0, 0.0), feed_text)
+        assert [str(v) for v in lines.xy.ravel()] == [
+            str(float(t)) for t in re.findall(r"[XY](\S+)", lines.text)]
+    assert run.run(np.array([5.0, 2e6]), np.zeros(2), np.ones(2), (0.0, 0.0), 0.0) is None

@@ -4,27 +4,15 @@ starting a text chunk that its anchor shifts."""
 
 from __future__ import annotations
 
-import pytest
-
-from tests.unit.import_helpers import drawn_strokes, program_lines, run_import
-
-HEAD = ('<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" '
-        'viewBox="0 0 100 100">')
-# Hershey futural's "I" at font-size 32 (one glyph unit a user unit): one vertical
-# stroke 4 units right of the glyph's origin, from the baseline 21 units up; 8 wide.
-I_X, I_TOP, I_ADVANCE = 4.0, 21.0, 8.0
+from tests.fixtures.text_glyphs import HEAD, I_ADVANCE, glyph_poses
+from tests.unit.import_helpers import run_import
 
 
 def glyph_origins(tmp_path, body: str) -> list[tuple[float, float]]:
-    """Where each "I" was set: its origin (x, baseline y) in SVG user units (y down)."""
-    doc = HEAD + f'<g font-size="32" font-family="Hershey Sans">{body}</g></svg>'
-    r = run_import(tmp_path, doc, "d.svg", optimize=False)
-    out = []
-    for s in drawn_strokes(program_lines(r)):
-        (x0, y0), (x1, y1) = s[0], s[-1]
-        assert x0 == pytest.approx(x1) and abs(y1 - y0) == pytest.approx(I_TOP, abs=0.01)
-        out.append((round(x0 - I_X, 3), round(100 - min(y0, y1), 3)))
-    return out
+    """Where each "I" was set, upright: its origin (x, baseline y) in SVG user units."""
+    poses = glyph_poses(tmp_path, body)
+    assert all(angle == 0 for _, _, angle in poses), poses
+    return [(x, y) for x, y, _ in poses]
 
 
 def test_x_and_y_lists_place_each_glyph(tmp_path):

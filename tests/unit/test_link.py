@@ -24,6 +24,8 @@ from plotbridge.plotter.link import (
 )
 from plotbridge.program.wire import compact_async
 
+from tests.fixtures.waits import settle
+
 SETTINGS = ["$0=4", "$10=3", "$110=6000.000", "$130=300.000", "$131=220.000"]
 
 
@@ -181,21 +183,13 @@ class FakeLink(Link):
         return transport
 
 
-async def until(predicate: Callable[[], bool], limit: float = 2.0) -> None:
-    deadline = time.monotonic() + limit
-    while not predicate():
-        if time.monotonic() > deadline:
-            raise AssertionError("condition not met in time")
-        await asyncio.sleep(0.005)
-
-
 @contextlib.asynccontextmanager
 async def running(board: FakeBoard):
     link = FakeLink(board)
     auto, board.auto = board.auto, True    # answer the handshake at once
     task = asyncio.create_task(link.run())
     try:
-        await until(lambda: link.connected)
+        await settle(lambda: link.connected)
         board.auto = auto
         yield link
     finally:
@@ -264,7 +258,7 @@ async def test_no_grbl_board_is_retried_not_fatal():
         await asyncio.sleep(0.8)
         assert not link.connected and not task.done()
         board.muted = False
-        await until(lambda: link.connected, 3.0)
+        await settle(lambda: link.connected, 3.0)
     finally:
         task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
@@ -275,7 +269,7 @@ async def test_status_polled_and_published():
     board = FakeBoard()
     async with running(board) as link:
         board.state, board.pos, board.accessories = "Run", (12.0, 3.5), "S"
-        await until(lambda: link.status.state == "Run")
+        await settle(lambda: link.status.state == "Run")
         assert (link.status.x, link.status.y, link.status.pen) == (12.0, 3.5, "down")
         assert link.status.planner_free == 15
         statuses = [e for e in link.events if e.kind == "status"]
@@ -300,7 +294,7 @@ async def test_homing_answer_carries_the_state_homing_left():
     board = FakeBoard()
     board.state = "Alarm"
     async with running(board) as link:
-        await until(lambda: link.status.state == "Alarm")
+        await settle(lambda: link.status.state == "Alarm")
         link.poll_hz = 0.01     # no routine poll may refresh the state by chance
 
         def home(line: str) -> list[str] | None:
@@ -367,7 +361,7 @@ async def test_stream_lines_sent_ahead_of_acks():
     board = FakeBoard(auto=False)
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(20)), lambda n: None))
-        await until(lambda: len(board.rx) > 90)
+        await settle(lambda: len(board.rx) > 90)
         # Several lines are in the buffer while none is acknowledged yet.
         assert board.rx.count(b"\n") >= 3
         board.auto = True
@@ -389,7 +383,7 @@ async def test_error_mid_stream_aborts_with_line_number():
         assert exc.last_acked == 9
         # The link stays usable and in step afterwards.
         board.on_line = None
-        await until(lambda: link._counter.outstanding == 0)
+        await settle(lambda: link._counter.outstanding == 0)
         assert await link.command("G0 X0") == []
 
 
@@ -417,7 +411,7 @@ async def test_alarm_mid_stream_aborts_and_shows_alarm():
         assert any(e.kind == "alarm" and e.code == 2 for e in link.events)
         assert link._counter.outstanding == 0
         board.state = "Idle"
-        await until(lambda: link.status.state == "Idle")
+        await settle(lambda: link.status.state == "Idle")
         assert link.status.alarm is None
 
 
@@ -437,7 +431,7 @@ async def test_alarm_leftovers_answered_with_error_are_not_taken_for_a_command()
     board.on_line = limit
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(100)), lambda n: None))
-        await until(lambda: len(board.rx) > 90)
+        await settle(lambda: len(board.rx) > 90)
         while board.state != "Alarm":     # run up to the alarm; leftovers stay
             board.execute(1)
             await asyncio.sleep(0.001)
@@ -474,7 +468,7 @@ async def test_cancel_stream():
     board = FakeBoard(auto=False)
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(200)), lambda n: None))
-        await until(lambda: len(board.rx) > 90)
+        await settle(lambda: len(board.rx) > 90)
         link.cancel_stream()
         with pytest.raises(StreamAborted) as info:
             await asyncio.wait_for(task, 1)
@@ -506,21 +500,21 @@ async def test_disconnect_mid_stream_then_reconnect():
     board = FakeBoard(auto=False)
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(200)), lambda n: None))
-        await until(lambda: len(board.rx) > 90)
+        await settle(lambda: len(board.rx) > 90)
         board.execute(3)
         await asyncio.sleep(0.01)
         board.unplug()
         with pytest.raises(StreamAborted) as info:
             await asyncio.wait_for(task, 1)
         assert info.value.reason == "disconnected" and info.value.last_acked == 3
-        await until(lambda: not link.connected)
+        await settle(lambda: not link.connected)
         assert link.status.state == "Disconnected"
         assert any(e.kind == "disconnected" for e in link.events)
         with pytest.raises(LinkDown):
             await link.command("$X")
         board.auto = True
         board.unplugged = False
-        await until(lambda: link.connected, 3.0)
+        await settle(lambda: link.connected, 3.0)
         assert board.connects == 2 and board.lines.count("$$") == 2
 
 
@@ -529,10 +523,10 @@ async def test_silent_board_noticed_within_a_second():
     async with running(board) as link:
         board.muted = True
         t0 = time.monotonic()
-        await until(lambda: not link.connected, 2.0)
+        await settle(lambda: not link.connected, 2.0)
         assert time.monotonic() - t0 < 1.0
         board.muted = False
-        await until(lambda: link.connected, 3.0)
+        await settle(lambda: link.connected, 3.0)
 
 
 # --- realtime and emergency stop ------------------------------------------------
@@ -543,7 +537,7 @@ async def test_estop_during_stream_writes_reset_first_and_aborts():
     board.state = "Run"
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(300)), lambda n: None))
-        await until(lambda: len(board.rx) > 90)
+        await settle(lambda: len(board.rx) > 90)
         before = len(board.writes)
         link.estop()   # synchronous: the byte is out before estop() returns
         written = board.writes[before:]
@@ -554,7 +548,7 @@ async def test_estop_during_stream_writes_reset_first_and_aborts():
         assert info.value.reason == "estop"
         after = board.writes[before + len(written):]
         assert not any(w.endswith(b"\n") for w in after), "G-code sent after the reset"
-        await until(lambda: link.status.state == "Alarm")
+        await settle(lambda: link.status.state == "Alarm")
 
 
 async def test_command_after_reset_waits_for_banner():
@@ -576,7 +570,7 @@ async def test_realtime_bytes_written_immediately():
     board = FakeBoard(auto=False)
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(100)), lambda n: None))
-        await until(lambda: len(board.rx) > 90)
+        await settle(lambda: len(board.rx) > 90)
         link.realtime(b"!")
         assert board.writes[-1] == b"!"
         link.realtime(b"~")
@@ -594,7 +588,7 @@ async def test_reset_to_continue_gets_a_soft_reset():
         alarms: list[int | None] = []
         link.subscribe(lambda event: alarms.append(event.code) if event.kind == "alarm" else None)
         board.send("ALARM:1", "[MSG:Reset to continue]")
-        await until(lambda: b"\x18" in board.writes)
+        await settle(lambda: b"\x18" in board.writes)
         assert alarms == [1]  # (the status may already be the reset board's, without it)
 
 
@@ -617,7 +611,7 @@ async def test_stock_grbl_work_position_reports_without_buffer_field():
                    + ["<Run|WPos:6.000,8.000,0.000|FS:500,0>"] * 1000)
     board.status_line = lambda: next(reports)
     async with running(board) as link:
-        await until(lambda: link.status.state == "Run")
+        await settle(lambda: link.status.state == "Run")
         assert (link.status.x, link.status.y) == (16.0, 28.0)
         assert link.status.rx_free is None and link.status.feed == 500
         acked: list[int] = []
@@ -712,7 +706,7 @@ async def test_estop_with_full_os_buffer_discards_unsent_lines():
     board = FakeBoard(auto=False)
     async with running(board) as link:
         task = asyncio.create_task(link.stream(iter(program(200)), lambda n: None))
-        await until(lambda: len(board.rx) > 60)
+        await settle(lambda: len(board.rx) > 60)
         board.write_limit = 0                # the OS takes nothing for now
         board.execute(2)
         await asyncio.sleep(0.02)            # freed space: more lines queue up unsent
@@ -721,6 +715,6 @@ async def test_estop_with_full_os_buffer_discards_unsent_lines():
         board.write_limit = None
         with pytest.raises(StreamAborted):
             await asyncio.wait_for(task, 1)
-        await until(lambda: b"\x18" in board.writes)
+        await settle(lambda: b"\x18" in board.writes)
         after = b"".join(board.writes[board.writes.index(b"\x18"):])
         assert b"G1" not in after, "line bytes reached the board after the reset"

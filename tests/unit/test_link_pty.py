@@ -14,6 +14,8 @@ import time
 
 from plotbridge.plotter.link import Link, StreamAborted
 
+from tests.fixtures.waits import settle
+
 
 class PtyBoard:
     def __init__(self) -> None:
@@ -61,13 +63,6 @@ class PtyBoard:
             os.close(self.master)
 
 
-async def wait_for(predicate, limit: float = 3.0) -> None:
-    deadline = time.monotonic() + limit
-    while not predicate():
-        assert time.monotonic() < deadline, "condition not met in time"
-        await asyncio.sleep(0.01)
-
-
 async def test_pty_connect_stream_estop_and_loss(tmp_path):
     board = PtyBoard()
     port = tmp_path / "plotter.pty"
@@ -75,7 +70,7 @@ async def test_pty_connect_stream_estop_and_loss(tmp_path):
     link = Link(str(port))
     task = asyncio.create_task(link.run())
     try:
-        await wait_for(lambda: link.connected)
+        await settle(lambda: link.connected)
         assert link.settings == {0: 4.0, 110: 6000.0}
         assert (link.status.x, link.status.y) == (1.0, 2.0)
         assert b"\x18" not in board.raw
@@ -87,7 +82,7 @@ async def test_pty_connect_stream_estop_and_loss(tmp_path):
         board.hold = True
         stream = asyncio.create_task(
             link.stream(iter((n, f"G1 X{n} F1000") for n in range(1, 100)), acked.append))
-        await wait_for(lambda: len(board.rx) > 100)
+        await settle(lambda: len(board.rx) > 100)
         link.estop()
         try:
             await asyncio.wait_for(stream, 2)
@@ -95,12 +90,12 @@ async def test_pty_connect_stream_estop_and_loss(tmp_path):
             assert exc.reason == "estop"
         else:
             raise AssertionError("stream was not aborted")
-        await wait_for(lambda: board.raw.endswith(b"\x18") or b"\x18?" in board.raw)
+        await settle(lambda: board.raw.endswith(b"\x18") or b"\x18?" in board.raw)
         board.hold = False
 
         board.close()
         t0 = time.monotonic()
-        await wait_for(lambda: not link.connected, 2.0)
+        await settle(lambda: not link.connected, 2.0)
         assert time.monotonic() - t0 < 1.0
         assert link.status.state == "Disconnected"
     finally:

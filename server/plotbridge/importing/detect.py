@@ -39,7 +39,9 @@ def check_text(path: Path) -> str:
                                             f"0x{chunk[bad]:02x} at offset {offset + bad}")
             if blank and chunk.strip():
                 blank = False
-            if utf8:
+            # ASCII with no sequence open before it is UTF-8 (and 10 times faster to
+            # tell than decoding it)
+            if utf8 and not (chunk.isascii() and not decoder.getstate()[0]):
                 try:
                     decoder.decode(chunk)
                 except UnicodeDecodeError:

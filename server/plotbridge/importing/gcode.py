@@ -39,6 +39,7 @@ _NOOP_M = {2.0, 30.0, 7.0, 8.0, 9.0}
 # M words dropped with a warning: motors on and off (the server manages the motors).
 _MOTOR_M = {17.0, 18.0, 84.0}
 _AXIS_WORDS = frozenset("XYZIJRFSPNT")
+PLAIN_LINES = 256       # plain lines whose words GcodeReader keeps
 ARC_RADIUS_ABS = 0.005
 ARC_RADIUS_REL = 0.001
 
@@ -116,6 +117,9 @@ class GcodeReader:
         self.pending_layer: str | None = None
         self.tool: float | None = None
         self.default_feed = options.feed
+        # The words of plain lines read before (M3, M5, ...: a file repeats a few of them
+        # thousands of times), each read the same way every time.
+        self._plain: dict[str, list[tuple[str, str]]] = {}
 
     def ops(self, chunks: Iterable[tuple[int, str]]) -> Iterator[tuple]:
         """The ops of the source, given as chunks of whole lines: (number of the chunk's
@@ -127,69 +131,86 @@ class GcodeReader:
             return
         out: list[tuple] = []
         for first, text in chunks:
-            kind, xs, ys, fs = scan(text, MAX_LINE)
-            raws = text.split("\n")
+            lines = scan(text, MAX_LINE)
+            kind = lines.kind
             common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
             for a, b in itertools.pairwise(cuts):
-                k = a
-                while k < b:
-                    taken = 0
-                    if common[a] and not self.relative and not self.inches:
-                        taken = self._run(out, first + k, kind[k:b], xs[k:b], ys[k:b],
-                                          fs[k:b])
-                    if taken:
-                        k += taken
-                    else:
-                        # any other line, a common one in relative or inch mode, or one
-                        # whose F is not positive (the general parser reports it)
-                        self._line(out, first + k, raws[k])
-                        k += 1
-                    if out:     # before the next line: errors keep the source's order
-                        yield from out
-                        out.clear()
+                if common[a] and not self.relative and not self.inches:
+                    self._run(out, first + a, kind[a:b], lines.x[a:b], lines.y[a:b],
+                              lines.feed[a:b])
+                else:
+                    # any other line, or a common one in relative or inch mode (a run
+                    # of common lines changes neither)
+                    for k in range(a, b):
+                        self._line(out, first + k, lines.line(k))
+                        if out:     # before the next line: errors keep the source's order
+                            yield from out
+                            out.clear()
+                if out:
+                    yield from out
+                    out.clear()
 
     def _run(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
-             y: np.ndarray, f: np.ndarray) -> int:
-        """Appends the ops of consecutive common lines (absolute millimetres) as MOVES
-        ops; returns how many lines it took (all, or those before a non-positive F)."""
-        given = ~np.isnan(f)
-        bad = np.flatnonzero(given & (f <= 0))
-        if len(bad):
-            n = int(bad[0])
-            return self._run(out, first, kind[:n], x[:n], y[:n], f[:n]) if n else 0
+             y: np.ndarray, feed: np.ndarray) -> None:
+        """Appends the ops of consecutive common lines (absolute millimetres) as MOVES ops;
+        `feed`: the last F given in the run at or before each line (NaN when none is)."""
         n = len(kind)
+        if n == 1 and self.dialect not in MOTION_PEN:
+            self._one(out, first, int(kind[0]) == LINE, float(x[0]) + self.off_x,
+                      float(y[0]) + self.off_y, float(feed[0]))
+            return
         draw = kind == LINE
         x = x + self.off_x
         y = y + self.off_y
         # The feed of each line: the last F given at or before it, else the one before
         # the run; a G1 with no feed ever given warns once and takes the default.
-        at = np.maximum.accumulate(np.where(given, np.arange(n), -1))
         before = self.feed
         if before is None:
-            unfed = np.flatnonzero(draw & (at < 0))
+            unfed = np.flatnonzero(draw & np.isnan(feed))
             if len(unfed):
                 self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
                 before = self.default_feed
-        feed = np.where(at >= 0, f[np.maximum(at, 0)], np.nan if before is None else before)
-        if at[-1] >= 0 or before is not None:
-            self.feed = float(feed[-1])
+        if before is not None:
+            feed = np.where(np.isnan(feed), before, feed)
+        last = float(feed[-1])
+        if last == last:
+            self.feed = last
         feeds = np.where(draw, feed, np.nan)
         self.motion = 1 if draw[-1] else 0
         self.x, self.y = float(x[-1]), float(y[-1])
         if self.dialect not in MOTION_PEN:
             out.append((MOVES, first, x, y, feeds))
-            return n
+            return
         # The pen follows the motion mode: one MOVES op per stretch of the same pen.
         pen = draw if self.dialect == "none" or self.laser else np.zeros(n, bool)
         cuts = [0, *(np.flatnonzero(pen[1:] != pen[:-1]) + 1).tolist(), n]
         for a, b in itertools.pairwise(cuts):
             self._pen(out, first + a, bool(pen[a]))
             out.append((MOVES, first + a, x[a:b], y[a:b], feeds[a:b]))
-        return n
+
+    def _one(self, out: list[tuple], line_no: int, draw: bool, x: float, y: float,
+             feed: float) -> None:
+        """`_run` for a run of one line, with Python's floats (the same arithmetic) rather
+        than arrays: a stroke's travel is such a run."""
+        before = self.feed
+        if before is None and draw and feed != feed:
+            self.errors.warn(line_no, _no_feed(1, self.default_feed))
+            before = self.default_feed
+        if before is not None and feed != feed:
+            feed = before
+        if feed == feed:
+            self.feed = feed
+        self.motion = 1 if draw else 0
+        self.x, self.y = x, y
+        out.append((MOVE, line_no, x, y, feed if draw else None))
 
     def _line(self, out: list[tuple], line_no: int, raw: str) -> None:
         """Appends the ops of one line read by the general parser."""
+        words = self._plain.get(raw)
+        if words is not None:
+            self._block(out, line_no, words)
+            return
         if len(raw) > MAX_LINE:
             if len(raw) > MAX_RAW_LINE:
                 self.errors.add(line_no, f"line longer than {MAX_RAW_LINE} characters")
@@ -208,16 +229,21 @@ class GcodeReader:
             message = _COMMENT.sub("", pause.group(2)).strip() or None
             self._boundary(message)
             return
-        if "*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw or "%" in raw:
-            text = strip_line(raw, line_no, self.errors)
-        else:   # the common plain line
+        plain = not ("*" in raw or "(" in raw or ";" in raw or "N" in raw or "n" in raw
+                     or "%" in raw)
+        if plain:
             text = raw.replace(" ", "").replace("\t", "").upper()
+        else:
+            text = strip_line(raw, line_no, self.errors)
         if not text:
             return
         if _BLOCK.fullmatch(text) is None:
             self.errors.add(line_no, f"cannot parse '{raw.strip()[:60]}'")
             return
-        self._block(out, line_no, _WORD.findall(text))
+        words = _WORD.findall(text)
+        if plain and len(self._plain) < PLAIN_LINES:
+            self._plain[raw] = words
+        self._block(out, line_no, words)
 
     def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
         if down and self.pending_layer is not None:
@@ -486,11 +512,13 @@ def sniff_dialect(head: str) -> str:
     and then G0 travel between G1 strokes with no M5 (a laser's file: G0 is pen-up
     travel, as GRBL's laser mode); M3/M5; no pen command at all: every G1 draws."""
     text = _COMMENT.sub("", head)
-    if _M300.search(text):
+    # Each search only where its words' plain text occurs (a search is 100 times slower
+    # than looking for a substring, and this is a megabyte).
+    if "300" in text and _M300.search(text):
         return "m300"
-    if _M280.search(text):
+    if "280" in text and _M280.search(text):
         return "m280"
-    if len({float(z) for z in _Z_WORD.findall(text)}) >= 2:
+    if ("Z" in text or "z" in text) and len({float(z) for z in _Z_WORD.findall(text)}) >= 2:
         return "z"
     if _M3.search(text) is None:
         return "none"

@@ -7,11 +7,29 @@ from pathlib import Path
 
 import numpy as np
 
+from ..native.previewjson import strokes_json
 from .simplify import simplify_all, simplify_mask
 
 MAX_POINTS = 200_000
 BASE_TOLERANCE = 0.1   # mm: below what a preview on any screen shows
 _BATCH = 1 << 16       # raw points simplified at a time
+
+
+def _joined(parts: list[list[tuple[float, float]] | np.ndarray]) -> np.ndarray:
+    """The points of lists and arrays of points, in order, as one n x 2 array."""
+    arrays: list[np.ndarray] = []
+    run: list[tuple[float, float]] = []
+    for p in parts:
+        if isinstance(p, list):
+            run.extend(p)
+        else:
+            if run:
+                arrays.append(np.array(run, dtype=float))
+                run = []
+            arrays.append(p)
+    if run or not arrays:
+        arrays.append(np.array(run, dtype=float).reshape(-1, 2))
+    return arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
 
 
 class PreviewBuilder:
@@ -31,11 +49,13 @@ class PreviewBuilder:
         self._pen_lines = (0, 0)   # (pen-down line, pen-up line) of the current stroke
         self.travel: list[tuple[float, float, float, float]] = []
         self.points = 0
-        self._raw: list[tuple[float, float]] = []
-        # Raw pieces waiting for the next batch: (points, continues into the next piece,
-        # colour, program lines).
-        self._pending: list[tuple[list[tuple[float, float]], bool, str | None,
-                                  tuple[int, int]]] = []
+        # The raw points of the stroke being drawn, in parts: lists of points drawn one
+        # at a time and n x 2 arrays drawn in bulk; _raw_n counts them.
+        self._raw: list[list[tuple[float, float]] | np.ndarray] = []
+        self._raw_n = 0
+        # Raw pieces waiting for the next batch: (parts as in _raw, points, continues into
+        # the next piece, colour, program lines).
+        self._pending: list[tuple[list, int, bool, str | None, tuple[int, int]]] = []
         self._pending_points = 0
         self._open: np.ndarray | None = None   # simplified start of a stroke still going
         self._travel_from: tuple[float, float] | None = None
@@ -44,28 +64,40 @@ class PreviewBuilder:
     def draw(self, x0: float, y0: float, x: float, y: float) -> None:
         if self._travel_from is not None:
             self._flush_travel()
-        raw = self._raw
-        if not raw:
-            raw.append((x0, y0))
-        raw.append((x, y))
-        if len(raw) >= _BATCH:
-            self._queue(continues=True)
-            self._raw = [raw[-1]]
+        if not self._raw_n:
+            self._raw.append([(x0, y0)])
+            self._raw_n = 1
+        part = self._raw[-1]
+        if isinstance(part, np.ndarray):
+            part = []
+            self._raw.append(part)
+        part.append((x, y))
+        self._raw_n += 1
+        if self._raw_n >= _BATCH:
+            self._restart_raw((x, y))
 
-    def draw_many(self, x0: float, y0: float, pts: list[tuple[float, float]]) -> None:
-        """`draw` along a polyline from (x0, y0) through `pts`."""
+    def draw_many(self, x0: float, y0: float, pts: np.ndarray) -> None:
+        """`draw` along a polyline from (x0, y0) through `pts` (n x 2)."""
         if self._travel_from is not None:
             self._flush_travel()
-        raw = self._raw
-        if not raw:
-            raw.append((x0, y0))
-        while pts:
-            room = _BATCH - len(raw)
-            raw.extend(pts[:room])
+        if not self._raw_n:
+            self._raw.append([(x0, y0)])
+            self._raw_n = 1
+        while len(pts):
+            room = _BATCH - self._raw_n
+            self._raw.append(pts[:room])
+            self._raw_n += len(pts[:room])
             pts = pts[room:]
-            if len(raw) >= _BATCH:
-                self._queue(continues=True)
-                self._raw = raw = [raw[-1]]
+            if self._raw_n >= _BATCH:
+                last = self._raw[-1][-1]
+                self._restart_raw((float(last[0]), float(last[1])))
+
+    def _restart_raw(self, last: tuple[float, float]) -> None:
+        """A full batch of raw points goes to be simplified; the stroke goes on from its
+        last point."""
+        self._queue(continues=True)
+        self._raw = [[last]]
+        self._raw_n = 1
 
     def move(self, x0: float, y0: float, x: float, y: float) -> None:
         """A pen-up move; consecutive ones are shown as one travel line."""
@@ -90,26 +122,29 @@ class PreviewBuilder:
         self._pen_lines = (self._pen_lines[0], line)
 
     def end_stroke(self) -> None:
-        if self._raw:
+        if self._raw_n:
             self._queue(continues=False)
             self._raw = []
+            self._raw_n = 0
 
     def _queue(self, continues: bool) -> None:
-        self._pending.append((self._raw, continues, self.colour, self._pen_lines))
-        self._pending_points += len(self._raw)
+        self._pending.append((self._raw, self._raw_n, continues, self.colour,
+                              self._pen_lines))
+        self._pending_points += self._raw_n
         if self._pending_points >= _BATCH:
             self._simplify_pending()
 
     def _simplify_pending(self) -> None:
         if not self._pending:
             return
-        sizes = [len(p[0]) for p in self._pending]
-        pts = np.array([q for p in self._pending for q in p[0]], dtype=float)
+        sizes = [p[1] for p in self._pending]
+        pts = _joined([part for p in self._pending for part in p[0]])
         ends = np.cumsum(sizes)
         fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
         keep = simplify_mask(pts, self.tolerance, fixed)
-        for (_, continues, colour, lines), lo, hi in zip(self._pending, ends - np.array(sizes),
-                                                         ends, strict=True):
+        starts = (ends - np.array(sizes)).tolist()
+        for (_, _, continues, colour, lines), lo, hi in zip(self._pending, starts,
+                                                            ends.tolist(), strict=True):
             piece = pts[lo:hi][keep[lo:hi]]
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])
@@ -136,14 +171,17 @@ class PreviewBuilder:
             self.travel = self.travel[::step][:room]
             self.points = sum(len(s) for s in self.strokes) + 2 * len(self.travel)
 
-    def finish(self, bounds: dict[str, float]) -> dict:
+    def _settle(self) -> None:
+        """Everything drawn so far simplified and within the budget."""
         self.end_stroke()
         if self._travel_from is not None:
             self._flush_travel()
         self._simplify_pending()
         self._fit()
+
+    def _rest(self, bounds: dict[str, float]) -> dict:
+        """The body after its strokes."""
         return {
-            "strokes": [np.round(s, 3).tolist() for s in self.strokes],
             "colours": self.colours,
             "lines": [list(span) for span in self.lines],
             "travel": [[[round(a, 3), round(b, 3)], [round(c, 3), round(d, 3)]]
@@ -151,6 +189,20 @@ class PreviewBuilder:
             "bounds": bounds,
         }
 
+    def finish(self, bounds: dict[str, float]) -> dict:
+        self._settle()
+        return {"strokes": [np.round(s, 3).tolist() for s in self.strokes], **self._rest(bounds)}
+
     def write(self, path: Path, bounds: dict[str, float]) -> None:
-        # json.dumps uses the C encoder; json.dump to a file would not.
-        path.write_text(json.dumps(self.finish(bounds), separators=(",", ":")), encoding="utf-8")
+        """preview.json: json.dumps(self.finish(bounds)) without spaces, the strokes
+        (up to max_points numbers written by Python one at a time) by
+        native/previewjson.c."""
+        self._settle()
+        strokes = strokes_json(self.strokes)
+        if strokes is None:
+            text = json.dumps(self.finish(bounds), separators=(",", ":"))
+        else:
+            # json.dumps uses the C encoder; json.dump to a file would not.
+            rest = json.dumps(self._rest(bounds), separators=(",", ":"))
+            text = f'{{"strokes":{strokes},{rest[1:]}'
+        path.write_text(text, encoding="utf-8")

@@ -8,6 +8,8 @@ from collections.abc import Iterable
 import numpy as np
 
 from ..motion.estimate import Estimator
+from ..motion.library import LINE, RAPID
+from ..native.movelines import MoveLines
 from .models import ErrorLog, MachineProfile
 from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PEN, arc_extent, arc_points
 from .placement import Transform
@@ -16,6 +18,7 @@ from .preview import PreviewBuilder
 HEADER = ("G21", "G90", "M5")
 EPS = 1e-6
 PREVIEW_ARC_TOL = 0.05
+SHORT_RUN = 4      # moves: fewer cost less written one by one than in bulk
 
 
 def _feed(f: float) -> str:
@@ -43,9 +46,11 @@ class ProgramWriter:
         self.pen_lifts = 0
         self.bounds = [math.inf, math.inf, -math.inf, -math.inf]
         self._area = (-EPS, -EPS, profile.width + EPS, profile.height + EPS)
-        self._buf: list[str] = []
+        self._buf: list[str] = []    # texts of whole lines, each ending with a newline
+        self._buffered = 0           # lines in _buf
         self.last = ""
         self._feed_texts: dict[float, str] = {}
+        self._runs = MoveLines(self._area, self._feed_text, RAPID, LINE)
         self.layers: list[dict] = []
         # Pen-up travel that left the work area (source line, x, y): clamped to the
         # area when no stroke follows it (a trailing move home), an error otherwise.
@@ -60,15 +65,24 @@ class ProgramWriter:
         self.last = text
         self.line += 1
         self.planner.receive(len(text) + 1)
-        self._buf.append(text)
-        if len(self._buf) >= 4096:
+        self._buf.append(text + "\n")
+        self._buffered += 1
+        if self._buffered >= 4096:
             self.flush()
 
     def flush(self) -> None:
         if self._buf:
-            self.out.write("\n".join(self._buf))
-            self.out.write("\n")
+            self.out.write("".join(self._buf))
             self._buf = []
+            self._buffered = 0
+
+    def _feed_text(self, feed: float) -> str:
+        f = self._feed_texts.get(feed)
+        if f is None:
+            if len(self._feed_texts) >= 256:    # a file of ever new feeds
+                self._feed_texts.clear()
+            f = self._feed_texts[feed] = _feed(feed)
+        return f
 
     def _check(self, src_line: int | None, x: float, y: float) -> bool:
         """Within the work area? Reports the source line when not."""
@@ -180,14 +194,10 @@ class ProgramWriter:
         if feed is None:
             self._write(f"G0 X{xt} Y{yt}")
         else:
-            f = self._feed_texts.get(feed)
-            if f is None:
-                if len(self._feed_texts) >= 256:    # a file of ever new feeds
-                    self._feed_texts.clear()
-                f = self._feed_texts[feed] = _feed(feed)
-            self._write(f"G1 X{xt} Y{yt} F{f}")
+            self._write(f"G1 X{xt} Y{yt} F{self._feed_text(feed)}")
         self.planner.move(self.line, x, y, feed)
-        d = math.hypot(x - x0, y - y0)
+        dx, dy = x - x0, y - y0
+        d = math.sqrt(dx * dx + dy * dy)    # as movelines.c sums a run's moves
         if self.down:
             self.pen_down_mm += d
             self.preview.draw(x0, y0, x, y)
@@ -208,52 +218,41 @@ class ProgramWriter:
     def moves(self, first: int | None, xs: np.ndarray, ys: np.ndarray,
               feeds: np.ndarray) -> None:
         """`move` for each point in turn (feeds NaN for rapids; source lines from `first`
-        on), done for all at once; a run that leaves the work area goes point by point."""
-        xt = [f"{v:.3f}" for v in xs.tolist()]
-        yt = [f"{v:.3f}" for v in ys.tolist()]
-        x = np.array(xt, dtype=float)
-        y = np.array(yt, dtype=float)
-        a = self._area
-        if ((x < a[0]) | (x > a[2]) | (y < a[1]) | (y > a[3])).any():
+        on), done for all at once (native/movelines.c writes the lines); a short run, or
+        one that leaves the work area, goes point by point."""
+        lines = None
+        if len(xs) >= SHORT_RUN:
+            lines = self._runs.run(xs, ys, feeds, (self.x, self.y),
+                                   self.pen_down_mm if self.down else self.travel_mm)
+        if lines is None:
             for k, (px, py, f) in enumerate(zip(xs.tolist(), ys.tolist(), feeds.tolist(),
                                                 strict=True)):
                 self.move(None if first is None else first + k, px, py,
                           None if f != f else f)
             return
-        x0 = np.concatenate(([self.x], x[:-1]))
-        y0 = np.concatenate(([self.y], y[:-1]))
-        keep = (x != x0) | (y != y0)
-        if not keep.all():
-            if not keep.any():
-                return
-            sel = keep.tolist()
-            xt = [v for v, k in zip(xt, sel, strict=True) if k]
-            yt = [v for v, k in zip(yt, sel, strict=True) if k]
-            x, y, feeds = x[keep], y[keep], feeds[keep]
-            x0 = np.concatenate(([self.x], x[:-1]))
-            y0 = np.concatenate(([self.y], y[:-1]))
-        fl = feeds.tolist()
-        texts_of = {f: _feed(f) for f in set(fl) if f == f}
-        texts = [f"G1 X{a} Y{b} F{texts_of[f]}" if f == f else f"G0 X{a} Y{b}"
-                 for a, b, f in zip(xt, yt, fl, strict=True)]
-        self.planner.moves(x, y, feeds, [len(t) + 1 for t in texts])
-        self.line += len(texts)
-        self.last = texts[-1]
-        self._buf.extend(texts)
-        if len(self._buf) >= 4096:
+        n = len(lines.xy)
+        if not n:
+            return
+        self.planner.moves(lines.kind, lines.x32, lines.y32, lines.f32, lines.nbytes)
+        self.line += n
+        text = lines.text
+        self.last = text[text.rfind("\n", 0, -1) + 1:-1]
+        self._buf.append(text)
+        self._buffered += n
+        if self._buffered >= 4096:
             self.flush()
-        xl, yl = x.tolist(), y.tolist()
-        d = np.array(list(map(math.hypot, (x - x0).tolist(), (y - y0).tolist())))
+        end = lines.xy[-1].tolist()
         if self.down:
-            self.pen_down_mm = float(np.cumsum(np.concatenate(([self.pen_down_mm], d)))[-1])
-            self.preview.draw_many(self.x, self.y, list(zip(xl, yl, strict=True)))
+            self.pen_down_mm = lines.length
+            self.preview.draw_many(self.x, self.y, lines.xy.copy())
             b = self.bounds    # the stroke's first point was added at pen down
-            b[0], b[1] = min(b[0], min(xl)), min(b[1], min(yl))
-            b[2], b[3] = max(b[2], max(xl)), max(b[3], max(yl))
+            lo_x, lo_y, hi_x, hi_y = lines.bounds
+            b[0], b[1] = min(b[0], lo_x), min(b[1], lo_y)
+            b[2], b[3] = max(b[2], hi_x), max(b[3], hi_y)
         else:
-            self.travel_mm = float(np.cumsum(np.concatenate(([self.travel_mm], d)))[-1])
-            self.preview.move(self.x, self.y, xl[-1], yl[-1])
-        self.x, self.y = xl[-1], yl[-1]
+            self.travel_mm = lines.length
+            self.preview.move(self.x, self.y, *end)
+        self.x, self.y = end
 
     def arc(self, src_line: int | None, x: float, y: float, i: float, j: float,
             feed: float, cw: bool) -> None:

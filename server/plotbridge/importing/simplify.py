@@ -1,12 +1,15 @@
-"""Polyline simplification (Ramer-Douglas-Peucker, distance to the segment).
-
-All intervals of one recursion level are split at once with array operations, so the
-cost is a few passes over the points rather than one Python step per kept point.
+"""Polyline simplification (Ramer-Douglas-Peucker, distance to the segment), done by
+native/simplify.c: one pass per recursion level over a million preview points is too
+slow in Python or array operations.
 """
 
 from __future__ import annotations
 
+import ctypes
+
 import numpy as np
+
+from ..native import library
 
 
 def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
@@ -26,43 +29,27 @@ def simplify_all(polylines: list[np.ndarray], tolerance: float) -> list[np.ndarr
     starts = ends - sizes
     pts = np.concatenate(polylines)
     keep = simplify_mask(pts, tolerance, np.unique(np.concatenate([starts, ends - 1])))
-    return [pts[a:b][keep[a:b]] for a, b in zip(starts, ends, strict=True)]
+    return [pts[a:b][keep[a:b]] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)]
 
 
 def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np.ndarray:
     """Which points to keep; `fixed` are indices always kept, which must include the
     first and the last (several polylines laid end to end are simplified at once by
     fixing the ends of each)."""
-    n = len(points)
-    keep = np.zeros(n, dtype=bool)
-    keep[fixed] = True
-    active = np.flatnonzero(~keep)
-    tol2 = tolerance * tolerance
-    xs, ys = np.ascontiguousarray(points[:, 0]), np.ascontiguousarray(points[:, 1])
-    while active.size:
-        kept = np.flatnonzero(keep)
-        pos = np.cumsum(keep)[active]    # kept points before each active one
-        a, b = kept[pos - 1], kept[pos]
-        ax, ay = xs[a], ys[a]
-        dx, dy = xs[b] - ax, ys[b] - ay
-        rx, ry = xs[active] - ax, ys[active] - ay
-        dd = dx * dx + dy * dy
-        t = (rx * dx + ry * dy) / np.where(dd > 0, dd, 1.0)
-        np.clip(t, 0.0, 1.0, out=t)
-        ox, oy = rx - t * dx, ry - t * dy
-        dist2 = ox * ox + oy * oy
-        starts = np.flatnonzero(np.r_[True, pos[1:] != pos[:-1]])
-        gmax = np.maximum.reduceat(dist2, starts)
-        sizes = np.diff(np.r_[starts, active.size])
-        group = np.repeat(np.arange(starts.size), sizes)
-        split = gmax > tol2
-        # The farthest point of each interval that must be split becomes a kept point.
-        cand = np.flatnonzero((dist2 == gmax[group]) & split[group])
-        if not cand.size:
-            break
-        first = cand[np.r_[True, group[cand][1:] != group[cand][:-1]]]
-        keep[active[first]] = True
-        still = split[group]
-        still[first] = False
-        active = active[still]
-    return keep
+    keep = np.zeros(len(points), dtype=np.uint8)
+    keep[fixed] = 1
+    xs = np.ascontiguousarray(points[:, 0], dtype=np.float64)
+    ys = np.ascontiguousarray(points[:, 1], dtype=np.float64)
+    if _native()(len(points), xs, ys, tolerance * tolerance, keep):
+        raise MemoryError("simplify: out of memory")
+    return keep.view(bool)
+
+
+def _native():
+    fn = library("simplify").simplify_mask
+    if fn.argtypes is None:
+        f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
+        fn.argtypes = [ctypes.c_long, f64, f64, ctypes.c_double,
+                       np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")]
+        fn.restype = ctypes.c_int
+    return fn

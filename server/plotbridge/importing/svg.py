@@ -575,16 +575,13 @@ class SvgReader:
             chars.extend(svgtext.Char(ch, n, size, letter, word, anchor) for ch in text)
         starts.append(len(chars))
         for first, end, lists in marks:
-            lo, hi = starts[first], starts[end]
-            for key, values in lists.items():
-                for c, v in zip(chars[lo:hi], values, strict=False):
-                    if getattr(c, key) is None:   # a descendant's own value wins
-                        setattr(c, key, v)
+            svgtext.assign(chars[starts[first]:starts[end]], lists)
         for n, strokes in sorted(svgtext.layout(font, chars).items()):
             self._emit_text(elem, runs[n][1], runs[n][0], strokes)
 
     def _positions(self, node: Element, ctx: Ctx) -> dict[str, list[float]]:
-        """The x, y, dx and dy lists of a text or tspan, in user units."""
+        """The x, y, dx and dy lists of a text or tspan, in user units, and its rotate
+        list in degrees."""
         size = length(ctx.style.get("font-size"), 16.0, default=16.0)
         out = {}
         for key, ref in (("x", ctx.vw), ("y", ctx.vh), ("dx", ctx.vw), ("dy", ctx.vh)):
@@ -592,6 +589,9 @@ class SvgReader:
             if raw and raw.strip():
                 out[key] = [length(v, ref, font=size) for v in re.split(r"[\s,]+", raw.strip())
                             if v]
+        raw = node.get("rotate")
+        if raw and raw.strip():
+            out["rotate"] = svgtext.angles(raw)
         return out
 
     def _metrics(self, ctx: Ctx) -> tuple[float, float, float]:

@@ -2,8 +2,8 @@
 
 A pen draws each glyph stroke once, where an outline font would draw every stroke
 twice. The Hershey glyphs are laid out at the text's position, size, anchor, letter
-and word spacing, on a `textPath` when there is one; the caller applies transforms.
-Glyph units: y down, baseline at 9, 32 units to the em.
+and word spacing and per-glyph rotation, on a `textPath` when there is one; the caller
+applies transforms. Glyph units: y down, baseline at 9, 32 units to the em.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ BASELINE = 9.0
 DEFAULT_FONT = "futural"
 # font-family names that the Hershey fonts stand for without substitution
 HERSHEY_NAMES = re.compile(r"hershey|futura|rowman|scripts|timesr|gothic", re.I)
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 
 
 @dataclass
@@ -56,20 +57,25 @@ def advance(font: str, text: str, size: float, letter: float, word: float) -> fl
     return sum(glyph(font, ch).width * k + letter + (word if ch == " " else 0.0) for ch in text)
 
 
-def _glyph_at(g: Glyph, x: float, y: float, k: float) -> list[np.ndarray]:
+def _glyph_at(g: Glyph, x: float, y: float, k: float, degrees: float = 0.0,
+              lead: float = 0.0) -> list[np.ndarray]:
+    """The glyph's strokes with its origin (left edge on the baseline, moved `lead`
+    along the baseline) at (x, y), turned `degrees` clockwise (y down) about (x, y)."""
+    a = math.radians(degrees)
+    ca, sa = math.cos(a), math.sin(a)
     out = []
     for s in g.strokes:
-        pts = np.empty_like(s)
-        pts[:, 0] = x + (s[:, 0] - g.left) * k
-        pts[:, 1] = y + (s[:, 1] - BASELINE) * k
-        out.append(pts)
+        lx = (s[:, 0] - g.left) * k + lead
+        ly = (s[:, 1] - BASELINE) * k
+        out.append(np.column_stack([x + ca * lx - sa * ly, y + sa * lx + ca * ly]))
     return out
 
 
 @dataclass
 class Char:
-    """One addressable character of a `<text>` with what positions it: absolute x/y and
-    relative dx/dy (None where no list gives it one), and its run's metrics."""
+    """One addressable character of a `<text>` with what positions it: absolute x/y,
+    relative dx/dy and its rotation in degrees (None where no list gives it one), and
+    its run's metrics."""
 
     ch: str
     run: int            # index of the text run (one style) it belongs to
@@ -81,12 +87,42 @@ class Char:
     y: float | None = None
     dx: float | None = None
     dy: float | None = None
+    rotate: float | None = None
+
+
+def angles(raw: str) -> list[float]:
+    """A `rotate` list: numbers (degrees) separated by white space and/or commas."""
+    out = []
+    for v in re.split(r"[\s,]+", raw.strip()):
+        if not v:
+            continue
+        a = float(v) if _NUMBER.fullmatch(v) else math.nan
+        if not math.isfinite(a):   # not SVG's number syntax, or too large for a float
+            raise ValueError(f"rotate '{raw.strip()[:40]}': '{v[:20]}' is not a number of "
+                             "degrees")
+        out.append(a)
+    return out
+
+
+def assign(chars: list[Char], lists: dict[str, list[float]]) -> None:
+    """Give the characters of one text or tspan (descendants included) the values of its
+    x, y, dx, dy and rotate lists, where a descendant's own list (assigned first) has
+    not: the n-th value goes to the n-th character. Characters past the end of a
+    position list are left to ancestors; past the end of a rotate list they take its
+    last angle."""
+    for key, values in lists.items():
+        if key == "rotate" and values:
+            values = values + values[-1:] * (len(chars) - len(values))
+        for c, v in zip(chars, values, strict=False):
+            if getattr(c, key) is None:
+                setattr(c, key, v)
 
 
 def layout(font: str, chars: list[Char]) -> dict[int, list[np.ndarray]]:
     """Glyph strokes (user units, y down) by run, each glyph where SVG puts it: an
     absolute x or y starts a new text chunk there, dx/dy shift the glyph and all after
-    it, and each chunk is shifted by its anchor."""
+    it, each chunk is shifted by its anchor, and each glyph is turned by its rotation
+    about its own (shifted) position; rotation does not change where the next goes."""
     x = y = 0.0
     chunks: list[tuple[str, list[tuple[Char, Glyph, float, float]]]] = []
     for c in chars:
@@ -108,7 +144,8 @@ def layout(font: str, chars: list[Char]) -> dict[int, list[np.ndarray]]:
         width = end - placed[0][2]
         shift = {"middle": -width / 2, "end": -width}.get(anchor, 0.0)
         for c, g, px, py in placed:
-            out.setdefault(c.run, []).extend(_glyph_at(g, px + shift, py, c.size / EM_UNITS))
+            out.setdefault(c.run, []).extend(
+                _glyph_at(g, px + shift, py, c.size / EM_UNITS, c.rotate or 0.0))
     return out
 
 
@@ -131,12 +168,8 @@ def along(font: str, text: str, path: np.ndarray, offset: float, size: float,
             i = min(int(np.searchsorted(cum, mid, side="right")) - 1, len(seg) - 1)
             t = (mid - cum[i]) / lengths[i] if lengths[i] > 0 else 0.0
             px, py = path[i] + t * seg[i]
-            ang = math.atan2(seg[i][1], seg[i][0])
-            ca, sa = math.cos(ang), math.sin(ang)
-            for st in g.strokes:
-                lx = (st[:, 0] - g.left) * k - w / 2
-                ly = (st[:, 1] - BASELINE) * k
-                out.append(np.column_stack([px + ca * lx - sa * ly, py + sa * lx + ca * ly]))
+            turn = math.degrees(math.atan2(seg[i][1], seg[i][0]))
+            out.extend(_glyph_at(g, px, py, k, turn, lead=-w / 2))
         s += w + letter + (word if ch == " " else 0.0)
     return out
 

@@ -95,15 +95,16 @@ class Estimator:
     def move(self, line: int, x: float, y: float, feed: float | None) -> None:
         self._set(RAPID if feed is None else LINE, x, y, feed or 0.0)
 
-    def moves(self, x: np.ndarray, y: np.ndarray, feeds: np.ndarray,
-              nbytes: list[int]) -> None:
-        """`receive` and `move` for each of a run of lines (feeds NaN for rapids)."""
-        rapid = np.isnan(feeds)
-        self.kind.frombytes(np.where(rapid, RAPID, LINE).astype(np.uint8).tobytes())
-        self.bytes.frombytes(np.minimum(nbytes, 65535).astype(np.uint16).tobytes())
-        self.x.frombytes(x.astype(np.float32).tobytes())
-        self.y.frombytes(y.astype(np.float32).tobytes())
-        self.feed.frombytes(np.where(rapid, 0.0, feeds).astype(np.float32).tobytes())
+    def moves(self, kind: np.ndarray, x: np.ndarray, y: np.ndarray, feed: np.ndarray,
+              nbytes: np.ndarray) -> None:
+        """`receive` and `move` for each of a run of lines, given as the library takes
+        them: kind (uint8, RAPID or LINE), x, y, feed (float32, 0 for rapids), bytes
+        (uint16)."""
+        self.kind.frombytes(kind)
+        self.bytes.frombytes(nbytes.view(np.uint8))
+        self.x.frombytes(x.view(np.uint8))
+        self.y.frombytes(y.view(np.uint8))
+        self.feed.frombytes(feed.view(np.uint8))
         zeros = bytes(4 * len(x))
         self.i.frombytes(zeros)
         self.j.frombytes(zeros)

@@ -6,7 +6,7 @@
  * by the importer's general parser, which accepts the common lines too and gives the
  * same result for them (the unit tests compare the two).
  *
- * Numbers are read with strtod, correctly rounded like Python's float(); the grammar
+ * Numbers are read correctly rounded like Python's float() (number()); the grammar
  * of a number is the general parser's: [-+]? (digits [. digits*] | . digits).
  */
 
@@ -30,29 +30,44 @@ static int digit(const char *p, const char *end)
     return p < end && *p >= '0' && *p <= '9';
 }
 
-/* Reads a number at p; returns the position after it, NULL when there is none. */
+/* Exact powers of ten: every one up to 1e22 is a double. */
+static const double POW10[] = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10,
+                               1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19,
+                               1e20, 1e21, 1e22};
+
+/* Reads a number at p; returns the position after it, NULL when there is none. A
+ * number of at most 15 digits with at most 22 after the point is its digits (exact in
+ * a double) divided by a power of ten (exact too): one correctly rounded division,
+ * the value strtod gives. Longer ones go through strtod. */
 static const char *number(const char *p, const char *end, double *out)
 {
     const char *s = p;
     char buf[NUM_MAX + 1];
+    int neg = 0, digits = 0, frac = 0;
+    uint64_t m = 0;
     if (p < end && (*p == '-' || *p == '+'))
-        p++;
+        neg = *p++ == '-';
     if (digit(p, end)) {
-        while (digit(p, end))
-            p++;
+        for (; digit(p, end); p++, digits++)
+            m = m * 10 + (uint64_t)(*p - '0');
         if (p < end && *p == '.')
             p++;
-        while (digit(p, end))
-            p++;
+        for (; digit(p, end); p++, digits++, frac++)
+            m = m * 10 + (uint64_t)(*p - '0');
     } else if (p < end && *p == '.' && digit(p + 1, end)) {
         p++;
-        while (digit(p, end))
-            p++;
+        for (; digit(p, end); p++, digits++, frac++)
+            m = m * 10 + (uint64_t)(*p - '0');
     } else {
         return NULL;
     }
     if (p - s > NUM_MAX)
         return NULL;
+    if (digits <= 15 && frac <= 22) {
+        double v = (double)m / POW10[frac];
+        *out = neg ? -v : v;
+        return p;
+    }
     memcpy(buf, s, (size_t)(p - s));
     buf[p - s] = '\0';
     *out = strtod(buf, NULL);
@@ -84,8 +99,8 @@ static uint8_t scan_line(const char *p, const char *end, double *x, double *y, d
         return OTHER;
     *f = NAN;
     q = letter(p, end, 'F');
-    if (q && !(p = number(blanks(q, end), end, f)))
-        return OTHER;
+    if (q && (!(p = number(blanks(q, end), end, f)) || !(*f > 0)))
+        return OTHER;   /* a feed that is not positive: the general parser reports it */
     p = blanks(p, end);
     if (p < end && *p == ';') {
         for (p++; p < end; p++)
@@ -96,28 +111,38 @@ static uint8_t scan_line(const char *p, const char *end, double *x, double *y, d
 }
 
 /* The lines of text[0, len), which ends with a newline: kind[k] (OTHER, RAPID or LINE)
- * and for common lines x[k], y[k], f[k] (NaN without F). Lines holding bytes outside
- * ASCII are OTHER (max_line counts characters). Returns the number of lines, at most
- * max_lines. */
-long gcode_scan(const char *text, long len, long max_lines, long max_line, uint8_t *kind,
-                double *x, double *y, double *f)
+ * and for common lines x[k], y[k], f[k] (NaN without F) and feed[k], the last F given
+ * at or before line k in its run of consecutive common lines (NaN when none is);
+ * start[k]: where line k begins, start[n]: len. Lines holding bytes outside ASCII are
+ * OTHER (max_line counts characters); ascii: the caller knows there are none. Returns
+ * the number of lines n, at most max_lines. */
+long gcode_scan(const char *text, long len, int ascii, long max_lines, long max_line,
+                uint8_t *kind, double *x, double *y, double *f, double *feed, long *start)
 {
     const char *p = text, *end = text + len;
     long n = 0;
+    double run_feed = NAN;
     while (p < end && n < max_lines) {
         const char *eol = memchr(p, '\n', (size_t)(end - p));
         const char *c;
         if (!eol)
             eol = end;
+        start[n] = p - text;
         kind[n] = OTHER;
         if (eol - p <= max_line) {
-            for (c = p; c < eol && (unsigned char)*c < 0x80; c++)
+            for (c = ascii ? eol : p; c < eol && (unsigned char)*c < 0x80; c++)
                 ;
             if (c == eol)
                 kind[n] = scan_line(p, eol, &x[n], &y[n], &f[n]);
         }
+        if (kind[n] == OTHER)
+            run_feed = NAN;
+        else if (!isnan(f[n]))
+            run_feed = f[n];
+        feed[n] = run_feed;
         n++;
         p = eol + 1;
     }
+    start[n] = len;
     return n;
 }

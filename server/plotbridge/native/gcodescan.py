@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ctypes
+from typing import NamedTuple
 
 import numpy as np
 
@@ -10,6 +11,7 @@ from . import library
 
 _f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
 _u8 = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")
+_long = np.ctypeslib.ndpointer(np.int_, flags="C_CONTIGUOUS")
 OTHER, RAPID, LINE = 0, 1, 2
 
 
@@ -17,20 +19,40 @@ def _scanner():
     lib = library("gcodescan")
     fn = lib.gcode_scan
     if fn.restype is not ctypes.c_long:
-        fn.argtypes = [ctypes.c_char_p, ctypes.c_long, ctypes.c_long, ctypes.c_long, _u8,
-                       _f64, _f64, _f64]
+        fn.argtypes = [ctypes.c_char_p, ctypes.c_long, ctypes.c_int, ctypes.c_long,
+                       ctypes.c_long, _u8, _f64, _f64, _f64, _f64, _long]
         fn.restype = ctypes.c_long
     return fn
 
 
-def scan(text: str, max_line: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(kind, x, y, f) of each line of `text` (which ends with a newline): kind OTHER,
-    RAPID (G0) or LINE (G1) for a common line of at most `max_line` characters, whose
-    X, Y and F (NaN when absent) the other arrays hold."""
+class Scan(NamedTuple):
+    """A chunk's lines: kind (OTHER, RAPID (G0) or LINE (G1)) and, for the common ones,
+    X, Y, F (NaN when absent) and the feed in effect: the last F given at or before the
+    line in its run of consecutive common lines (NaN when none is)."""
+
+    kind: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    f: np.ndarray
+    feed: np.ndarray
+    data: bytes
+    start: np.ndarray
+
+    def line(self, k: int) -> str:
+        """The text of line k, without its newline."""
+        return self.data[self.start[k]:self.start[k + 1] - 1].decode("utf-8",
+                                                                     "surrogateescape")
+
+
+def scan(text: str, max_line: int) -> Scan:
+    """The lines of `text` (which ends with a newline); a common line is G0/G1 X Y [F]
+    [; comment] of at most `max_line` characters whose F, when given, is positive."""
     data = text.encode("utf-8", "surrogateescape")
-    n = data.count(b"\n")
-    kind = np.empty(n, np.uint8)
-    x, y, f = np.empty(n), np.empty(n), np.empty(n)
-    got = _scanner()(data, len(data), n, max_line, kind, x, y, f)
-    assert got == n
-    return kind, x, y, f
+    # Room for a line per byte (no counting pass; only what the lines use is touched).
+    room = len(data)
+    kind = np.empty(room, np.uint8)
+    x, y, f, feed = np.empty(room), np.empty(room), np.empty(room), np.empty(room)
+    start = np.empty(room + 1, np.int_)
+    n = _scanner()(data, len(data), text.isascii(), room, max_line, kind, x, y, f, feed,
+                   start)
+    return Scan(kind[:n], x[:n], y[:n], f[:n], feed[:n], data, start[:n + 1])
