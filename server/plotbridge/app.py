@@ -52,7 +52,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     events = EventHub()
     clients = Hub()
     events.subscribe(clients.broadcast)
-    webhooks = Webhooks(list(config.webhooks), config.data_dir)
+    webhooks = Webhooks(list(config.webhooks), config.data_dir, config.db_path)
     events.subscribe(webhooks.publish)
     config.jobs_dir.mkdir(parents=True, exist_ok=True)
     config.tmp_dir.mkdir(exist_ok=True)

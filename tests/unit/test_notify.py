@@ -1,20 +1,25 @@
 """Notifications: which hub messages make which notices, and how one URL's queue
-delivers them (order, retries with backoff, bounds) to a fake receiver; the
-settings API for the URLs."""
+delivers them (order, retries with backoff, bounds) to a fake receiver; the events
+still waiting kept in SQLite across a restart; the settings API for the URLs."""
 
 from __future__ import annotations
 
 import asyncio
 import json
+import logging
+import sqlite3
 import time
+from collections.abc import AsyncIterator
+from pathlib import Path
 
 import httpx
 import pytest
 from plotbridge.cli import webhooks_from_args
 from plotbridge.config import ConfigError
-from plotbridge.notify import check_url
+from plotbridge.notify import Webhooks, check_url
 from plotbridge.notify.delivery import Delivery
 from plotbridge.notify.notices import NoticeWatcher
+from plotbridge.notify.outbox import Outbox, Pending
 
 from tests.unit.test_api import make_app, serving, settle
 from tests.unit.test_config import parse as serve_args
@@ -121,16 +126,35 @@ class FakeReceiver:
         return [body["n"] for _, body in self.got]
 
 
-async def running(receiver: FakeReceiver, **options) -> Delivery:
-    delivery = Delivery("http://receiver.test/hook", receiver.post,
+URL = "http://receiver.test/hook"
+
+
+@pytest.fixture
+async def outbox(tmp_path) -> AsyncIterator[Outbox]:
+    outbox = Outbox(tmp_path / "plotbridge.db")
+    assert await outbox.open() == {}
+    yield outbox
+    await outbox.close()
+
+
+async def running(receiver: FakeReceiver, outbox: Outbox, waiting: list[Pending] | None = None,
+                  **options) -> Delivery:  # fmt: skip
+    delivery = Delivery(URL, receiver.post, outbox, waiting,
                         **{"first_delay": 0.05, "max_delay": 0.2, **options})  # fmt: skip
     delivery.start()
     return delivery
 
 
-async def test_each_event_once_in_order():
+def kept(db: Path) -> list[tuple[str, int]]:
+    """The outbox's rows as another process reads them: (url, the body's n)."""
+    with sqlite3.connect(db) as conn:
+        rows = conn.execute("SELECT url, body FROM webhook_outbox ORDER BY seq").fetchall()
+    return [(url, json.loads(body)["n"]) for url, body in rows]
+
+
+async def test_each_event_once_in_order(outbox):
     receiver = FakeReceiver()
-    delivery = await running(receiver)
+    delivery = await running(receiver, outbox)
     for n in range(20):
         delivery.put("job_done", {"n": n})
     await settle(lambda: delivery.figures.delivered == 20)
@@ -139,9 +163,9 @@ async def test_each_event_once_in_order():
     await delivery.close()
 
 
-async def test_errors_are_retried_with_growing_delays_and_order_kept():
+async def test_errors_are_retried_with_growing_delays_and_order_kept(outbox):
     receiver = FakeReceiver(500, httpx.ConnectError("refused"), httpx.ReadTimeout("slow"), 503)
-    delivery = await running(receiver)
+    delivery = await running(receiver, outbox)
     delivery.put("job_started", {"n": 1})
     delivery.put("job_done", {"n": 2})
     await settle(lambda: delivery.figures.delivered == 2, within=5)
@@ -152,21 +176,22 @@ async def test_errors_are_retried_with_growing_delays_and_order_kept():
     await delivery.close()
 
 
-async def test_a_receiver_refusing_an_event_for_good_is_not_asked_again():
+async def test_a_receiver_refusing_an_event_for_good_is_not_asked_again(outbox):
     receiver = FakeReceiver(404)
-    delivery = await running(receiver)
+    delivery = await running(receiver, outbox)
     delivery.put("alarm", {"n": 1})
     delivery.put("alarm", {"n": 2})
     await settle(lambda: delivery.queued == 0)
     assert receiver.numbers() == [1, 2]
     assert delivery.figures.refused == 1 and delivery.figures.delivered == 1
+    await settle(lambda: kept(outbox.path) == [])  # refused for good: not kept either
     await delivery.close()
 
 
-async def test_a_receiver_down_for_long_loses_the_oldest_events_only(caplog):
+async def test_a_receiver_down_for_long_loses_the_oldest_events_only(outbox, caplog):
     receiver = FakeReceiver()
     receiver.hang.clear()  # the first post hangs
-    delivery = await running(receiver, limit=5)
+    delivery = await running(receiver, outbox, limit=5)
     delivery.put("job_done", {"n": 0})
     await settle(lambda: receiver.calls == 1)
     started = time.monotonic()
@@ -175,16 +200,18 @@ async def test_a_receiver_down_for_long_loses_the_oldest_events_only(caplog):
     assert time.monotonic() - started < 0.05  # put never waits
     assert delivery.queued == 5 and delivery.figures.dropped == 7
     assert "dropped the oldest" in caplog.text
+    await settle(lambda: kept(outbox.path) == [(URL, n) for n in range(7, 12)])  # on disk too
     receiver.hang.set()
     await settle(lambda: delivery.queued == 0)
     # the post under way (0) was already sent; the five newest follow in order
     assert receiver.numbers() == [0, 7, 8, 9, 10, 11]
+    await settle(lambda: kept(outbox.path) == [])
     await delivery.close()
 
 
-async def test_an_event_dropped_while_retried_is_not_sent_again():
+async def test_an_event_dropped_while_retried_is_not_sent_again(outbox):
     receiver = FakeReceiver(*([500] * 3))
-    delivery = await running(receiver, limit=2, first_delay=0.1)
+    delivery = await running(receiver, outbox, limit=2, first_delay=0.1)
     delivery.put("job_done", {"n": 0})
     await settle(lambda: len(receiver.got) == 1)
     delivery.put("job_done", {"n": 1})
@@ -192,6 +219,81 @@ async def test_an_event_dropped_while_retried_is_not_sent_again():
     await settle(lambda: delivery.queued == 0, within=5)
     assert receiver.numbers()[0] == 0 and receiver.numbers()[1:] == [1, 1, 1, 2]
     await delivery.close()
+
+
+# ---- the events waiting, across a restart -------------------------------------------
+
+
+async def test_waiting_events_are_delivered_after_a_restart_in_order_once(outbox):
+    receiver = FakeReceiver()
+    receiver.hang.clear()  # the receiver is down: the first post never comes back
+    delivery = await running(receiver, outbox)
+    for n in range(4):
+        delivery.put("job_done", {"n": n})
+    await settle(lambda: receiver.calls == 1 and len(kept(outbox.path)) == 4)
+    await delivery.close()  # the server stops (its post to the receiver cut off) ...
+    await outbox.close()
+    again = Outbox(outbox.path)  # ... and starts again
+    waiting = await again.open()
+    assert list(waiting) == [URL] and [p.event for p in waiting[URL]] == ["job_done"] * 4
+    receiver = FakeReceiver()
+    delivery = await running(receiver, again, waiting[URL])
+    delivery.put("job_done", {"n": 4})  # new events queue behind the old ones
+    await settle(lambda: delivery.figures.delivered == 5)
+    assert receiver.numbers() == [0, 1, 2, 3, 4]
+    await settle(lambda: kept(outbox.path) == [])
+    await delivery.close()
+    await again.close()
+    assert await Outbox(outbox.path).open() == {}
+
+
+async def test_more_events_kept_than_the_bound_drop_the_oldest_at_start(outbox, caplog):
+    caplog.set_level(logging.INFO, "plotbridge.notify")
+    for n in range(5):
+        outbox.add(URL, "alarm", json.dumps({"n": n}).encode())
+    await outbox.close()
+    again = Outbox(outbox.path)
+    waiting = await again.open()
+    receiver = FakeReceiver()
+    receiver.hang.clear()
+    delivery = await running(receiver, again, waiting[URL], limit=3)
+    assert delivery.queued == 3 and delivery.figures.dropped == 2
+    assert "5 events from before the restart" in caplog.text
+    assert "dropped the oldest" in caplog.text
+    await settle(lambda: kept(outbox.path) == [(URL, 2), (URL, 3), (URL, 4)])
+    await delivery.close()
+    await again.close()
+
+
+async def test_an_event_that_cannot_be_kept_is_logged_and_still_delivered(outbox, caplog):
+    with sqlite3.connect(outbox.path) as conn:
+        conn.execute("DROP TABLE webhook_outbox")  # the file went bad under the server
+    receiver = FakeReceiver()
+    delivery = await running(receiver, outbox)
+    delivery.put("job_done", {"n": 0})
+    await settle(lambda: delivery.figures.delivered == 1)
+    await settle(lambda: "could not be kept" in caplog.text)
+    assert "no such table: webhook_outbox" in caplog.text and receiver.numbers() == [0]
+    await delivery.close()
+
+
+async def test_events_of_a_url_no_longer_configured_are_dropped(tmp_path, caplog):
+    db, kept_url, gone_url = tmp_path / "plotbridge.db", "http://127.0.0.1:9/kept", \
+        "http://127.0.0.1:9/gone"  # fmt: skip
+    outbox = Outbox(db)
+    await outbox.open()
+    outbox.add(gone_url, "job_done", b'{"n": 0}')
+    outbox.add(kept_url, "job_done", b'{"n": 1}')
+    await outbox.close()
+    webhooks = Webhooks([], tmp_path, db, first_delay=30)  # port 9: refused, then waits
+    webhooks.saved = [kept_url]
+    await webhooks.start()
+    assert f"webhook {gone_url} is no longer configured: its 1 waiting" in caplog.text
+    assert webhooks.view()["webhooks"][0]["queued"] == 1
+    await settle(lambda: kept(db) == [(kept_url, 1)])
+    await webhooks.replace([])  # removing a URL drops its queue, on disk too
+    await settle(lambda: kept(db) == [])
+    await webhooks.close()
 
 
 # ---- URLs and the settings API --------------------------------------------------------

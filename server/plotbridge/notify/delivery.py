@@ -1,13 +1,16 @@
 """One webhook URL's ordered, bounded queue and the task that posts it.
 
 `put` never waits (it runs inside the event hub's publish, also on the
-emergency stop's path): it appends the event's JSON to the queue, dropping the
-oldest one with a log line when the receiver has been down so long that
-`limit` events wait. The task posts the events one at a time in order; each
-event leaves the queue once its receiver answered 2xx (or refused it for
-good), so it is delivered once, in order. A receiver that errs (5xx, 408, 429,
-connection refused, timeout) gets the same event again after a delay doubling
-from `first_delay` to `max_delay`. A timed-out request may have arrived: every
+emergency stop's path): it appends the event's JSON to the queue and to the
+outbox (outbox.py: kept on disk until it leaves the queue, so a restart
+delivers it), dropping the oldest one with a log line when the receiver has
+been down so long that `limit` events wait. A queue starts with the events a
+previous run left waiting (the oldest dropped the same way beyond `limit`).
+The task posts the events one at a time in order; each event leaves the queue
+once its receiver answered 2xx (or refused it for good), so it is delivered
+once, in order. A receiver that errs (5xx, 408, 429, connection refused,
+timeout) gets the same event again after a delay doubling from `first_delay`
+to `max_delay`. A timed-out request may have arrived: every
 event carries an `id` for the receiver to recognise a repeat.
 """
 
@@ -22,6 +25,8 @@ from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
 
+from plotbridge.notify.outbox import Outbox, Pending
+
 log = logging.getLogger("plotbridge.notify")
 
 Post = Callable[[str, bytes, dict[str, str]], Awaitable[int]]
@@ -29,12 +34,6 @@ Post = Callable[[str, bytes, dict[str, str]], Awaitable[int]]
 `httpx.TransportError` (refused, timed out, reset) when there is no answer."""
 
 RETRY_STATUS = frozenset({408, 425, 429})  # and every 5xx
-
-
-@dataclass
-class Pending:
-    event: str
-    body: bytes
 
 
 @dataclass
@@ -49,10 +48,12 @@ class Figures:
 
 
 class Delivery:
-    def __init__(self, url: str, post: Post, *, limit: int = 100, first_delay: float = 0.5,
+    def __init__(self, url: str, post: Post, outbox: Outbox, waiting: list[Pending] | None = None,
+                 *, limit: int = 100, first_delay: float = 0.5,
                  max_delay: float = 60.0) -> None:  # fmt: skip
         self.url = url
         self._post = post
+        self._outbox = outbox
         self.limit = limit
         self.first_delay = first_delay
         self.max_delay = max_delay
@@ -60,6 +61,11 @@ class Delivery:
         self._queue: deque[Pending] = deque()
         self._wake = asyncio.Event()
         self._task: asyncio.Task[None] | None = None
+        if waiting:
+            log.info("webhook %s: %d events from before the restart to deliver", url,
+                     len(waiting))  # fmt: skip
+            for pending in waiting:
+                self._append(pending)
 
     @property
     def queued(self) -> int:
@@ -77,12 +83,16 @@ class Delivery:
 
     def put(self, event: str, body: dict[str, Any]) -> None:
         """Queue one event (never waits)."""
+        self._append(self._outbox.add(self.url, event, json.dumps(body).encode()))
+
+    def _append(self, pending: Pending) -> None:
         if len(self._queue) >= self.limit:
             lost = self._queue.popleft()
+            self._outbox.remove(lost)
             self.figures.dropped += 1
             log.warning("webhook %s: %d events wait (receiver down?); dropped the oldest, "
                         "a %s", self.url, self.limit, lost.event)  # fmt: skip
-        self._queue.append(Pending(event, json.dumps(body).encode()))
+        self._queue.append(pending)
         self._wake.set()
 
     async def _run(self) -> None:
@@ -94,6 +104,7 @@ class Delivery:
             await self._deliver(pending)
             if self._queue and self._queue[0] is pending:  # not dropped meanwhile
                 self._queue.popleft()
+                self._outbox.remove(pending)
 
     async def _deliver(self, pending: Pending) -> None:
         """Post until the receiver takes it, refuses it for good, or the queue drops it."""

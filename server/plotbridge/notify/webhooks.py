@@ -3,7 +3,9 @@
 URLs come from `plotbridge serve --webhook URL` (fixed while the server runs)
 and from the settings (`DATA_DIR/webhooks.json`, edited through
 `/api/settings/webhooks`). Each URL has its own `Delivery` (ordered, bounded,
-retried); a slow or dead receiver holds back only its own queue.
+retried); a slow or dead receiver holds back only its own queue. The events waiting
+are kept in the server's database (`Outbox`) and delivered after a restart; those of
+a URL that is no webhook any more are dropped with a log line.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from plotbridge.auth import write_private
 from plotbridge.events import Message
 from plotbridge.notify.delivery import Delivery
 from plotbridge.notify.notices import NoticeWatcher
+from plotbridge.notify.outbox import Outbox, Pending
 
 log = logging.getLogger("plotbridge.notify")
 
@@ -88,11 +91,12 @@ def write_settings(path: Path, urls: list[str]) -> None:
 
 
 class Webhooks:
-    def __init__(self, fixed: list[str], data_dir: Path, **delivery: Any) -> None:
+    def __init__(self, fixed: list[str], data_dir: Path, db_path: Path, **delivery: Any) -> None:
         self.fixed = check_urls(fixed)
         self.path = data_dir / SETTINGS_FILE
         self.saved = read_settings(self.path)
         self._delivery = delivery  # Delivery's limit and delays (tests shorten them)
+        self._outbox = Outbox(db_path)
         self._watcher = NoticeWatcher()
         self._deliveries: dict[str, Delivery] = {}
         self._client: httpx.AsyncClient | None = None
@@ -102,9 +106,14 @@ class Webhooks:
 
     async def start(self) -> None:
         headers = {"User-Agent": f"plotbridge/{__version__}"}
+        waiting = await self._outbox.open()
+        for url in set(waiting) - set(self.urls):
+            log.warning("webhook %s is no longer configured: its %d waiting events are "
+                        "dropped", url, len(waiting.pop(url)))  # fmt: skip
+            self._outbox.forget(url)
         self._client = httpx.AsyncClient(timeout=POST_TIMEOUT_S, headers=headers,
                                          follow_redirects=False)  # fmt: skip
-        self._reconcile()
+        self._reconcile(waiting)
         for url in self.urls:
             log.info("webhook: events go to %s", url)
 
@@ -112,6 +121,7 @@ class Webhooks:
         for delivery in list(self._deliveries.values()):
             await delivery.close()
         self._deliveries.clear()
+        await self._outbox.close()  # the events still waiting stay for the next start
         if self._client is not None:
             await self._client.aclose()
             self._client = None
@@ -156,16 +166,18 @@ class Webhooks:
             self.saved = checked
             for url in set(self._deliveries) - set(self.urls):
                 await self._deliveries.pop(url).close()
+                self._outbox.forget(url)
             self._reconcile()
         log.info("webhook URLs in the settings: %s", ", ".join(checked) or "none")
         return self.view()
 
-    def _reconcile(self) -> None:
+    def _reconcile(self, waiting: dict[str, list[Pending]] | None = None) -> None:
         if self._client is None:
             return
         for url in self.urls:
             if url not in self._deliveries:
-                delivery = Delivery(url, self._post, **self._delivery)
+                delivery = Delivery(url, self._post, self._outbox, (waiting or {}).get(url),
+                                    **self._delivery)  # fmt: skip
                 delivery.start()
                 self._deliveries[url] = delivery
 
