@@ -8,20 +8,17 @@
 
 #define N_AXIS 2
 #define RX_SIZE 128          /* receive ring: GRBL's character-counting size */
-#define TX_SIZE 128          /* transmit ring (power of two) */
-#define LINE_SIZE 80         /* longest accepted line after stripping */
-/* Planner ring: PLAN_SIZE - 1 usable blocks of 21 bytes (planner.h). Per
- * chip; the host library (make motion) takes the value of the board it is
- * built for from here. */
-#ifndef PLAN_SIZE
-#if defined(__AVR_ATmega2560__)
-#define PLAN_SIZE 64         /* 63 blocks, 1.3 KiB (an override change re-derives
-                              * the queue's speeds 4 blocks per main-loop pass,
-                              * so depth no longer starves the steppers then) */
+/* Transmit ring (a power of two). The 328P's is 64 B: the 64 B it gives up
+ * hold the line numbers of its 33 planner blocks (planner.h). A status
+ * report while plotting is about 65 B, and the ring drains while the report
+ * is formatted, so the main loop seldom waits on it, and then ~1 ms at
+ * 115200 baud (87 us a byte); longer answers ($$, $#) wait as they always did. */
+#if defined(__AVR_ATmega328P__)
+#define TX_SIZE 64
 #else
-#define PLAN_SIZE 34         /* 33 blocks, 693 B: 2 KiB less the stack's 512 B */
+#define TX_SIZE 128
 #endif
-#endif
+#define LINE_SIZE 80         /* longest accepted line after stripping */
 #define SEG_SIZE 8           /* step segment ring (7 usable) */
 
 /* GRBL rows that need more flash than the 328P has beside the pen features
@@ -33,10 +30,9 @@
  *              $RST=# (without: G54 only, G28/G30 go to machine 0; error:20)
  *  GRBL_LINES: $N0/$N1 startup lines and the $I= build info string (error:3)
  *  GRBL_G93:   inverse time feed (error:20)
- *  GRBL_LINE_NUMBERS: every planner block carries its line's N number and
- *              the status report shows the executing one as |Ln: (GRBL's
- *              USE_LINE_NUMBERS, OPT letter N); 4 bytes a block, which the
- *              328P's RAM has no room for beside 33 blocks */
+ * Line numbers (GRBL's USE_LINE_NUMBERS, OPT letter N: every planner block
+ * keeps its line's N number, the status report shows the executing one as
+ * |Ln:) are no option: every board has them. */
 #if defined(__AVR_ATmega328P__)
 #define GRBL_FULL_DEFAULT 0
 #else
@@ -50,9 +46,6 @@
 #endif
 #ifndef GRBL_G93
 #define GRBL_G93 GRBL_FULL_DEFAULT
-#endif
-#ifndef GRBL_LINE_NUMBERS
-#define GRBL_LINE_NUMBERS GRBL_FULL_DEFAULT
 #endif
 
 /* Step timer: Timer1 at F_CPU/8 = 2 MHz. */
@@ -71,5 +64,18 @@
 #endif
 #include "io.h"
 #include BOARD_HEADER
+
+/* Planner ring: PLAN_SIZE - 1 usable blocks of 24 bytes (planner.h). Per
+ * chip unless the board header sets it; the host library (make motion)
+ * takes the value of the board it is built for from here. */
+#ifndef PLAN_SIZE
+#if defined(__AVR_ATmega2560__)
+#define PLAN_SIZE 64         /* 63 blocks, 1.5 KiB (an override change re-derives
+                              * the queue's speeds 4 blocks per main-loop pass,
+                              * so depth no longer starves the steppers then) */
+#else
+#define PLAN_SIZE 34         /* 33 blocks, 792 B: what 2 KiB less the stack's 512 B holds */
+#endif
+#endif
 
 #endif

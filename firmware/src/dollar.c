@@ -16,9 +16,9 @@ static void print_settings(void)
         uint8_t id = settings_id(i);
         float v = 0.0f;
         settings_get(&settings, id, &v);
-        RPT("$");
+        report_char('$');
         report_uint(id);
-        RPT("=");
+        report_char('=');
         report_fixed(v, settings_is_integer(id) ? 0 : 3);
         RPT("\r\n");
     }
@@ -59,7 +59,7 @@ static void print_offsets(void)
 #endif
         RPT("[G");
         report_uint(i < GC_SLOT_G28 ? 54 + i : i == GC_SLOT_G28 ? 28 : 30);
-        RPT(":");
+        report_char(':');
         report_xyz(v);
         RPT("]\r\n");
     }
@@ -90,7 +90,7 @@ static void print_startup_lines(void)
         eeline_load(n, line);
         RPT("$N");
         report_uint(n);
-        RPT("=");
+        report_char('=');
         report_str(line);
         RPT("\r\n");
     }
@@ -105,16 +105,14 @@ static void print_build_info(void)
     eeline_load(EELINE_BUILD_INFO, info);
     report_str(info);
 #endif
-    /* GRBL's letters for what this build leaves out */
-    RPT("]\r\n[OPT:"
+    /* GRBL's letters, in its order: N (line numbers, every board has them),
+     * then what this build leaves out */
+    RPT("]\r\n[OPT:N"
 #if !GRBL_WCS
         "#"
 #endif
 #if !GRBL_LINES
         "I"
-#endif
-#if GRBL_LINE_NUMBERS
-        "N"
 #endif
         ",");
     report_uint(PLAN_SIZE - 1); /* the same count as Bf: when idle */

@@ -2,6 +2,7 @@
 #include <string.h>
 #include "gcode.h"
 #include "numparse.h"
+#include "progmem.h"
 #include "status.h"
 
 #define ARC_RADIUS_ABS_TOL 0.005f
@@ -11,7 +12,13 @@
 
 /* word letters that carry a value, as bits for repeat detection */
 enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_COUNT };
-static const char word_letters[W_COUNT] = {'X', 'Y', 'Z', 'I', 'J', 'R', 'F', 'P', 'S', 'N', 'T', 'L'};
+/* each letter's word plus one (0: none), by letter - 'A': one flash read a
+ * word instead of a search, and no table in RAM */
+#define WORD(letter, w) [(letter) - 'A'] = (w) + 1
+static const uint8_t word_of_letter[26] PROGMEM = {
+    WORD('X', W_X), WORD('Y', W_Y), WORD('Z', W_Z), WORD('I', W_I), WORD('J', W_J), WORD('R', W_R),
+    WORD('F', W_F), WORD('P', W_P), WORD('S', W_S), WORD('N', W_N), WORD('T', W_T), WORD('L', W_L),
+};
 #define WB(w) (1u << (w))
 #define MAX_LINE_NUMBER 10000000.0f /* GRBL's limit on N (exact in a float) */
 
@@ -60,14 +67,6 @@ float gc_wco(const gc_state_t *st, uint8_t a)
 #else
     return st->g92[a];
 #endif
-}
-
-static uint8_t word_index(char letter)
-{
-    for (uint8_t w = 0; w < W_COUNT; w++)
-        if (word_letters[w] == letter)
-            return w;
-    return W_COUNT;
 }
 
 /* Centre of an R-form arc: on the perpendicular bisector of the chord;
@@ -214,8 +213,8 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
             }
             continue;
         }
-        uint8_t w = word_index(letter);
-        if (w == W_COUNT)
+        uint8_t w = (uint8_t)(pgm_read_byte(&word_of_letter[letter - 'A']) - 1); /* letter: A..Z here */
+        if (w >= W_COUNT)
             return jog ? ERR_INVALID_JOG : ERR_UNSUPPORTED;
         if (seen & WB(w))
             return ERR_WORD_REPEATED;
@@ -244,10 +243,8 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     }
     if ((seen & WB(W_N)) && val[W_N] > MAX_LINE_NUMBER)
         return ERR_LINE_NUMBER;
-#if GRBL_LINE_NUMBERS
     if (seen & WB(W_N)) /* GRBL keeps the whole part */
-        blk->line = (int32_t)val[W_N];
-#endif
+        blk->line = (uint32_t)val[W_N];
     if ((seen & WB(W_T)) && val[W_T] > 255.0f)
         return ERR_TOOL_NUMBER;
     if (seen & WB(W_F)) {

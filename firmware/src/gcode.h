@@ -54,9 +54,7 @@ typedef struct {
     float center[N_AXIS];
     float feed;           /* mm/min */
     float dwell_s;
-#if GRBL_LINE_NUMBERS
-    int32_t line;         /* N word (its whole part), 0 without one */
-#endif
+    uint32_t line;        /* N word (its whole part), 0 without one */
 } gc_block_t;
 
 void gc_init(gc_state_t *st);

@@ -101,7 +101,7 @@ void machine_report_status(void)
         state = hold_stopped() ? PSTR("Hold:0") : PSTR("Hold:1");
     else if (busy)
         state = mach.jog ? PSTR("Jog") : PSTR("Run");
-    RPT("<");
+    report_char('<');
     report_pstr(state);
     int32_t motor[N_AXIS], cart[N_AXIS];
     stepper_get_position(motor);
@@ -114,17 +114,15 @@ void machine_report_status(void)
     if (settings.report_mask & 2) {
         RPT("|Bf:");
         report_uint(plan_free());
-        RPT(",");
+        report_char(',');
         report_uint(serial_rx_free());
     }
-#if GRBL_LINE_NUMBERS
     /* the executing block's line, as GRBL: only a positive one */
-    int32_t ln = seg_exec_line();
-    if (ln > 0) {
+    plan_line_t ln = seg_exec_line();
+    if (ln) {
         RPT("|Ln:");
-        report_uint((uint32_t)ln);
+        report_uint(ln);
     }
-#endif
     RPT("|FS:");
     report_uint((uint32_t)(stepper_busy() ? seg_speed() * 60.0f + 0.5f : 0));
     RPT(",0");
@@ -151,7 +149,7 @@ void machine_report_status(void)
         RPT("|Ov:");
         for (uint8_t i = 0; i < 3; i++) {
             if (i)
-                RPT(",");
+                report_char(',');
             report_uint(rt_ov[i]);
         }
     }
@@ -391,9 +389,7 @@ uint8_t machine_execute(const gc_block_t *blk)
         machine_pen(blk->pen == PEN_DOWN);
     if (mach.abort)
         return ERR_LOCKED;
-#if GRBL_LINE_NUMBERS
     plan_set_line_number(blk->line);
-#endif
     uint8_t e = STATUS_OK;
     switch (blk->action) {
     case ACT_RAPID: e = line_to(blk->target, 0.0f, PB_RAPID); break;
@@ -483,8 +479,6 @@ uint8_t machine_jog(const char *body)
         return STATUS_OK;
     mach.jog = 1;
     memcpy(gc.pos, tmp.pos, sizeof(gc.pos));
-#if GRBL_LINE_NUMBERS
     plan_set_line_number(blk.line);
-#endif
     return line_to(blk.target, blk.feed, PB_JOG);
 }

@@ -24,10 +24,8 @@ static uint16_t last_feed_u16;
 #define OV_SLICE 4
 static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
 static float ov_prev_nominal;      /* the cruise speed^2 of the block before ov_at */
-#if GRBL_LINE_NUMBERS
-static int32_t line_number;    /* for the blocks queued next */
-void plan_set_line_number(int32_t n) { line_number = n; }
-#endif
+static plan_line_t line_number; /* for the blocks queued next */
+void plan_set_line_number(plan_line_t n) { line_number = n; }
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
@@ -358,9 +356,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
 
     plan_block_t *b = &ring[head];
     b->flags = flags;
-#if GRBL_LINE_NUMBERS
     b->line = line_number;
-#endif
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
     if (feed != last_feed) { /* F is modal: converted once per change */

@@ -27,7 +27,19 @@ typedef uint16_t plan_f16_t;
 plan_f16_t plan_f16_from_float(float v);
 float plan_f16_to_float(plan_f16_t h);
 
-/* A queued move, 21 bytes (25 with GRBL_LINE_NUMBERS): only what the queue and the segment preparer
+/* The N number of a block's line (0: none). GRBL's limit is 10,000,000
+ * (gcode.c answers error:27 above it), so 24 bits hold it: 3 bytes a block
+ * instead of 4 is what lets the 328P keep 33 blocks. The host has no 24-bit
+ * integer; a 24-bit field takes the same 3 bytes in its packed block. */
+#ifdef __AVR__
+typedef __uint24 plan_line_t;
+#define PLAN_LINE_FIELD(name) plan_line_t name
+#else
+typedef uint32_t plan_line_t;
+#define PLAN_LINE_FIELD(name) plan_line_t name : 24
+#endif
+
+/* A queued move, 24 bytes: only what the queue and the segment preparer
  * need. The planner passes run on every queued block for every new one, so
  * they work on squared speeds in fixed point (plan_sqr_t: integer adds and
  * compares); the length and acceleration are not stored but derived from
@@ -43,9 +55,7 @@ typedef struct {
     plan_f16_t nominal_sqr;   /* cruise speed squared, (mm/s)^2, overrides applied */
     uint16_t feed;            /* programmed feed, mm/min rounded (unused by rapids) */
     uint8_t flags;
-#if GRBL_LINE_NUMBERS
-    int32_t line;             /* the N number of the line it comes from, 0 none */
-#endif
+    PLAN_LINE_FIELD(line);    /* the N number of the line it comes from, 0 none */
 } plan_block_t;
 
 /* The float view of a block's geometry (main loop only), from its steps
@@ -70,10 +80,8 @@ uint8_t plan_count(void);
  * more than PLAN_MAX_EVENTS step events: the caller splits it (plan_pieces). */
 #define PLAN_TOO_LONG 2
 uint8_t plan_line(const float *target, float feed, uint8_t flags);
-#if GRBL_LINE_NUMBERS
 /* The N number plan_line gives the blocks it queues from now on (0: none). */
-void plan_set_line_number(int32_t n);
-#endif
+void plan_set_line_number(plan_line_t n);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
 uint16_t plan_events(const plan_block_t *b); /* step events of a block */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */

@@ -54,9 +54,9 @@ void protocol_startup_lines(void)
         uint8_t ok = eeline_load(n, lb.text);
         if (ok && !lb.text[0])
             continue;
-        RPT(">");
+        report_char('>');
         report_str(lb.text);
-        RPT(":");
+        report_char(':');
         report_status_code(ok ? protocol_gcode(lb.text) : ERR_EEPROM_READ);
     }
     lb.text[0] = 0;

@@ -36,7 +36,7 @@ void report_xyz(const float *v)
     float div = settings.report_inches ? 25.4f : 1.0f; /* $13 */
     for (uint8_t a = 0; a < 3; a++) {
         if (a)
-            RPT(",");
+            report_char(',');
         report_fixed(v[a] / div, 3);
     }
 }

@@ -4,6 +4,7 @@
 #define REPORT_H
 #include <stdint.h>
 #include <avr/pgmspace.h>
+#include "serial.h"
 
 void report_pstr(PGM_P s);
 void report_str(const char *s);
@@ -16,4 +17,6 @@ void report_banner(void);
 void report_unlock_hint(void);
 void report_msg(PGM_P text);           /* [MSG:text] */
 #define RPT(s) report_pstr(PSTR(s))
+/* one character: cheaper than RPT of a one-character string (no string, one register) */
+static inline void report_char(char c) { serial_write((uint8_t)c); }
 #endif

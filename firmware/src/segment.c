@@ -48,8 +48,7 @@ void seg_hold(uint8_t on)
 uint8_t seg_hold_reached(void) { return prep.hold && prep.stopped; }
 float seg_speed(void) { return prep.v; }
 
-#if GRBL_LINE_NUMBERS
-int32_t seg_exec_line(void)
+plan_line_t seg_exec_line(void)
 {
     uint8_t tail = seg_tail; /* the step interrupt only moves it forward; its slot stays valid */
     if (tail != seg_head)
@@ -57,7 +56,6 @@ int32_t seg_exec_line(void)
     const plan_block_t *b = plan_current();
     return b ? b->line : 0;
 }
-#endif
 
 void seg_drop_block(void)
 {
@@ -199,9 +197,7 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     p->events = plan_events(b);
     sb->events = (int16_t)p->events;
     sb->dir_negative = 0;
-#if GRBL_LINE_NUMBERS
     sb->line = b->line;
-#endif
     for (uint8_t a = 0; a < N_AXIS; a++) {
         int32_t st = b->steps[a];
         sb->steps[a] = (int16_t)(st < 0 ? -st : st);

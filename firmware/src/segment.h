@@ -5,6 +5,7 @@
 #define SEGMENT_H
 #include <stdint.h>
 #include "config.h"
+#include "planner.h"
 
 #define SEG_FIRST 0x01      /* first segment of a block: reset Bresenham, set direction */
 
@@ -12,9 +13,7 @@ typedef struct {
     int16_t steps[N_AXIS];  /* |motor steps|, at most PLAN_MAX_EVENTS */
     int16_t events;
     uint8_t dir_negative;   /* bit per motor */
-#if GRBL_LINE_NUMBERS
-    int32_t line;           /* its planner block's N number */
-#endif
+    PLAN_LINE_FIELD(line);  /* its planner block's N number */
 } step_block_t;
 
 typedef struct {
@@ -37,13 +36,11 @@ void seg_hold(uint8_t on);
 uint8_t seg_hold_reached(void);
 /* Forget the rest of the block being prepared (jog cancel after a hold). */
 void seg_drop_block(void);
-#if GRBL_LINE_NUMBERS
 /* N number of the block the steppers are executing: the segment under way,
  * else (a hold has drained them) the block being prepared; 0 when idle.
  * Not the block being prepared while segments run: that one is up to
  * SEG_SIZE - 1 short blocks ahead of the pen. Main loop only. */
-int32_t seg_exec_line(void);
-#endif
+plan_line_t seg_exec_line(void);
 /* Speed of the most recently prepared segment, mm/s. */
 float seg_speed(void);
 #endif

@@ -1,15 +1,8 @@
 #include <stddef.h>
 #include <string.h>
 #include "settings.h"
+#include "progmem.h"
 #include "status.h"
-#ifdef __AVR__
-#include <avr/pgmspace.h>
-#else /* host builds: the tables are ordinary constants */
-#define PROGMEM
-#define pgm_read_byte(p) (*(const uint8_t *)(p))
-#define pgm_read_word(p) (*(const uint16_t *)(p))
-#define memcpy_P memcpy
-#endif
 
 settings_t settings;
 

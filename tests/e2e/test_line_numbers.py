@@ -1,8 +1,9 @@
-"""End to end: a board whose firmware numbers lines (`$I` OPT `N`: the Mega profiles)
-through a real `plotbridge serve --virtual --board mega-ramps14`: the job goes out with
-`N` words, every status report while it runs carries the executing line (`Ln:`, the
-machine object's `line`), and a job stopped by the emergency stop resumes from the
-reported line with nothing drawn twice."""
+"""End to end: every firmware profile numbers lines (`$I` OPT `N`), the Uno's default
+uno-cnc-shield firmware and the Mega's mega-ramps14, each through a real
+`plotbridge serve --virtual --board ...`: the job goes out with `N` words, every
+status report while it runs carries the executing line (`Ln:`, the machine object's
+`line`), and a job stopped by the emergency stop resumes from the reported line with
+nothing drawn twice."""
 
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
 
 pytestmark = pytest.mark.e2e
 
+UNO = "uno-cnc-shield"
 MEGA = "mega-ramps14"
 FEED = 3000  # mm/min
 SEGMENT = 0.5  # mm: one planner block a line
@@ -33,14 +35,16 @@ def short_segments() -> tuple[str, int, float]:
     return "\n".join([*lines, "M5"]) + "\n", len(lines), SEGMENT * len(points)
 
 
-@pytest.fixture(scope="module")
-def mega_build(sim_build) -> None:
-    board_firmware(MEGA)
+@pytest.fixture(scope="module", params=[UNO, MEGA])
+def board(request, sim_build) -> str:
+    """Each profile, its firmware built."""
+    board_firmware(request.param)
+    return request.param
 
 
-def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(mega_build, tmp_path):
+def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(board, tmp_path):
     gcode, last_move, length = short_segments()
-    link = ["--virtual", "--sim-speed", "1", "--board", MEGA]
+    link = ["--virtual", "--sim-speed", "1", "--board", board]
     with running_server(tmp_path / "data", link) as server:
         server.home()
         assert server.machine()["line"] is None  # idle: nothing executes
@@ -67,5 +71,5 @@ def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(mega_build, 
         trace = server.client.get("/api/sim/trace").json()
         assert_same_drawing(server.preview(job["id"])["strokes"], trace["strokes"])
         redrawn = trace["draw_mm"] - length
-        print(f"estop on 0.5 mm segments, resumed from Ln: {redrawn:.4f} mm drawn twice")
+        print(f"{board}: estop on 0.5 mm segments, resumed from Ln: {redrawn:.4f} mm drawn twice")
         assert -ESTOP_REDRAW_MM <= redrawn <= ESTOP_REDRAW_MM, f"{redrawn:.3f} mm drawn twice"

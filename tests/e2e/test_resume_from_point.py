@@ -2,7 +2,9 @@
 real firmware in the simulator and a real `plotbridge serve`: a picked stroke vertex
 with a 1 mm overlap, a layer, a line inside an arc (the arc goes on as an arc), start
 options `layers`/`start_layer`, home-then-resume after an emergency stop, and a server
-killed mid-stroke (the board's run-out position keeps the redraw within one report)."""
+killed mid-stroke (the board's run-out position keeps the redraw within one report).
+The firmware is the Uno's (uno-cnc-shield), which numbers lines: the resume points
+come from the executing line its status reports name (`Ln:`)."""
 
 from __future__ import annotations
 
@@ -165,6 +167,7 @@ def test_home_then_resume_after_an_emergency_stop(server, plotter):
     plotter.clear()
     job = server.submit(gcode)
     server.wait_progress(job["id"], 15)
+    server.wait_machine(lambda m: m["line"] is not None, 10)  # Ln: names the executing line
     assert server.client.post("/api/machine/estop").status_code == 202
     server.wait_job(job["id"], ("stopped",), 10)
     server.wait_machine(lambda m: m["state"] == "Alarm", 10)
@@ -189,6 +192,7 @@ def test_server_killed_mid_stroke_redraws_at_most_one_report(plotter_factory, tm
         plotter.clear()
         job = server.submit(gcode)
         server.wait_progress(job["id"], 20)
+        server.wait_machine(lambda m: m["line"] is not None, 10)  # Ln: names the executing line
         killed = server.proc.pid if server.proc else None
         server.kill()
         if killed is not None:  # its import workers (own process group) go too
