@@ -102,6 +102,8 @@ SETTINGS: dict[int, SettingInfo] = {
 
 
 def _ranges() -> dict[int, Range]:
+    """firmware/src/settings.c's limits; tests/unit/test_settings_ranges.py holds the two
+    equal by asking the firmware's own code at every edge."""
     out: dict[int, Range] = {}
     for n in (11, 12, 24, 25, 110, 111, 120, 121, 130, 131):
         out[n] = Range("number", 0, FLOAT_MAX, above=True)

@@ -94,6 +94,14 @@ class QuietHandler(http.server.SimpleHTTPRequestHandler):
         pass
 
 
+@pytest.fixture
+def modules(desktop, static_web) -> Page:
+    """A page of the static web/ origin, for `run` (tests/fixtures/pages.py)."""
+    page, _ = desktop
+    page.goto(static_web + "/no-such-page")  # any page of that origin: modules load from it
+    return page
+
+
 def screenshot(page: Page, name: str) -> None:
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / f"{name}.png"))

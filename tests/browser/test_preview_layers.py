@@ -11,9 +11,8 @@ import pytest
 from plotbridge.importing import ImportOptions, MachineProfile, import_file
 
 from tests.browser.conftest import login, screenshot
-from tests.browser.test_ui_logic import modules, run  # noqa: F401 (a fixture)
-from tests.browser.test_ui_plot import upload, wait_job_state
 from tests.fixtures.drawings import INK
+from tests.fixtures.pages import run, upload, wait_job_state
 
 pytestmark = pytest.mark.browser
 
@@ -33,7 +32,7 @@ def layers_svg() -> bytes:
             + "</svg>").encode()
 
 
-def test_points_done_is_exact_at_every_layer_boundary(modules, tmp_path):  # noqa: F811
+def test_points_done_is_exact_at_every_layer_boundary(modules, tmp_path):
     src = tmp_path / "layers.svg"
     src.write_bytes(layers_svg())
     r = import_file(src, "layers.svg", tmp_path / "out", ImportOptions(), MachineProfile())

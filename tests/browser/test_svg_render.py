@@ -13,7 +13,7 @@ import pytest
 from plotbridge.importing import ImportOptions, MachineProfile, import_file
 from scipy.spatial import cKDTree
 
-from tests.unit.import_helpers import drawn_strokes, program_lines
+from tests.fixtures.imports import drawn_strokes, program_lines
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "svg"
 PX_PER_MM = 10

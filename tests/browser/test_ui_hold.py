@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import PHONE, login, screenshot
-from tests.browser.test_ui_plot import circles_svg, upload, wait_job_state
+from tests.fixtures.pages import circles_svg, upload, wait_job_state
 
 pytestmark = pytest.mark.browser
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import PHONE, login, new_page, screenshot
-from tests.browser.test_ui_plot import job_row, upload, wait_job_state
 from tests.fixtures.drawings import THREE_LAYERS
+from tests.fixtures.pages import job_row, upload, wait_job_state
 
 pytestmark = pytest.mark.browser
 

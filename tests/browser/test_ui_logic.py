@@ -4,34 +4,9 @@ from __future__ import annotations
 
 import pytest
 
+from tests.fixtures.pages import run
+
 pytestmark = pytest.mark.browser
-
-
-@pytest.fixture
-def modules(desktop, static_web):
-    page, _ = desktop
-    page.goto(static_web + "/no-such-page")  # any page of that origin: modules load from it
-    return page
-
-
-def run(page, body: str):
-    """Evaluate `body` (an async function body) with the UI's modules imported."""
-    return page.evaluate(
-        """async (body) => {
-            const m = {
-              ...(await import('/js/preview-data.js')),
-              ...(await import('/js/store.js')),
-              ...(await import('/js/actions.js')),
-              ...(await import('/js/reducer.js')),
-              ...(await import('/js/views/machine.js')),
-              ...(await import('/js/views/jobs.js')),
-              ...(await import('/js/views/control.js')),
-              ...(await import('/js/format.js')),
-            };
-            return await (new Function('m', `return (async () => { ${body} })()`))(m);
-        }""",
-        body,
-    )
 
 
 TWO_STROKES = (

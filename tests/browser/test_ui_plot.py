@@ -12,26 +12,10 @@ import pytest
 
 from tests.browser.conftest import DESKTOP, PHONE, login, screenshot
 from tests.fixtures.artifacts import record
+from tests.fixtures.pages import SQUARE_SVG, circles_svg, job_id, job_row, upload, wait_job_state
 
 pytestmark = pytest.mark.browser
 
-
-def circles_svg(n: int, step: float = 3.0) -> bytes:
-    """Concentric circles: a long plot (minutes of pen-down travel at real speed)."""
-    shapes = "".join(
-        f'<circle cx="100" cy="100" r="{5 + i * step:g}" fill="none" stroke="black"/>'
-        for i in range(n)
-    )
-    return (
-        '<svg xmlns="http://www.w3.org/2000/svg" width="200mm" height="200mm" '
-        f'viewBox="0 0 200 200">{shapes}</svg>'
-    ).encode()
-
-
-SQUARE_SVG = (
-    b'<svg xmlns="http://www.w3.org/2000/svg" width="60mm" height="60mm" viewBox="0 0 60 60">'
-    b'<rect x="10" y="10" width="30" height="30" fill="none" stroke="black"/></svg>'
-)
 
 # Starts the stop timer at the first input event, resolves when the page shows stopped.
 ARM_STOP_TIMER = """(eventName) => {
@@ -52,25 +36,6 @@ ARM_STOP_TIMER = """(eventName) => {
         observer.observe(panel, {attributes: true, attributeFilter: ['data-phase', 'hidden']});
     });
 }"""
-
-
-def upload(page, name: str, data: bytes, mime: str = "image/svg+xml") -> None:
-    page.set_input_files("#file-input", files=[{"name": name, "mimeType": mime, "buffer": data}])
-
-
-def job_row(page, name: str):
-    return page.locator("#queue li.job", has=page.locator(".name", has_text=name))
-
-
-def wait_job_state(page, name: str, states: tuple[str, ...], timeout: float = 20_000) -> str:
-    page.wait_for_function(
-        """([name, states]) => [...document.querySelectorAll('#queue li.job')].some((li) =>
-            li.querySelector('.name').textContent === name &&
-            states.includes(li.querySelector('.badge').textContent))""",
-        arg=[name, list(states)],
-        timeout=timeout,
-    )
-    return job_row(page, name).locator(".badge").text_content()
 
 
 def assert_stop_on_screen(page, viewport: dict[str, int]) -> None:
@@ -221,12 +186,6 @@ def plot_stop_unlock_next(
         assert server.job(job_id(page, next_name))["state"] == "done"
     screenshot(page, f"{prefix}-next-job")
     return elapsed, last_step_ms
-
-
-def job_id(page, name: str) -> str:
-    return page.evaluate(
-        "(name) => window.plotbridge.store.state.jobs.find((j) => j.name === name).id", name
-    )
 
 
 def manual_control_settings_console(page, server) -> None:

@@ -10,14 +10,7 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import DESKTOP, PHONE, login, new_page, screenshot
-from tests.browser.test_ui_plot import (
-    SQUARE_SVG,
-    circles_svg,
-    job_id,
-    job_row,
-    upload,
-    wait_job_state,
-)  # fmt: skip
+from tests.fixtures.pages import SQUARE_SVG, circles_svg, job_id, job_row, upload, wait_job_state
 
 pytestmark = pytest.mark.browser
 

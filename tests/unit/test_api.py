@@ -3,164 +3,24 @@
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import json
 import threading
 import time
-from collections.abc import AsyncIterator
-from pathlib import Path
 from types import SimpleNamespace
-from typing import Any
 
 import httpx
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from plotbridge.app import Board, create_app
-from plotbridge.config import Config, PlotterConfig
-from plotbridge.errors import Refused
 from plotbridge.jobs.imports import Importer
-from plotbridge.jobs.model import Imported
-from plotbridge.plotter.board import BoardFacts
-from plotbridge.plotter.link import LinkEvent, MachineStatus
 from plotbridge.plotter.runner import MARK_FILE
 from plotbridge.resume import Mark
 from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
+from tests.fixtures.fake_app import AUTH, TOKEN, fake_import, make_app, serving, upload
 from tests.fixtures.waits import settle
-
-TOKEN = "test-token-0123456789"
-AUTH = {"Authorization": f"Bearer {TOKEN}"}
-
-
-class FakeLink:
-    """Acknowledges streamed lines one per `step()` (or all with auto_ack); records output."""
-
-    def __init__(self, device: str = "/dev/fake") -> None:
-        self.device = device
-        self.poll_hz = 8.0
-        self.facts = BoardFacts()
-        self.status = MachineStatus(
-            connected=True, state="Idle", x=0.0, y=0.0, pen="up", firmware="1.1h", alarm=None,
-            planner_free=15, rx_free=128, feed=0.0, pins="", updated_at=time.time(),
-        )  # fmt: skip
-        self.settings: dict[int, float] = {110: 6000.0, 130: 300.0, 131: 220.0, 999: 1.0}
-        self.commands: list[str] = []
-        self.realtime_bytes: list[bytes] = []
-        self.estop_calls = 0
-        self.awaiting_banner = False
-        self.subscribers: list[Any] = []
-        self.streamed: list[tuple[int, str]] = []
-        self.auto_ack = False
-        self._abort: Exception | None = None
-        self._tick: asyncio.Event | None = None
-
-    async def run(self) -> None:
-        self._tick = asyncio.Event()
-        await asyncio.Event().wait()
-
-    def subscribe(self, callback: Any) -> Any:
-        self.subscribers.append(callback)
-        return lambda: self.subscribers.remove(callback)
-
-    def emit(self, kind: str, **fields: Any) -> None:
-        if kind == "status":
-            fields["status"] = self.status
-        for callback in list(self.subscribers):
-            callback(LinkEvent(kind, **fields))
-
-    def set_state(self, state: str, **fields: Any) -> None:
-        self.status.state = state
-        self.status.updated_at = time.time()
-        for key, value in fields.items():
-            setattr(self.status, key, value)
-        self.emit("status")
-
-    def realtime(self, byte: bytes) -> None:
-        self.realtime_bytes.append(byte)
-        if byte == b"!" and self.status.state == "Run":
-            self.set_state("Hold")
-        elif byte == b"~" and self.status.state == "Hold":
-            self.set_state("Run")
-
-    def estop(self) -> None:
-        from plotbridge.plotter.link import StreamAborted
-
-        self.estop_calls += 1
-        self.abort(StreamAborted("estop", 0, None, "reset"))
-        self.set_state("Alarm", alarm=3)
-
-    def abort(self, exc: Exception) -> None:
-        self._abort = exc
-        if self._tick:
-            self._tick.set()
-
-    def cancel_stream(self) -> None:
-        from plotbridge.plotter.link import StreamAborted
-
-        self.abort(StreamAborted("cancelled", 0, None, "cancelled"))
-
-    async def command(self, line: str, timeout: float = 10) -> list[str]:  # noqa: ASYNC109
-        self.commands.append(line)
-        if line == "$X":
-            self.set_state("Idle", alarm=None)
-        return []  # like Link.command: the lines before the ok
-
-    def step(self) -> None:
-        assert self._tick is not None
-        self._tick.set()
-
-    async def stream(self, lines: Any, on_ack: Any) -> None:
-        assert self._tick is not None
-        self._abort = None
-        self.set_state("Run")
-        async for number, text in lines:
-            if not self.auto_ack:
-                await self._tick.wait()
-                self._tick.clear()
-            if self._abort is not None:
-                raise self._abort
-            self.streamed.append((number, text))
-            on_ack(number)
-            await asyncio.sleep(0)
-        self.set_state("Idle")
-
-
-async def fake_import(self, kind, source, filename, dest, options):
-    """Stands in for the worker-process import: a program of 20 lines."""
-    text = Path(source).read_text() if kind == "file" else "pattern"  # noqa: ASYNC240
-    if "INVALID" in text:
-        raise Refused(422, {"errors": [{"line": 3, "message": "unknown command"}]})
-    program = ["G21", "G90", "M5"] + [f"G1 X{i}.000 Y0.000 F3000" for i in range(16)] + ["M5"]
-    Path(dest, "program.gcode").write_text("\n".join(program) + "\n")  # noqa: ASYNC240
-    Path(dest, "preview.json").write_text(json.dumps({"strokes": [[[0, 0], [1, 0]]]}))  # noqa: ASYNC240
-    result = SimpleNamespace(
-        format="gcode", lines_total=len(program), estimate_s=10.0,
-        bounds={"min_x": 0, "min_y": 0, "max_x": 15, "max_y": 0},
-        stats={"pen_down_mm": 15.0}, timeline=[(len(program), 10.0)],
-    )  # fmt: skip
-    return Imported.of(result)
-
-
-def make_app(tmp_path: Path, **config: Any):
-    link = FakeLink()
-    cfg = Config(data_dir=tmp_path, plotters=[PlotterConfig("plotter1", "/dev/fake")],
-                 allowed_hosts=("test", "testserver"), **config)
-    return create_app(cfg, [Board("plotter1", link)], TOKEN), link
-
-
-@contextlib.asynccontextmanager
-async def serving(app: Any) -> AsyncIterator[httpx.AsyncClient]:
-    """The app started (lifespan) and a client with the token."""
-    async with app.router.lifespan_context(app):
-        await asyncio.sleep(0)  # let the fake link's run() start
-        transport = httpx.ASGITransport(app=app)
-        async with httpx.AsyncClient(
-            transport=transport, base_url="http://test", headers=AUTH
-        ) as client:
-            yield client
 
 
 @pytest.fixture
@@ -170,10 +30,6 @@ async def api(tmp_path, monkeypatch):
     async with serving(app) as client:
         queue = app.state.components.queue
         yield SimpleNamespace(app=app, link=link, client=client, queue=queue)
-
-
-async def upload(client: httpx.AsyncClient, text: str = "G1 X1 Y1\n", **data: str):
-    return await client.post("/api/jobs", files={"file": ("drawing.gcode", text)}, data=data)
 
 
 # ---- auth -----------------------------------------------------------------------

@@ -2,43 +2,10 @@
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
-from types import SimpleNamespace
-
 from plotbridge.jobs.imports import Importer
-from plotbridge.jobs.model import Imported
 
-from tests.unit.test_api import make_app, serving, settle, upload
-
-LAYER = ["G0 X{x} Y0", "M3", "G1 X{x2} Y0 F3000", "M5"]
-
-
-def layered_program() -> tuple[list[str], list[dict]]:
-    """Three layers of one stroke each, an M0 between them (docs/INTERNALS.md, Layers)."""
-    program = ["G21", "G90", "M5"]
-    layers = []
-    for index, (name, colour) in enumerate((("a", "#000000"), ("b", "#ff0000"),
-                                            ("c", "#0000ff"))):  # fmt: skip
-        if index:
-            program.append("M0")
-        first = len(program) + 1 if index else 1
-        program += [line.format(x=10 * index, x2=10 * index + 5) for line in LAYER]
-        layers.append({"name": name, "colour": colour, "first_line": first,
-                       "last_line": len(program), "strokes": 1, "pen_down_mm": 5.0,
-                       "estimate_s": 1.0})  # fmt: skip
-    return program, layers
-
-
-async def layered_import(self, kind, source, filename, dest, options):
-    program, layers = layered_program()
-    Path(dest, "program.gcode").write_text("\n".join(program) + "\n")  # noqa: ASYNC240
-    Path(dest, "preview.json").write_text(json.dumps({"strokes": []}))  # noqa: ASYNC240
-    return Imported.of(SimpleNamespace(
-        format="svg", lines_total=len(program), estimate_s=3.0,
-        bounds={"min_x": 0, "min_y": 0, "max_x": 25, "max_y": 0},
-        stats={"pen_down_mm": 15.0}, timeline=[(len(program), 3.0)], layers=layers,
-    ))  # fmt: skip
+from tests.fixtures.fake_app import layered_import, layered_program, make_app, serving, upload
+from tests.fixtures.waits import settle
 
 
 async def test_pen_change_parks_prompts_and_continues(tmp_path, monkeypatch):

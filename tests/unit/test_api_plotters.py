@@ -10,7 +10,8 @@ from plotbridge.config import Config, PlotterConfig
 from plotbridge.jobs.imports import Importer
 from plotbridge.plotter.plotter import WorkArea
 
-from tests.unit.test_api import TOKEN, FakeLink, fake_import, serving, settle, upload
+from tests.fixtures.fake_app import TOKEN, FakeLink, fake_import, serving, upload
+from tests.fixtures.waits import settle
 
 NAMES = ("a", "b", "c")
 

@@ -2,32 +2,26 @@
 
 from __future__ import annotations
 
-import argparse
-
 import pytest
-from plotbridge.cli import add_serve_arguments, plotters_from_args
+from plotbridge.cli import plotters_from_args
 from plotbridge.config import ConfigError, PlotterConfig, read_plotters_file
 
-
-def parse(*argv: str) -> argparse.Namespace:
-    parser = argparse.ArgumentParser()
-    add_serve_arguments(parser)
-    return parser.parse_args(list(argv))
+from tests.fixtures.fake_app import serve_args
 
 
 def test_serial_repeats_and_virtual_counts(tmp_path, monkeypatch):
     monkeypatch.delenv("PLOTBRIDGE_SERIAL", raising=False)
     monkeypatch.delenv("PLOTBRIDGE_BOARD", raising=False)
-    two = plotters_from_args(parse("--serial", "/dev/a", "--serial", "/dev/b"), tmp_path)
+    two = plotters_from_args(serve_args("--serial", "/dev/a", "--serial", "/dev/b"), tmp_path)
     assert [(p.name, p.device) for p in two] == [("plotter1", "/dev/a"), ("plotter2", "/dev/b")]
-    assert [p.name for p in plotters_from_args(parse("--virtual", "3"), tmp_path)] == [
+    assert [p.name for p in plotters_from_args(serve_args("--virtual", "3"), tmp_path)] == [
         "plotter1", "plotter2", "plotter3"]
     default = PlotterConfig("plotter1", board="uno-cnc-shield")
-    assert plotters_from_args(parse(), tmp_path) == [default]
-    ramps = plotters_from_args(parse("--board", "mega-ramps14"), tmp_path)
+    assert plotters_from_args(serve_args(), tmp_path) == [default]
+    ramps = plotters_from_args(serve_args("--board", "mega-ramps14"), tmp_path)
     assert ramps[0].board == "mega-ramps14"
     with pytest.raises(ConfigError, match="between 1 and 16"):
-        plotters_from_args(parse("--virtual", "0"), tmp_path)
+        plotters_from_args(serve_args("--virtual", "0"), tmp_path)
 
 
 def test_plotters_file(tmp_path, monkeypatch):
@@ -37,10 +31,10 @@ def test_plotters_file(tmp_path, monkeypatch):
         'board = "uno-uln2003"\nwidth = 200\nheight = 150\n\n'
         '[[plotter]]\nname = "sim"\nvirtual = true\n'
     )
-    left, sim = plotters_from_args(parse(), tmp_path)
+    left, sim = plotters_from_args(serve_args(), tmp_path)
     assert left == PlotterConfig("left", "/dev/ttyUSB0", "uno-uln2003", 9600, (200.0, 150.0))
     assert sim.virtual and sim.name == "sim"
-    assert plotters_from_args(parse("--virtual", "1"), tmp_path)[0].name == "plotter1"
+    assert plotters_from_args(serve_args("--virtual", "1"), tmp_path)[0].name == "plotter1"
 
 
 @pytest.mark.parametrize("text, message", [

@@ -13,7 +13,7 @@ from plotbridge.guard import logs
 from plotbridge.guard.hosts import host_allowed, own_names
 from plotbridge.guard.ratelimit import FREE_FAILURES
 
-from tests.unit.test_api import TOKEN, make_app, serving
+from tests.fixtures.fake_app import TOKEN, make_app, serving
 
 OWN = {"host": "test", "origin": "http://test"}
 

@@ -15,7 +15,7 @@ from plotbridge.importing import (
     import_pattern,
 )
 
-from .import_helpers import drawn_strokes, program_lines, run_import
+from tests.fixtures.imports import drawn_strokes, program_lines, run_import
 
 SVG_HEAD = '<svg xmlns="http://www.w3.org/2000/svg" '
 

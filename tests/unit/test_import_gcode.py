@@ -14,7 +14,7 @@ from plotbridge.importing.gcode import read_ops
 from plotbridge.importing.models import ErrorLog
 from plotbridge.importing.ops import single_moves
 
-from .import_helpers import drawn_strokes, program_lines, run_import
+from tests.fixtures.imports import drawn_strokes, program_lines, run_import
 
 
 def test_m3_dialect_is_normalized(tmp_path):

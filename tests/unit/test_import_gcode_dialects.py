@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from plotbridge.importing import ImportFailed
 
-from tests.unit.import_helpers import program_lines, run_import
+from tests.fixtures.imports import program_lines, run_import
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "gcode"
 

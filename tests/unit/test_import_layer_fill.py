@@ -9,7 +9,7 @@ import json
 import pytest
 from plotbridge.importing.fields import import_fields, layer_fills
 
-from tests.unit.import_helpers import drawn_strokes, program_lines, run_import
+from tests.fixtures.imports import drawn_strokes, program_lines, run_import
 
 HEAD = ('<svg xmlns="http://www.w3.org/2000/svg" '
         'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 from plotbridge.importing.optimize import EndIndex, optimize_strokes, order_greedy, two_opt
 from plotbridge.importing.optimize import travel as travel_of
 
-from .import_helpers import drawn_strokes, program_lines, run_import
+from tests.fixtures.imports import drawn_strokes, program_lines, run_import
 
 coord = st.integers(min_value=0, max_value=2000).map(lambda v: v / 10)   # 0.1 mm grid
 point = st.tuples(coord, coord)

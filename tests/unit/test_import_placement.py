@@ -6,7 +6,7 @@ import pytest
 from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile
 from plotbridge.importing.placement import Transform, paper_size, placement
 
-from .import_helpers import run_import
+from tests.fixtures.imports import run_import
 
 BOX = (10.0, 20.0, 60.0, 40.0)   # 50 x 20 mm drawing
 M = MachineProfile()

@@ -9,7 +9,7 @@ import pytest
 from plotbridge.importing import preview as preview_module
 from plotbridge.program.reader import Command
 
-from tests.unit.import_helpers import program_lines, run_import
+from tests.fixtures.imports import program_lines, run_import
 
 HEAD = ('<svg xmlns="http://www.w3.org/2000/svg" '
         'xmlns:inkscape="http://www.inkscape.org/namespaces/inkscape" '

@@ -12,7 +12,7 @@ from plotbridge.importing.preview import PreviewBuilder
 from plotbridge.importing.simplify import simplify
 from plotbridge.resume import Mark, ResumePoint, locate, resume_preamble
 
-from .import_helpers import program_lines, run_import
+from tests.fixtures.imports import program_lines, run_import
 
 
 def test_simplify_keeps_shape_and_drops_collinear_points():

@@ -4,8 +4,8 @@ starting a text chunk that its anchor shifts."""
 
 from __future__ import annotations
 
+from tests.fixtures.imports import run_import
 from tests.fixtures.text_glyphs import HEAD, I_ADVANCE, glyph_poses
-from tests.unit.import_helpers import run_import
 
 
 def glyph_origins(tmp_path, body: str) -> list[tuple[float, float]]:

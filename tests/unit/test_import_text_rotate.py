@@ -8,8 +8,8 @@ from __future__ import annotations
 import pytest
 from plotbridge.importing import svgtext
 
+from tests.fixtures.imports import drawn_strokes, program_lines, run_import
 from tests.fixtures.text_glyphs import HEAD, I_ADVANCE, glyph_poses, turned
-from tests.unit.import_helpers import drawn_strokes, program_lines, run_import
 
 
 def test_each_glyph_is_the_upright_glyph_turned_about_its_own_start_point():

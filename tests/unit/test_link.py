@@ -1,9 +1,5 @@
-"""The serial link (plotbridge.plotter.link) against a scripted GRBL board.
-
-The fake board below stands in for the port: it records every write in
-order, keeps a 128-byte receive buffer that fails the test if it overflows,
-and answers lines the way GRBL 1.1 does (or as a test scripts it).
-"""
+"""The serial link (plotbridge.plotter.link) against a scripted GRBL board
+(tests/fixtures/fake_board.py) standing in for the port."""
 
 from __future__ import annotations
 
@@ -11,218 +7,26 @@ import asyncio
 import contextlib
 import re
 import time
-from collections.abc import Callable
 
 import pytest
 from plotbridge.plotter.link import (
     CommandError,
-    Link,
     LinkDown,
     LinkEvent,
     StreamAborted,
-    _PortProtocol,
 )
 from plotbridge.program.wire import compact_async
 
+from tests.fixtures.fake_board import (
+    FakeBoard,
+    FakeLink,
+    aiter_of,
+    drain_recording,
+    feed_slowly,
+    program,
+    running,
+)
 from tests.fixtures.waits import settle
-
-SETTINGS = ["$0=4", "$10=3", "$110=6000.000", "$130=300.000", "$131=220.000"]
-
-
-class FakeSerial:
-    def __init__(self, board: FakeBoard) -> None:
-        self.board = board
-
-    def write(self, data: bytes) -> int:
-        limit = self.board.write_limit       # what the OS would take now
-        taken = bytes(data) if limit is None else bytes(data[:limit])
-        if taken:
-            self.board.receive(taken)
-        return len(taken)
-
-    def reset_output_buffer(self) -> None:
-        self.board.writes.append(b"<flush>")
-
-
-class FakeTransport:
-    def __init__(self, board: FakeBoard) -> None:
-        self.serial = FakeSerial(board)
-        self.closing = False
-
-    def is_closing(self) -> bool:
-        return self.closing
-
-    def get_write_buffer_size(self) -> int:
-        return 0
-
-    def write(self, data: bytes) -> None:  # only used for partial writes
-        raise AssertionError("the fake serial always takes everything")
-
-    def abort(self) -> None:
-        self.closing = True
-
-
-class FakeBoard:
-    """A scripted GRBL 1.1 board.
-
-    `auto`: lines are executed (answered) as soon as they arrive; otherwise
-    they wait in the receive buffer until `execute()` is called, like a board
-    whose planner is full.
-    """
-
-    def __init__(self, *, banner_on_connect: bool = False, auto: bool = True) -> None:
-        self.banner_on_connect = banner_on_connect
-        self.auto = auto
-        self.writes: list[bytes] = []
-        self.lines: list[str] = []
-        self.rx = bytearray()
-        self.max_rx = 0
-        self.state = "Idle"
-        self.pos = (0.0, 0.0)
-        self.accessories = ""
-        self.muted = False
-        self.write_limit: int | None = None
-        self.unplugged = False
-        self.connects = 0
-        self.script: dict[str, list[str]] = {}      # line -> answer lines
-        self.on_line: Callable[[str], list[str] | None] | None = None
-        self.protocol: _PortProtocol | None = None
-
-    # the port side
-    def attach(self, protocol: _PortProtocol) -> None:
-        self.protocol = protocol
-        self.rx.clear()
-        self.connects += 1
-        if self.banner_on_connect:
-            self.send("", "Grbl 1.1h ['$' for help]")
-
-    def send(self, *lines: str, raw: bytes = b"") -> None:
-        data = raw + b"".join(line.encode() + b"\r\n" for line in lines)
-        proto = self.protocol
-        if proto is not None and not self.muted:
-            asyncio.get_running_loop().call_soon(proto.data_received, data)
-
-    def unplug(self) -> None:
-        self.unplugged = True
-        proto, self.protocol = self.protocol, None
-        if proto is not None:
-            asyncio.get_running_loop().call_soon(proto.connection_lost, OSError(5, "EIO"))
-
-    def receive(self, data: bytes) -> None:
-        self.writes.append(data)
-        if self.muted:
-            return
-        for byte in data:
-            if byte == ord("?"):
-                self.send(self.status_line())
-            elif byte == 0x18:
-                self.rx.clear()
-                if self.state in ("Run", "Jog"):
-                    self.send("ALARM:3")
-                    self.state = "Alarm"
-                self.send("", "Grbl 1.1h ['$' for help]")
-            elif byte in b"!~":
-                self.state = "Hold" if byte == ord("!") else "Run"
-            else:
-                self.rx.append(byte)
-                self.max_rx = max(self.max_rx, len(self.rx))
-                assert len(self.rx) <= 128, "receive buffer overflow"
-        if self.auto:
-            self.execute()
-
-    def status_line(self) -> str:
-        acc = f"|A:{self.accessories}" if self.accessories else ""
-        return (f"<{self.state}|MPos:{self.pos[0]:.3f},{self.pos[1]:.3f},0.000"
-                f"|Bf:15,{128 - len(self.rx)}|FS:0,0{acc}>")
-
-    def execute(self, count: int | None = None) -> int:
-        """Take up to `count` complete lines out of the receive buffer and answer them."""
-        done = 0
-        while b"\n" in self.rx and (count is None or done < count):
-            end = self.rx.index(b"\n")
-            line = self.rx[:end].decode()
-            del self.rx[:end + 1]
-            self.lines.append(line)
-            self.send(*self.answer(line))
-            done += 1
-        return done
-
-    def answer(self, line: str) -> list[str]:
-        if self.on_line is not None and (custom := self.on_line(line)) is not None:
-            return custom
-        if line in self.script:
-            return self.script[line]
-        if line == "$$":
-            return [*SETTINGS, "ok"]
-        if line == "$I":
-            return ["[VER:1.1h.20190825:]", "[OPT:V,15,128]", "ok"]
-        return ["ok"]
-
-
-class FakeLink(Link):
-    banner_wait = 0.02
-    handshake_timeout = 0.5
-    silence_timeout = 0.3
-    reset_settle = 0.3
-    backoff_min = 0.02
-    backoff_max = 0.1
-
-    def __init__(self, board: FakeBoard) -> None:
-        super().__init__("fake", poll_hz=40)
-        self.board = board
-        self.events: list[LinkEvent] = []
-        self.subscribe(self.events.append)
-
-    async def _open_port(self) -> FakeTransport:
-        if self.board.unplugged:
-            raise OSError(2, "No such file or directory")
-        transport = FakeTransport(self.board)
-        protocol = _PortProtocol(self)
-        protocol.connection_made(transport)
-        self.board.attach(protocol)
-        return transport
-
-
-@contextlib.asynccontextmanager
-async def running(board: FakeBoard):
-    link = FakeLink(board)
-    auto, board.auto = board.auto, True    # answer the handshake at once
-    task = asyncio.create_task(link.run())
-    try:
-        await settle(lambda: link.connected)
-        board.auto = auto
-        yield link
-    finally:
-        task.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await task
-
-
-def program(count: int, start: int = 1) -> list[tuple[int, str]]:
-    # Lines of varying length, so the buffer fills unevenly.
-    return [(n, f"G1 X{n * 0.5:.3f} Y{(n * 7) % 200:.3f} F3000" + " " * (n % 9))
-            for n in range(start, start + count)]
-
-
-async def aiter_of(items):
-    for item in items:
-        yield item
-
-
-async def drain_recording(board: FakeBoard, stop: asyncio.Event, fills: list[int]) -> None:
-    """Execute one line at a time, recording how full the receive buffer was before each."""
-    while not stop.is_set():
-        fills.append(len(board.rx))
-        board.execute(1)
-        await asyncio.sleep(0.001)
-
-
-async def feed_slowly(board: FakeBoard, stop: asyncio.Event, per_tick: int = 1) -> None:
-    """Execute lines a few at a time, like a planner draining."""
-    while not stop.is_set():
-        board.execute(per_tick)
-        await asyncio.sleep(0.001)
-
 
 # --- connecting ---------------------------------------------------------------
 

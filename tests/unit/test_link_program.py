@@ -12,7 +12,7 @@ import pytest
 from plotbridge.plotter.link import StreamAborted
 from plotbridge.program.reader import ProgramReader, motion_flags
 
-from tests.unit.test_link import FakeBoard, feed_slowly, running
+from tests.fixtures.fake_board import FakeBoard, feed_slowly, running
 
 
 def write_program(path: Path, count: int) -> list[str]:

@@ -21,8 +21,8 @@ from plotbridge.notify.delivery import Delivery
 from plotbridge.notify.notices import NoticeWatcher
 from plotbridge.notify.outbox import Outbox, Pending
 
-from tests.unit.test_api import make_app, serving, settle
-from tests.unit.test_config import parse as serve_args
+from tests.fixtures.fake_app import make_app, serve_args, serving
+from tests.fixtures.waits import settle
 
 # ---- notices ------------------------------------------------------------------------
 

@@ -14,8 +14,8 @@ from plotbridge.pens.feed import move_length
 from plotbridge.pens.model import Pen, parse_layer_pens
 from plotbridge.program.reader import Command
 
-from tests.unit.test_api import make_app, serving, settle, upload
-from tests.unit.test_api_pen_change import layered_import
+from tests.fixtures.fake_app import layered_import, make_app, serving, upload
+from tests.fixtures.waits import settle
 
 
 async def numbered(lines: list[str]):
