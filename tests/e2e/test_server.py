@@ -22,6 +22,7 @@ from tests.fixtures.trace import (
     assert_same_drawing,
     assert_stopped,
     drawn_once_mm,
+    stop_clock,
     stroke_length,
 )
 from tests.fixtures.waits import wait_until
@@ -49,10 +50,10 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     plotter.clear()
     job = server.submit(drawing(circles=6))
     server.wait_progress(job["id"], 40)
-    sent_at = time.monotonic()
+    sent = stop_clock(plotter)
     response = server.client.post("/api/machine/estop")
     assert response.status_code == 202
-    assert_stopped(server, plotter, job["id"], sent_at)
+    assert_stopped(server, plotter, job["id"], sent)
     # the next job waits until the alarm is cleared, saying why
     other = server.submit(drawing(), start=False)
     waiting = server.client.post(f"/api/jobs/{other['id']}/start").json()
@@ -84,11 +85,11 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
         wait_until(lambda: import_workers(server.proc.pid), bool, 30, "an import worker")
         assert not uploading.done()
         assert server.job(job["id"])["lines_done"] < 600, "the job ran out before the stop"
-        sent_at = time.monotonic()
+        sent = stop_clock(plotter)
         response = server.client.post("/api/machine/estop")
-        answered = time.monotonic() - sent_at
+        answered = time.monotonic() - sent.at
         assert response.status_code == 202 and answered < 0.2
-        assert_stopped(server, plotter, job["id"], sent_at)
+        assert_stopped(server, plotter, job["id"], sent)
         assert uploading.result().status_code in (201, 422)
 
 
@@ -100,7 +101,7 @@ def test_estop_websocket_mid_job(server, plotter):
         first = json.loads(ws.recv(5))
         assert first["type"] == "machine"
         server.wait_progress(job["id"], 40)
-        sent_at = time.monotonic()
+        sent = stop_clock(plotter)
         ws.send(json.dumps({"type": "estop"}))
         seen_ack = seen_stopped = False
         deadline = time.monotonic() + 5
@@ -109,7 +110,7 @@ def test_estop_websocket_mid_job(server, plotter):
             seen_ack |= message == {"type": "ack", "command": "estop"}
             seen_stopped |= message["type"] == "job" and message["job"]["state"] == "stopped"
         assert seen_ack and seen_stopped
-    assert_stopped(server, plotter, job["id"], sent_at)
+    assert_stopped(server, plotter, job["id"], sent)
 
 
 def test_pause_resume(server, plotter):

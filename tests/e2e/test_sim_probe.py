@@ -121,32 +121,24 @@ def test_byte_timing_follows_115200_in_real_time(
 ) -> None:
     p = plotter_factory(firmware=sim_build.probe, speed=1)
     port = open_port(p)
-    assert p.proc is not None
     data = b"U" * 1000
-    began, queued = time.monotonic(), run_queue_wait(p.proc.pid)
+    began, queued = time.monotonic(), p.cpu_wait()
     port.write(data)
     assert port.read(len(data)) == data
     took = time.monotonic() - began
     # A simulator kept off the CPU catches up with the wall clock afterwards (by design:
     # paced time stays true on average), so bytes may come faster by that much.
-    starved = run_queue_wait(p.proc.pid) - queued
+    starved = p.cpu_wait() - queued
     assert len(data) * BYTE_TIME * 0.95 - starved < took < len(data) * BYTE_TIME * 10
-
-
-def run_queue_wait(pid: int) -> float:
-    """Seconds the process's threads spent runnable but waiting for a CPU."""
-    tasks = Path(f"/proc/{pid}/task").iterdir()
-    return sum(int((t / "schedstat").read_text().split()[1]) for t in tasks) / 1e9
 
 
 def test_speed_paces_simulated_time(plotter_factory: PlotterFactory, sim_build: SimBuild) -> None:
     rates, starved = {}, {}
     for speed in (1, 2, 0):
         p = plotter_factory(firmware=sim_build.probe, speed=speed)
-        assert p.proc is not None
-        t0, w0, q0 = p.trace()["sim_time"], time.monotonic(), run_queue_wait(p.proc.pid)
+        t0, w0, q0 = p.trace()["sim_time"], time.monotonic(), p.cpu_wait()
         time.sleep(0.5)
-        t1, w1, q1 = p.trace()["sim_time"], time.monotonic(), run_queue_wait(p.proc.pid)
+        t1, w1, q1 = p.trace()["sim_time"], time.monotonic(), p.cpu_wait()
         rates[speed] = (t1 - t0) / (w1 - w0)
         starved[speed] = (q1 - q0) / (w1 - w0)
         p.stop()

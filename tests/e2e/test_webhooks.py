@@ -21,7 +21,7 @@ import pytest
 
 from tests.fixtures.drawings import THREE_LAYERS, drawing
 from tests.fixtures.server import ServerProcess, running_server
-from tests.fixtures.trace import assert_stopped
+from tests.fixtures.trace import assert_stopped, stop_clock
 from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
@@ -145,11 +145,11 @@ def test_estop_is_not_delayed_by_a_hanging_receiver(server, plotter, receiver):
     while receiver.pending == 0:  # the job_started post hangs at the receiver
         assert time.monotonic() < deadline, "the server posted no job_started"
         time.sleep(0.02)
-    sent_at = time.monotonic()
+    sent = stop_clock(plotter)
     response = server.client.post("/api/machine/estop")
-    answered = time.monotonic() - sent_at
+    answered = time.monotonic() - sent.at
     assert response.status_code == 202 and answered < 0.25, answered
-    assert_stopped(server, plotter, job["id"], sent_at)
+    assert_stopped(server, plotter, job["id"], sent)
     assert server.client.get("/api/settings/webhooks").json()["webhooks"][0]["queued"] >= 2
     receiver.go.set()
     events = [e["event"] for e in receiver.wait_for("job_stopped")]

@@ -370,7 +370,7 @@ async def test_board_error_fails_job_with_line(api):
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
     api.link.step()
-    await asyncio.sleep(0.01)
+    await settle(lambda: api.queue.jobs[job["id"]].lines_done == 1)  # streaming: line 2 next
     api.link.abort(StreamAborted("error", 1, 2, "error:33 invalid target"))
     await settle(lambda: api.queue.jobs[job["id"]].state == "failed")
     failed = (await api.client.get(f"/api/jobs/{job['id']}")).json()
