@@ -9,7 +9,7 @@ import ctypes
 
 import numpy as np
 
-from ..native import library
+from ..native import function
 
 
 def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
@@ -46,10 +46,7 @@ def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np
 
 
 def _native():
-    fn = library("simplify").simplify_mask
-    if fn.argtypes is None:
-        f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
-        fn.argtypes = [ctypes.c_long, f64, f64, ctypes.c_double,
-                       np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")]
-        fn.restype = ctypes.c_int
-    return fn
+    f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
+    return function("simplify", "simplify_mask",
+                    [ctypes.c_long, f64, f64, ctypes.c_double,
+                     np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")], ctypes.c_int)

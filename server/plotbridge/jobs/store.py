@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import json
 import logging
-import sqlite3
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from plotbridge.database import connect
 from plotbridge.jobs.model import Job
 
 log = logging.getLogger("plotbridge.jobs.store")
@@ -39,10 +39,7 @@ class JobStore:
     def __init__(self, path: Path, first_plotter: str) -> None:
         self.path = path
         self._lock = threading.Lock()
-        self._db = sqlite3.connect(path, check_same_thread=False, isolation_level=None)
-        self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=NORMAL")
-        self._db.execute(SCHEMA)
+        self._db = connect(path, SCHEMA)
         self._migrate(first_plotter)
         self._writer = ThreadPoolExecutor(1, thread_name_prefix="plotbridge-db")
 

@@ -9,6 +9,7 @@ import ctypes
 import subprocess
 import threading
 from pathlib import Path
+from typing import Any
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[2]
@@ -34,3 +35,11 @@ def library(name: str) -> ctypes.CDLL:
                                         f"{r.stderr.strip() or r.stdout.strip()}")
             lib = _loaded[name] = ctypes.CDLL(str(path))
         return lib
+
+
+def function(name: str, symbol: str, argtypes: list[Any], restype: Any) -> Any:
+    """`symbol` of build/lib<name>.so with its C signature declared (on first use)."""
+    fn = getattr(library(name), symbol)  # ctypes hands out the same object each time
+    if fn.argtypes is None:
+        fn.argtypes, fn.restype = argtypes, restype
+    return fn

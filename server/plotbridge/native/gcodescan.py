@@ -7,7 +7,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import library
+from . import function
 
 _f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
 _u8 = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")
@@ -16,13 +16,9 @@ OTHER, RAPID, LINE = 0, 1, 2
 
 
 def _scanner():
-    lib = library("gcodescan")
-    fn = lib.gcode_scan
-    if fn.restype is not ctypes.c_long:
-        fn.argtypes = [ctypes.c_char_p, ctypes.c_long, ctypes.c_int, ctypes.c_long,
-                       ctypes.c_long, _u8, _f64, _f64, _f64, _f64, _long]
-        fn.restype = ctypes.c_long
-    return fn
+    return function("gcodescan", "gcode_scan",
+                    [ctypes.c_char_p, ctypes.c_long, ctypes.c_int, ctypes.c_long,
+                     ctypes.c_long, _u8, _f64, _f64, _f64, _f64, _long], ctypes.c_long)
 
 
 class Scan(NamedTuple):

@@ -9,7 +9,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import library
+from . import function
 
 _LINE_ROOM = 48     # bytes of a line without its feed text (movelines.c)
 FEEDS_MAX = 4096    # feed texts kept from run to run (a file of ever new feeds)
@@ -44,12 +44,9 @@ class _Writer(ctypes.Structure):
 
 
 def _fn():
-    fn = library("movelines").moves_lines
-    if fn.restype is not ctypes.c_long:
-        fn.argtypes = [ctypes.POINTER(_Writer), ctypes.c_long, ctypes.c_double,
-                       ctypes.c_double]
-        fn.restype = ctypes.c_long
-    return fn
+    return function("movelines", "moves_lines", [ctypes.POINTER(_Writer), ctypes.c_long,
+                                                 ctypes.c_double, ctypes.c_double],
+                    ctypes.c_long)
 
 
 class Lines(NamedTuple):

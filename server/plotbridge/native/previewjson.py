@@ -6,16 +6,12 @@ import ctypes
 
 import numpy as np
 
-from . import library
+from . import function
 
 
 def _fn():
-    fn = library("previewjson").strokes_json
-    if fn.restype is not ctypes.c_long:
-        p = ctypes.c_void_p
-        fn.argtypes = [ctypes.c_long, p, p, p]
-        fn.restype = ctypes.c_long
-    return fn
+    p = ctypes.c_void_p
+    return function("previewjson", "strokes_json", [ctypes.c_long, p, p, p], ctypes.c_long)
 
 
 def strokes_json(strokes: list[np.ndarray]) -> str | None:

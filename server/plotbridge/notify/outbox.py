@@ -27,6 +27,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from plotbridge.database import connect
+
 log = logging.getLogger("plotbridge.notify")
 
 SCHEMA = """
@@ -103,10 +105,7 @@ class Outbox:
     # ---- on the writer thread -----------------------------------------------------------
 
     def _open(self) -> list[tuple[int, str, str, bytes]]:
-        self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None)
-        self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=NORMAL")  # WAL: a kill -9 loses nothing committed
-        self._db.execute(SCHEMA)
+        self._db = connect(self.path, SCHEMA)
         return self._db.execute(
             "SELECT seq, url, event, body FROM webhook_outbox ORDER BY seq").fetchall()
 

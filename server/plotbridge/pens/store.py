@@ -9,12 +9,12 @@ missing), so the jobs' `user_version` does not change.
 from __future__ import annotations
 
 import json
-import sqlite3
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from plotbridge.database import connect
 from plotbridge.pens.model import Pen
 
 SCHEMA = """
@@ -30,10 +30,7 @@ CREATE TABLE IF NOT EXISTS pens (
 class PenStore:
     def __init__(self, path: Path) -> None:
         self._lock = threading.Lock()
-        self._db = sqlite3.connect(path, check_same_thread=False, isolation_level=None)
-        self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=NORMAL")  # WAL: no fsync per commit
-        self._db.execute(SCHEMA)
+        self._db = connect(path, SCHEMA)
         self._writer = ThreadPoolExecutor(1, thread_name_prefix="plotbridge-pens")
 
     def close(self) -> None:
