@@ -9,6 +9,8 @@
 #include "settings.h"
 
 #define DRIVE_PULSED 0
+#define DRIVE_X 1u /* drive_step's bits */
+#define DRIVE_Y 2u
 
 #if DRIVE_KIND == DRIVE_BIPOLAR && BIPOLAR_FULL_STEP
 #define COIL_STRIDE 2  /* full step two-phase-on: the odd (two coils) states */
@@ -33,13 +35,13 @@ extern const uint8_t coil_x[8], coil_y[8]; /* port bits per state */
  * called with interrupts off, so the port write cannot race) */
 static inline void drive_step(uint8_t axes)
 {
-    if (axes & 1) {
+    if (axes & DRIVE_X) {
         uint8_t p = (uint8_t)((coil_state.phase[0] + coil_delta[0]) & 7);
         coil_state.phase[0] = p;
         if (coil_on)
             IO_PORT(X_COIL_A) = (uint8_t)((IO_PORT(X_COIL_A) & ~COIL_X_MASK) | coil_x[p]);
     }
-    if (axes & 2) {
+    if (axes & DRIVE_Y) {
         uint8_t p = (uint8_t)((coil_state.phase[1] + coil_delta[1]) & 7);
         coil_state.phase[1] = p;
         if (coil_on)

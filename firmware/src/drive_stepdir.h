@@ -11,25 +11,26 @@
 
 #define DRIVE_PULSED 1
 
-extern uint8_t drive_pulsing; /* axes whose pulse is up */
+extern uint8_t drive_pulsing; /* DRIVE_X / DRIVE_Y bits whose pulse is up */
 
-/* 2 cycles per axis on separate ports, 3 on a shared one (one write) */
-static inline __attribute__((always_inline)) void drive_step(uint8_t axes)
+/* Both step pins on one port: an axis's bit is its pin's bit, so a step
+ * is one write of the bits to PINx (a toggle: both edges at once). */
+#define DRIVE_ONE_PORT IO_SAME_PORT(X_STEP, Y_STEP)
+#define DRIVE_X (DRIVE_ONE_PORT ? IO_MASK(X_STEP) : 1u)
+#define DRIVE_Y (DRIVE_ONE_PORT ? IO_MASK(Y_STEP) : 2u)
+
+/* 1 cycle on a shared port (one write), 2 per axis on separate ports */
+static inline __attribute__((always_inline)) void drive_step(uint8_t bits)
 {
-    if (IO_SAME_PORT(X_STEP, Y_STEP)) {
-        uint8_t bits = 0;
-        if (axes & 1)
-            bits |= IO_MASK(X_STEP);
-        if (axes & 2)
-            bits |= IO_MASK(Y_STEP);
-        IO_PINREG(X_STEP) = bits; /* both edges in one write */
+    if (DRIVE_ONE_PORT) {
+        IO_PINREG(X_STEP) = bits; /* writing 0 toggles nothing */
     } else {
-        if (axes & 1)
+        if (bits & 1)
             IO_TOGGLE(X_STEP);
-        if (axes & 2)
+        if (bits & 2)
             IO_TOGGLE(Y_STEP);
     }
-    drive_pulsing = axes;
+    drive_pulsing = bits;
 }
 
 static inline __attribute__((always_inline)) void drive_step_end(void)

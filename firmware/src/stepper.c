@@ -8,7 +8,9 @@
 #include "settings.h"
 #include "stepper.h"
 
-static volatile uint8_t running;
+/* Running: Timer1's compare interrupt is on (it is only ever on while the
+ * steppers run; no RAM for a flag). */
+#define RUNNING() (TIMSK1 != 0)
 /* Motor position: a 32-bit base plus signed 16-bit step counts that the
  * interrupt keeps (no 32-bit read-modify-write per step) and the main loop
  * folds into the base whenever it polls (stepper_start). Between two polls
@@ -16,21 +18,21 @@ static volatile uint8_t running;
  * at 50 kHz, 22,400 steps, inside int16. */
 static volatile int32_t position[N_AXIS];
 static volatile int16_t done[N_AXIS];
-static uint8_t pulse_ticks;                 /* Timer0 ticks (0.5 us) */
 static uint8_t enabled;
 
 /* state of the step interrupt */
-static uint8_t pending_steps;   /* axes to step at the next tick (bit0 X, bit1 Y) */
+static uint8_t pending_steps;   /* DRIVE_X / DRIVE_Y bits to step at the next tick */
 static uint8_t dir_negative;    /* axes of the current block that move negative */
 static uint16_t seg_left;
-static step_block_t *blk;
+/* the current block's Bresenham terms, copied from its step_block_t when
+ * it starts: one load each a tick, no pointer to fetch first */
+static int16_t blk_steps[N_AXIS], blk_events;
 static int16_t counter[N_AXIS]; /* Bresenham: 16-bit, blocks are at most PLAN_MAX_EVENTS */
 
 void stepper_apply_settings(void)
 {
     /* +1: the first tick after the count is reset may be partly gone */
-    pulse_ticks = (uint8_t)(settings.pulse_us * 2 + 1);
-    OCR0A = pulse_ticks;
+    OCR0A = (uint8_t)(settings.pulse_us * 2 + 1); /* Timer0 ticks (0.5 us) */
     drive_apply_settings();
 }
 
@@ -58,7 +60,7 @@ void stepper_enable(uint8_t on)
 }
 
 uint8_t stepper_enabled(void) { return enabled; }
-uint8_t stepper_busy(void) { return running; }
+uint8_t stepper_busy(void) { return RUNNING(); }
 
 /* The step counts into the base position (interrupts off). */
 static inline __attribute__((always_inline)) void fold_counts(void)
@@ -70,12 +72,12 @@ static inline __attribute__((always_inline)) void fold_counts(void)
 
 void stepper_start(void)
 {
-    if (running || done[0] || done[1]) /* (stopped, the interrupt leaves them alone) */
+    if (RUNNING() || done[0] || done[1]) /* (stopped, the interrupt leaves them alone) */
         ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
         {
             fold_counts();
         }
-    if (running || seg_head == seg_tail)
+    if (RUNNING() || seg_head == seg_tail)
         return;
     if (!enabled)
         stepper_enable(1);
@@ -83,7 +85,6 @@ void stepper_start(void)
     {
         pending_steps = 0;
         seg_left = 0;
-        running = 1;
         /* simavr never fires a CTC timer whose compare value is 0: load one first */
         OCR1A = 100;
         TCNT1 = 0;
@@ -98,16 +99,16 @@ uint8_t stepper_halt(void)
     uint8_t was;
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
+        was = RUNNING();
         TCCR1B = 1 << WGM12;
         TIMSK1 = 0;
         TIMSK0 = 0;
         drive_step_end();
-        was = running;
-        running = 0;
         /* steps counted but never pulsed: take them back so the position stays true */
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            if (pending_steps & (1 << a))
-                done[a] += (dir_negative & (1 << a)) ? 1 : -1;
+        if (pending_steps & DRIVE_X)
+            done[0] += (dir_negative & 1) ? 1 : -1;
+        if (pending_steps & DRIVE_Y)
+            done[1] += (dir_negative & 2) ? 1 : -1;
         fold_counts();
         pending_steps = 0;
     }
@@ -141,7 +142,7 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
             position[a] += (dir_negative & (1 << a)) ? -1 : 1;
     drive_set_dir(dir_negative);
     _delay_us(2); /* direction setup time before the edge */
-    drive_step(mask);
+    drive_step((uint8_t)((mask & 1 ? DRIVE_X : 0) | (mask & 2 ? DRIVE_Y : 0)));
 #if DRIVE_PULSED
     _delay_us(10);
     drive_step_end();
@@ -178,7 +179,11 @@ ISR(TIMER1_COMPA_vect)
     IO_HIGH(BENCH_ISR);
 #endif
 #if DRIVE_PULSED
-    if (drive_pulsing) /* the pulse end came late (never at the planned rates): keep edges paired */
+    /* a pulse still up (its end came late: never at the planned rates) falls
+     * first, keeping edges paired; with none up this toggles nothing */
+    if (DRIVE_ONE_PORT)
+        drive_step(drive_pulsing);
+    else if (drive_pulsing)
         drive_step_end();
     drive_step(pending_steps);
     TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse; no wrap to handle */
@@ -187,50 +192,61 @@ ISR(TIMER1_COMPA_vect)
 #else
     drive_step(pending_steps);
 #endif
-    if (seg_left == 0) {
+    uint16_t left = seg_left;
+    if (left == 0) {
         if (seg_head == seg_tail) { /* nothing left: stop (Timer0 still ends this pulse) */
             TCCR1B = 1 << WGM12;
             TIMSK1 = 0;
-            running = 0;
             pending_steps = 0;
 #ifdef BENCH_ISR_PIN
             IO_LOW(BENCH_ISR);
 #endif
             return;
         }
-        segment_t *seg = &seg_ring[ring_slot(seg_tail, SEG_SIZE)];
+        const segment_t *seg = &seg_ring[ring_slot(seg_tail, SEG_SIZE)];
         OCR1A = seg->period;
-        seg_left = seg->events;
+        left = seg->events;
         if (seg->flags & SEG_FIRST) {
-            step_block_t *b = seg->block;
-            blk = b;
-            counter[0] = counter[1] = (int16_t)(b->events >> 1);
+            const step_block_t *b = seg->block;
+            int16_t events = b->events;
+            blk_events = events;
+            blk_steps[0] = b->steps[0];
+            blk_steps[1] = b->steps[1];
+            counter[0] = counter[1] = (int16_t)(events >> 1);
             dir_negative = b->dir_negative;
             drive_set_dir(dir_negative);
         }
     }
+    /* the segment's last event: its slot may be refilled (all of it is
+     * copied above) */
+    if (--left == 0)
+        seg_tail++;
+    seg_left = left;
+    /* each counter stored before the position count: fewer registers held */
     uint8_t steps = 0;
-    counter[0] -= blk->steps[0];
-    if (counter[0] < 0) {
-        counter[0] += blk->events;
-        steps |= 1;
+    int16_t c = counter[0] - blk_steps[0];
+    if (c < 0) {
+        counter[0] = c + blk_events;
+        steps = DRIVE_X;
         if (dir_negative & 1)
             done[0]--;
         else
             done[0]++;
+    } else {
+        counter[0] = c;
     }
-    counter[1] -= blk->steps[1];
-    if (counter[1] < 0) {
-        counter[1] += blk->events;
-        steps |= 2;
+    c = counter[1] - blk_steps[1];
+    if (c < 0) {
+        counter[1] = c + blk_events;
+        steps |= DRIVE_Y;
         if (dir_negative & 2)
             done[1]--;
         else
             done[1]++;
+    } else {
+        counter[1] = c;
     }
     pending_steps = steps;
-    if (--seg_left == 0)
-        seg_tail++; /* segment consumed: its slot may be refilled */
 #if DRIVE_PULSED
     if (TIFR0 & (1 << OCF0A)) {
         /* a long tick (a block starts) outlasted the pulse: end it now rather
