@@ -8,32 +8,29 @@
 
 enum { LB_NONE, LB_LINE, LB_OVERFLOW, LB_BAD_BYTE };
 
+/* linebuf_t.flags: the state between bytes, in one byte (RAM on the 328P) */
+#define LBF_PAREN 0x01     /* inside ( ) */
+#define LBF_SEMICOLON 0x02 /* after ; up to the line end */
+#define LBF_AFTER_CR 0x04  /* the \n of a \r\n pair ends no second line */
+#define LBF_OVERFLOW 0x08  /* more than LINE_SIZE kept characters */
+#define LBF_BAD_BYTE 0x10  /* a control byte or binary noise */
+
 typedef struct {
     char text[LINE_SIZE + 1];
     uint8_t len;
-    uint8_t in_paren, in_semicolon, overflow, bad_byte;
-    uint8_t after_cr; /* the \n of a \r\n pair ends no second line */
+    uint8_t flags;
 } linebuf_t;
 
 void linebuf_reset(linebuf_t *lb);
 /* Feed one byte; LB_LINE / LB_OVERFLOW / LB_BAD_BYTE at a line end: text is
  * then NUL-terminated (a blank line gives LB_LINE with len 0) and stays valid
  * until the next byte is fed. */
-static inline uint8_t linebuf_feed(linebuf_t *lb, uint8_t c);
-/* linebuf_feed for every byte but the common one below */
-uint8_t linebuf_feed_rest(linebuf_t *lb, uint8_t c);
-
-static inline uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
-{
-    /* the common byte inline, in one test of each: an upper-case letter,
-     * digit or sign outside a comment, with room left (the line is
-     * NUL-terminated at its end, not after every byte) */
-    if (c > ' ' && c <= 'Z' && c != '(' && c != ';' && !(lb->in_paren | lb->in_semicolon) &&
-        lb->len < LINE_SIZE) {
-        lb->after_cr = 0;
-        lb->text[lb->len++] = (char)c;
-        return LB_NONE;
-    }
-    return linebuf_feed_rest(lb, c);
-}
+uint8_t linebuf_feed(linebuf_t *lb, uint8_t c);
+/* Feed the bytes of a ring (ring[index & mask]) from *tail up to head, or
+ * up to and including a line end; *tail is advanced past the bytes taken.
+ * Returns linebuf_feed's result for the last byte (LB_NONE: no line end
+ * yet). A line's common run of letters, digits, signs and points is copied
+ * in one loop with the length in a register. */
+uint8_t linebuf_feed_ring(linebuf_t *lb, const uint8_t *ring, uint8_t mask, uint8_t *tail,
+                          uint8_t head);
 #endif

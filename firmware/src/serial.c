@@ -38,7 +38,7 @@ void serial_init(void)
  * longer pay for pushing and popping the 11 registers a call may clobber
  * (44 cycles a byte). The trampoline keeps the ABI: r1 is 0 in an interrupt
  * body, r0 is scratch, r24 carries the byte in and the answer out. */
-__asm__(".section .text.realtime_byte_saving,\"ax\",@progbits\n"
+__asm__(".pushsection .text.realtime_byte_saving,\"ax\",@progbits\n"
         "realtime_byte_saving:\n"
         "  push r18\n  push r19\n  push r20\n  push r21\n  push r22\n  push r23\n"
         "  push r25\n  push r26\n  push r27\n  push r30\n  push r31\n"
@@ -46,7 +46,7 @@ __asm__(".section .text.realtime_byte_saving,\"ax\",@progbits\n"
         "  pop r31\n  pop r30\n  pop r27\n  pop r26\n  pop r25\n"
         "  pop r23\n  pop r22\n  pop r21\n  pop r20\n  pop r19\n  pop r18\n"
         "  ret\n"
-        ".text\n");
+        ".popsection\n");
 
 static inline __attribute__((always_inline)) uint8_t realtime_byte_in_isr(uint8_t c)
 {
@@ -80,9 +80,8 @@ ISR(UART_RX_VECT)
 
 uint8_t serial_read_line(linebuf_t *lb)
 {
-    uint8_t r = LB_NONE, tail = rx_tail;
-    while (r == LB_NONE && tail != rx_head)
-        r = linebuf_feed(lb, rx_buf[ring_slot(tail++, RX_SIZE)]);
+    uint8_t tail = rx_tail;
+    uint8_t r = linebuf_feed_ring(lb, rx_buf, RX_SIZE - 1, &tail, rx_head);
     rx_tail = tail; /* once: the bytes taken are free for the interrupt now */
     return r;
 }

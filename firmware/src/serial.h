@@ -7,7 +7,7 @@
 
 void serial_init(void);
 /* Feed received bytes to lb up to the end of a line or of the bytes in:
- * linebuf_feed's result for the last byte (LB_NONE: no line end yet). */
+ * linebuf_feed_ring's result for the last byte (LB_NONE: no line end yet). */
 uint8_t serial_read_line(linebuf_t *lb);
 void serial_write(uint8_t c);       /* blocks (servicing the watchdog) while the ring is full */
 uint8_t serial_rx_free(void);

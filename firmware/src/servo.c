@@ -65,6 +65,13 @@ ISR(TIMER2_COMPA_vect)
      * (a few us late, the same for both edges, so the width holds) */
     IO_SET(SERVO, high ^ (remaining == interval));
 #endif
+    /* the rest (~100 cycles) may be interrupted: run with interrupts shut it
+     * delayed a step tick due meanwhile by as much, and a step edge ~140
+     * cycles late is a step period of 180 at 50 kHz. Not re-entered: the
+     * next compare is at least MIN_INTERVAL ticks (256 us) away; the state
+     * here is this interrupt's own, and the inputs are polled with
+     * interrupts shut again (they raise the same flags as the UART's). */
+    sei();
     us_frac += (uint16_t)interval * TICK_US;
     while (us_frac >= 1000) {
         us_frac -= 1000;
@@ -83,6 +90,7 @@ ISR(TIMER2_COMPA_vect)
     }
     load_next();
 #ifndef INPUTS_PCINT
+    cli();
     inputs_poll();
 #endif
 }

@@ -181,9 +181,7 @@ ISR(TIMER1_COMPA_vect)
 #if DRIVE_PULSED
     /* a pulse still up (its end came late: never at the planned rates) falls
      * first, keeping edges paired; with none up this toggles nothing */
-    if (DRIVE_ONE_PORT)
-        drive_step(drive_pulsing);
-    else if (drive_pulsing)
+    if (drive_pulsing)
         drive_step_end();
     drive_step(pending_steps);
     TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse; no wrap to handle */

@@ -12,6 +12,7 @@ const char *fuzz_corpus_dir = "fuzz/corpus";
 static const test_case cases[] = {
     {"numbers", test_numbers},
     {"linebuf", test_linebuf},
+    {"linebuf_ring", test_linebuf_ring},
     {"fmt", test_fmt},
     {"ring", test_ring},
     {"gcode_valid", test_gcode_valid},

@@ -93,6 +93,51 @@ void test_linebuf(void)
     CHECK(feed_all(&lb, "G1 (open\nG2\n", &last) == 2 && strcmp(lb.text, "G2") == 0);
 }
 
+/* linebuf_feed_ring gives the lines, results and texts that linebuf_feed
+ * gives byte by byte, for bytes arriving in any pieces across the ring's wrap */
+void test_linebuf_ring(void)
+{
+    static const char stream[] =
+        "X112.5Y67.25\nx1 y2 (c) ;rest\r\nG1\r\rN5G1X-.5\n(open\nXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXX"
+        "XXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXXX\nG\x01" "1\n\n$$\n";
+    const uint8_t n = (uint8_t)(sizeof(stream) - 1);
+    for (uint8_t piece = 1; piece <= 17; piece += 4) {
+        for (uint8_t start = 0; start < 16; start += 5) {
+            uint8_t ring[16];
+            linebuf_t a, b;
+            linebuf_reset(&a);
+            linebuf_reset(&b);
+            uint8_t head = start, tail = start, fed = 0, lines_a = 0, lines_b = 0;
+            for (uint8_t i = 0; i < n; i++) {
+                uint8_t r = linebuf_feed(&a, (uint8_t)stream[i]);
+                if (r != LB_NONE)
+                    lines_a++;
+            }
+            while (fed < n || tail != head) {
+                /* the sender adds up to `piece` bytes while the ring has room */
+                for (uint8_t k = 0; k < piece && fed < n && (uint8_t)(head - tail) < 16; k++)
+                    ring[head++ & 15] = (uint8_t)stream[fed++];
+                uint8_t before = tail;
+                uint8_t r = linebuf_feed_ring(&b, ring, 15, &tail, head);
+                CHECK(tail != before || before == head);
+                if (r != LB_NONE) {
+                    lines_b++;
+                    /* the same line came out of the byte-by-byte feed */
+                    linebuf_t c;
+                    linebuf_reset(&c);
+                    uint8_t rc = LB_NONE, seen = 0;
+                    for (uint8_t i = 0; i < n && seen < lines_b; i++) {
+                        rc = linebuf_feed(&c, (uint8_t)stream[i]);
+                        seen += rc != LB_NONE;
+                    }
+                    CHECK(rc == r && strcmp(c.text, b.text) == 0);
+                }
+            }
+            CHECK(lines_a == 10 && lines_b == lines_a);
+        }
+    }
+}
+
 void test_fmt(void)
 {
     char b[FMT_MAX];

@@ -3,6 +3,7 @@
 #define TESTS_H
 void test_numbers(void);
 void test_linebuf(void);
+void test_linebuf_ring(void);
 void test_fmt(void);
 void test_ring(void);
 void test_gcode_valid(void);
