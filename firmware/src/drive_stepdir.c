@@ -8,7 +8,6 @@
 
 #if DRIVE_KIND == DRIVE_STEPDIR
 
-uint8_t drive_pulsing;
 static uint8_t enabled;
 
 void drive_init(void)

@@ -11,7 +11,9 @@
 
 #define DRIVE_PULSED 1
 
-extern uint8_t drive_pulsing; /* DRIVE_X / DRIVE_Y bits whose pulse is up */
+/* DRIVE_X / DRIVE_Y bits whose pulse is up: a general purpose I/O register
+ * (one cycle to read or write in the step interrupts) */
+#define drive_pulsing GPIOR2
 
 /* Both step pins on one port: an axis's bit is its pin's bit, so a step
  * is one write of the bits to PINx (a toggle: both edges at once). */
@@ -35,7 +37,10 @@ static inline __attribute__((always_inline)) void drive_step(uint8_t bits)
 
 static inline __attribute__((always_inline)) void drive_step_end(void)
 {
-    drive_step(drive_pulsing);
+    if (DRIVE_ONE_PORT)
+        IO_PINREG(X_STEP) = drive_pulsing;
+    else
+        drive_step(drive_pulsing);
     drive_pulsing = 0;
 }
 

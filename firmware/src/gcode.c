@@ -1,4 +1,5 @@
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 #include "gcode.h"
 #include "numparse.h"
@@ -104,7 +105,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     uint8_t g_units = 0, g_dist = 0, g_plane = 0, g_coord = 0, g_feed_mode = 0; /* groups seen on this line */
     uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pause = 0, m_stop_groups = 0, m_pen_groups = 0;
 
-    memset(blk, 0, sizeof(*blk));
+    memset(blk, 0, offsetof(gc_block_t, store));
     for (uint8_t i = 0; line[i];) {
         char letter = line[i++];
         if (letter == '/') /* block delete: GRBL ignores the character */

@@ -25,7 +25,21 @@
 #define IO_READ(...) ((IO_PINREG(__VA_ARGS__) & IO_MASK(__VA_ARGS__)) != 0)
 /* writing a 1 to PINx toggles PORTx: one cycle, and atomic */
 #define IO_TOGGLE(...) (IO_PINREG(__VA_ARGS__) = IO_MASK(__VA_ARGS__))
-/* two pins on the same port (a constant expression: the compiler folds it) */
-#define IO_SAME_PORT(a, b) (&IO_PORT(a) == &IO_PORT(b))
+/* two pins on the same port: a number per port letter, so that the
+ * preprocessor can test it too (#if IO_SAME_PORT(X_STEP, Y_STEP)) */
+#define IO_PORT_NUM(...) IO_PORT_NUM_(__VA_ARGS__)
+#define IO_PORT_NUM_(p, b) IO_PORT_NUM_##p
+#define IO_PORT_NUM_A 1
+#define IO_PORT_NUM_B 2
+#define IO_PORT_NUM_C 3
+#define IO_PORT_NUM_D 4
+#define IO_PORT_NUM_E 5
+#define IO_PORT_NUM_F 6
+#define IO_PORT_NUM_G 7
+#define IO_PORT_NUM_H 8
+#define IO_PORT_NUM_J 9
+#define IO_PORT_NUM_K 10
+#define IO_PORT_NUM_L 11
+#define IO_SAME_PORT(a, b) (IO_PORT_NUM(a) == IO_PORT_NUM(b))
 
 #endif

@@ -21,8 +21,10 @@ static volatile int16_t done[N_AXIS];
 static uint8_t enabled;
 
 /* state of the step interrupt */
-static uint8_t pending_steps;   /* DRIVE_X / DRIVE_Y bits to step at the next tick */
-static uint8_t dir_negative;    /* axes of the current block that move negative */
+/* in general purpose I/O registers: read or written in one cycle instead of
+ * two, and GPIOR0's bits tested in place (sbis) */
+#define PENDING_STEPS GPIOR1    /* DRIVE_X / DRIVE_Y bits to step at the next tick */
+#define DIR_NEGATIVE GPIOR0     /* axes of the current block that move negative */
 static uint16_t seg_left;
 /* the current block's Bresenham terms, copied from its step_block_t when
  * it starts: one load each a tick, no pointer to fetch first */
@@ -83,7 +85,7 @@ void stepper_start(void)
         stepper_enable(1);
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
-        pending_steps = 0;
+        PENDING_STEPS = 0;
         seg_left = 0;
         /* simavr never fires a CTC timer whose compare value is 0: load one first */
         OCR1A = 100;
@@ -105,12 +107,12 @@ uint8_t stepper_halt(void)
         TIMSK0 = 0;
         drive_step_end();
         /* steps counted but never pulsed: take them back so the position stays true */
-        if (pending_steps & DRIVE_X)
-            done[0] += (dir_negative & 1) ? 1 : -1;
-        if (pending_steps & DRIVE_Y)
-            done[1] += (dir_negative & 2) ? 1 : -1;
+        if (PENDING_STEPS & DRIVE_X)
+            done[0] += (DIR_NEGATIVE & 1) ? 1 : -1;
+        if (PENDING_STEPS & DRIVE_Y)
+            done[1] += (DIR_NEGATIVE & 2) ? 1 : -1;
         fold_counts();
-        pending_steps = 0;
+        PENDING_STEPS = 0;
     }
     return was;
 }
@@ -183,19 +185,19 @@ ISR(TIMER1_COMPA_vect)
      * first, keeping edges paired; with none up this toggles nothing */
     if (drive_pulsing)
         drive_step_end();
-    drive_step(pending_steps);
+    drive_step(PENDING_STEPS);
     TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse; no wrap to handle */
     TIFR0 = 1 << OCF0A;
     TIMSK0 = 1 << OCIE0A;
 #else
-    drive_step(pending_steps);
+    drive_step(PENDING_STEPS);
 #endif
     uint16_t left = seg_left;
     if (left == 0) {
         if (seg_head == seg_tail) { /* nothing left: stop (Timer0 still ends this pulse) */
             TCCR1B = 1 << WGM12;
             TIMSK1 = 0;
-            pending_steps = 0;
+            PENDING_STEPS = 0;
 #ifdef BENCH_ISR_PIN
             IO_LOW(BENCH_ISR);
 #endif
@@ -211,8 +213,9 @@ ISR(TIMER1_COMPA_vect)
             blk_steps[0] = b->steps[0];
             blk_steps[1] = b->steps[1];
             counter[0] = counter[1] = (int16_t)(events >> 1);
-            dir_negative = b->dir_negative;
-            drive_set_dir(dir_negative);
+            uint8_t negative = b->dir_negative;
+            DIR_NEGATIVE = negative;
+            drive_set_dir(negative);
         }
     }
     /* the segment's last event: its slot may be refilled (all of it is
@@ -226,7 +229,7 @@ ISR(TIMER1_COMPA_vect)
     if (c < 0) {
         counter[0] = c + blk_events;
         steps = DRIVE_X;
-        if (dir_negative & 1)
+        if (DIR_NEGATIVE & 1)
             done[0]--;
         else
             done[0]++;
@@ -237,14 +240,14 @@ ISR(TIMER1_COMPA_vect)
     if (c < 0) {
         counter[1] = c + blk_events;
         steps |= DRIVE_Y;
-        if (dir_negative & 2)
+        if (DIR_NEGATIVE & 2)
             done[1]--;
         else
             done[1]++;
     } else {
         counter[1] = c;
     }
-    pending_steps = steps;
+    PENDING_STEPS = steps;
 #if DRIVE_PULSED
     if (TIFR0 & (1 << OCF0A)) {
         /* a long tick (a block starts) outlasted the pulse: end it now rather
@@ -259,17 +262,47 @@ ISR(TIMER1_COMPA_vect)
 }
 
 #if DRIVE_PULSED
-/* The pulse ends $0 us after its edge. Cycle budget, measured by
- * bench/firmware_bench.py: 50 cycles worst, entry and exit included. */
+#if DRIVE_ONE_PORT
+/* The pulse ends $0 us after its edge: the pulsing bits written to the step
+ * port's PIN register toggle back. Naked: nothing here changes SREG and it
+ * needs one register (and no zero register: r1 may be mid-multiply when it
+ * comes), so it saves only that one; the compiler's version also saved r0,
+ * r1 and SREG. It runs after a tick shorter than the pulse (one or no axis
+ * stepping); a longer tick ends the pulse itself. Cycle budget, measured by
+ * bench/firmware_bench.py: 22 cycles worst, entry and exit included (was 39).
+ * The step port must be in I/O space (ports A-G), as both boards' are. */
+ISR(TIMER0_COMPA_vect, ISR_NAKED)
+{
+    __asm__ volatile(
+        "push r24\n\t"
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
+        "sbi %[bench_port], %[bench_bit]\n\t"
+#endif
+        "in r24, %[pulsing]\n\t"
+        "out %[pin], r24\n\t"
+        "ldi r24, 0\n\t"
+        "out %[pulsing], r24\n\t"
+        "sts %[timsk], r24\n\t"
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
+        "cbi %[bench_port], %[bench_bit]\n\t"
+#endif
+        "pop r24\n\t"
+        "reti\n\t"
+        :
+        : [pulsing] "I"(_SFR_IO_ADDR(drive_pulsing)), [pin] "I"(_SFR_IO_ADDR(IO_PINREG(X_STEP))),
+          [timsk] "n"(_SFR_MEM_ADDR(TIMSK0))
+#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
+          , [bench_port] "I"(_SFR_IO_ADDR(IO_PORT(BENCH_ISR_END))), [bench_bit] "I"(IO_BIT(BENCH_ISR_END))
+#endif
+    );
+}
+#else
+/* The pulse ends $0 us after its edge. Cycle budget: about 50 cycles,
+ * entry and exit included (step pins on two ports: two toggles). */
 ISR(TIMER0_COMPA_vect)
 {
-#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
-    IO_HIGH(BENCH_ISR_END);
-#endif
     drive_step_end();
     TIMSK0 = 0;
-#if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
-    IO_LOW(BENCH_ISR_END);
-#endif
 }
+#endif
 #endif
