@@ -94,9 +94,9 @@ static uint8_t arc_center_from_radius(const float *s, const float *t, float r, u
     return STATUS_OK;
 }
 
-uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t jog)
+uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_block_t *blk, uint8_t jog)
 {
-    gc_state_t st = *st_out;
+    *st = *from; /* the one copy: changed in place, the caller commits it */
     float val[W_COUNT];
     uint16_t seen = 0;
     int8_t motion = -1;
@@ -152,10 +152,10 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
 #if GRBL_WCS
                     {
                         uint8_t c = (uint8_t)(code10 / 10 - 54);
-                        if (c != st.coord) {
-                            st.coord = c;
+                        if (c != st->coord) {
+                            st->coord = c;
                             blk->wco_changed = 1;
-                            if (!coord_load(c, st.wcs))
+                            if (!coord_load(c, st->wcs))
                                 return ERR_EEPROM_READ;
                         }
                     }
@@ -168,26 +168,26 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                     if (g_feed_mode++)
                         return ERR_MODAL_CONFLICT;
 #if GRBL_G93
-                    if (st.inverse_time && code10 == 940)
-                        st.feed = 0.0f; /* G93 to G94: the feed is undefined until an F */
-                    st.inverse_time = code10 == 930;
+                    if (st->inverse_time && code10 == 940)
+                        st->feed = 0.0f; /* G93 to G94: the feed is undefined until an F */
+                    st->inverse_time = code10 == 930;
 #endif
                     break;
                 case 530: g53 = 1; break;
                 case 170: case 180: case 190:
                     if (g_plane++)
                         return ERR_MODAL_CONFLICT;
-                    st.plane = (uint8_t)(code10 / 10 - 17);
+                    st->plane = (uint8_t)(code10 / 10 - 17);
                     break;
                 case 200: case 210:
                     if (g_units++)
                         return ERR_MODAL_CONFLICT;
-                    st.inches = code10 == 200;
+                    st->inches = code10 == 200;
                     break;
                 case 900: case 910:
                     if (g_dist++)
                         return ERR_MODAL_CONFLICT;
-                    st.incremental = code10 == 910;
+                    st->incremental = code10 == 910;
                     break;
                 /* accepted, nothing to do on a pen plotter: G40 (no cutter
                  * compensation), G49 (no tool length offset), G61 (exact
@@ -228,9 +228,9 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
 
     uint8_t inverse = 0;
 #if GRBL_G93
-    inverse = st.inverse_time; /* F is 1/min then, not a length */
+    inverse = st->inverse_time; /* F is 1/min then, not a length */
 #endif
-    if (st.inches) /* lengths (X Y Z I J R F) to mm once; mm lines multiply nothing */
+    if (st->inches) /* lengths (X Y Z I J R F) to mm once; mm lines multiply nothing */
         for (uint8_t w = W_X; w <= (inverse ? W_R : W_F); w++)
             if (seen & WB(w))
                 val[w] *= 25.4f;
@@ -252,7 +252,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         if (jog)
             blk->feed = val[W_F];
         else
-            st.feed = val[W_F];
+            st->feed = val[W_F];
     }
     if (m300) {
         if (!(seen & WB(W_S)))
@@ -263,8 +263,8 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     if (non_modal == NM_SET_HOME) {
         /* G28.1/G30.1 store where the machine is; axis words on the line
          * are then an ordinary motion in the modal mode, as in GRBL */
-        memcpy(blk->store, st.pos, sizeof(st.pos));
-        blk->store[2] = st.z;
+        memcpy(blk->store, st->pos, sizeof(st->pos));
+        blk->store[2] = st->z;
         blk->store_slot = (uint8_t)(home_slot + 1);
         non_modal = NM_NONE;
     }
@@ -273,37 +273,37 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         /* Z is the pen, decided on machine Z so that no offset can flip it;
          * only a motion moves the pen (G92 Z, G10 Z and G53 Z never do) */
         if (non_modal == NM_G92) {
-            st.g92[2] = 0.0f;
-            st.g92[2] = st.z - gc_wco(&st, 2) - val[W_Z];
+            st->g92[2] = 0.0f;
+            st->g92[2] = st->z - gc_wco(st, 2) - val[W_Z];
         } else if (non_modal == NM_NONE && !g53) {
-            if ((motion >= 0 ? motion : st.motion) == MOTION_NONE)
+            if ((motion >= 0 ? motion : st->motion) == MOTION_NONE)
                 return ERR_AXIS_WORDS_UNUSED;
-            float z = st.incremental ? st.z + val[W_Z] : val[W_Z] + gc_wco(&st, 2);
+            float z = st->incremental ? st->z + val[W_Z] : val[W_Z] + gc_wco(st, 2);
             if (fabsf(z) > GC_MAX_COORD)
                 return ERR_INVALID_TARGET;
-            st.z = z;
+            st->z = z;
             if (pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
                 pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
         }
     }
     if (g53 && non_modal)
         return ERR_MODAL_CONFLICT; /* both in GRBL's non-modal group */
-    if (g53 && !jog && (motion >= 0 ? motion : st.motion) > MOTION_G1)
+    if (g53 && !jog && (motion >= 0 ? motion : st->motion) > MOTION_G1)
         return ERR_G53_MOTION;
 
     /* where the axis words point, in machine mm */
     float target[N_AXIS];
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        target[a] = st.pos[a];
+        target[a] = st->pos[a];
         if (!(axes & (1u << a)))
             continue;
         float v = val[a];
         if (g53)
             target[a] = v;
-        else if (st.incremental)
-            target[a] = st.pos[a] + v;
+        else if (st->incremental)
+            target[a] = st->pos[a] + v;
         else
-            target[a] = v + gc_wco(&st, a);
+            target[a] = v + gc_wco(st, a);
         if (fabsf(target[a]) > GC_MAX_COORD)
             return ERR_INVALID_TARGET;
     }
@@ -313,7 +313,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
     blk->motors = m_motors;
     blk->program_end = m_end;
     blk->pause = m_pause;
-    memcpy(blk->start, st.pos, sizeof(st.pos));
+    memcpy(blk->start, st->pos, sizeof(st->pos));
 
     if (non_modal == NM_DWELL) {
         if (axes || motion >= 0)
@@ -334,14 +334,14 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
             return ERR_NO_AXIS_WORDS;
         for (uint8_t a = 0; a < N_AXIS; a++)
             if (axes & (1u << a)) {
-                st.g92[a] = 0.0f;
-                st.g92[a] = st.pos[a] - gc_wco(&st, a) - val[a];
+                st->g92[a] = 0.0f;
+                st->g92[a] = st->pos[a] - gc_wco(st, a) - val[a];
             }
         blk->wco_changed = 1;
     } else if (non_modal == NM_G92_1) {
         if (motion >= 0)
             return ERR_AXIS_COMMAND_CONFLICT;
-        memset(st.g92, 0, sizeof(st.g92));
+        memset(st->g92, 0, sizeof(st->g92));
         blk->wco_changed = 1;
 #if GRBL_WCS
     } else if (non_modal == NM_G10) {
@@ -356,7 +356,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
         uint8_t l = (uint8_t)val[W_L], p = (uint8_t)val[W_P];
         if ((l != 2 && l != 20) || (l == 2 && (seen & WB(W_R))))
             return ERR_UNSUPPORTED;
-        uint8_t slot = p ? (uint8_t)(p - 1) : st.coord;
+        uint8_t slot = p ? (uint8_t)(p - 1) : st->coord;
         if (!coord_load(slot, blk->store))
             return ERR_EEPROM_READ;
         for (uint8_t a = 0; a < GC_AXES; a++) {
@@ -364,11 +364,11 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 continue;
             /* L20: the offset that makes the machine's position read val;
              * L2: the offset itself */
-            float machine = a < N_AXIS ? st.pos[a] : st.z;
-            blk->store[a] = l == 20 ? machine - st.g92[a] - val[a] : val[a];
+            float machine = a < N_AXIS ? st->pos[a] : st->z;
+            blk->store[a] = l == 20 ? machine - st->g92[a] - val[a] : val[a];
         }
-        if (slot == st.coord) {
-            memcpy(st.wcs, blk->store, sizeof(st.wcs));
+        if (slot == st->coord) {
+            memcpy(st->wcs, blk->store, sizeof(st->wcs));
             blk->wco_changed = 1;
         }
         blk->store_slot = (uint8_t)(slot + 1);
@@ -391,34 +391,34 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
 #endif
         uint8_t words = (uint8_t)(seen & (WB(W_X) | WB(W_Y) | WB(W_Z)));
         for (uint8_t a = 0; a < N_AXIS; a++)
-            st.pos[a] = blk->target[a] = words && !(words & (1u << a)) ? st.pos[a] : home[a];
+            st->pos[a] = blk->target[a] = words && !(words & (1u << a)) ? st->pos[a] : home[a];
     } else {
         if (motion >= 0)
-            st.motion = (uint8_t)motion;
+            st->motion = (uint8_t)motion;
         uint8_t moving = axes != 0;
-        if (moving && st.motion == MOTION_NONE)
+        if (moving && st->motion == MOTION_NONE)
             return ERR_AXIS_WORDS_UNUSED;
         if (!moving && (motion == MOTION_G2 || motion == MOTION_G3))
             return seen & WB(W_Z) ? ERR_ARC_NO_PLANE_AXIS : ERR_NO_AXIS_WORDS;
         if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
-            if (st.motion != MOTION_G0) {
-                float f = jog ? blk->feed : st.feed;
+            if (st->motion != MOTION_G0) {
+                float f = jog ? blk->feed : st->feed;
                 if (f <= 0.0f)
                     return ERR_UNDEFINED_FEED;
                 blk->feed = f;
             }
-            blk->action = st.motion == MOTION_G0 ? ACT_RAPID : st.motion == MOTION_G1 ? ACT_LINE : ACT_ARC;
+            blk->action = st->motion == MOTION_G0 ? ACT_RAPID : st->motion == MOTION_G1 ? ACT_LINE : ACT_ARC;
             blk->inverse_time = inverse;
             if (blk->action == ACT_ARC) {
-                if (st.plane)
+                if (st->plane)
                     return ERR_UNSUPPORTED; /* an arc through Z: the pen has no Z motor */
-                blk->clockwise = st.motion == MOTION_G2;
+                blk->clockwise = st->motion == MOTION_G2;
                 if (seen & (1u << W_R)) {
                     if (seen & ((1u << W_I) | (1u << W_J)))
                         return ERR_UNUSED_WORDS;
                     if (fabsf(val[W_R]) > GC_MAX_COORD) /* the long way round a huge circle */
                         return ERR_INVALID_TARGET;
-                    uint8_t e = arc_center_from_radius(st.pos, target, val[W_R],
+                    uint8_t e = arc_center_from_radius(st->pos, target, val[W_R],
                                                        blk->clockwise, blk->center);
                     if (e)
                         return e;
@@ -431,7 +431,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                         float off = (seen & (1u << (W_I + a))) ? val[W_I + a] : 0.0f;
                         if (fabsf(off) > GC_MAX_COORD)
                             return ERR_INVALID_TARGET;
-                        blk->center[a] = st.pos[a] + off;
+                        blk->center[a] = st->pos[a] + off;
                         r0 += off * off;
                     }
                     r0 = sqrtf(r0);
@@ -444,17 +444,16 @@ uint8_t gc_parse(const char *line, gc_state_t *st_out, gc_block_t *blk, uint8_t 
                 }
             }
             memcpy(blk->target, target, sizeof(target));
-            memcpy(st.pos, target, sizeof(target));
+            memcpy(st->pos, target, sizeof(target));
         }
     }
     if (seen & ~used)
         return ERR_UNUSED_WORDS;
     if (m_end)
-        gc_program_end(&st);
+        gc_program_end(st);
 #if GRBL_G93
     if (inverse) /* an inverse-time F holds for its own line only */
-        st.feed = 0.0f;
+        st->feed = 0.0f;
 #endif
-    *st_out = st;
     return STATUS_OK;
 }

@@ -62,9 +62,12 @@ typedef struct {
 } gc_block_t;
 
 void gc_init(gc_state_t *st);
-/* Parse line into *blk against *st. STATUS_OK commits the new modal state;
- * any error leaves *st untouched. jog: parse a $J= body (GRBL's jog rules). */
-uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog);
+/* Parse line into *blk against the modal state *from; *next (not from)
+ * gets the state after the line, valid on STATUS_OK: the caller commits it
+ * (the one copy of the state a line costs), or not on any error or when it
+ * refuses the block. jog: parse a $J= body (GRBL's jog rules). */
+uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *next, gc_block_t *blk,
+                 uint8_t jog);
 /* Program end (M2/M30): modal state back to the power-up defaults, position kept. */
 void gc_program_end(gc_state_t *st);
 /* Work coordinate offset (wcs + g92) of axis a (0..2), as WCO and $# show it. */

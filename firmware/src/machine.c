@@ -468,9 +468,9 @@ uint8_t machine_check_limits(const gc_block_t *blk)
 
 uint8_t machine_jog(const char *body)
 {
-    gc_state_t tmp = gc;
+    gc_state_t tmp;
     gc_block_t blk;
-    uint8_t e = gc_parse(body, &tmp, &blk, 1);
+    uint8_t e = gc_parse(body, &gc, &tmp, &blk, 1);
     if (e)
         return e;
     if (settings.soft_limits && outside_work_area(blk.target))

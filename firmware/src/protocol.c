@@ -24,16 +24,16 @@ uint8_t protocol_gcode(const char *line)
         return ERR_LOCKED;
     if (mach.jog && machine_moving())
         return ERR_NOT_IDLE;
-    gc_state_t before = gc;
+    gc_state_t next;
     gc_block_t blk;
-    uint8_t e = gc_parse(line, &gc, &blk, 0);
+    uint8_t e = gc_parse(line, &gc, &next, &blk, 0);
     if (e)
         return e;
-    if (machine_check_limits(&blk)) {
-        gc = before;
+    if (machine_check_limits(&blk)) { /* the line is refused: gc stays as it was */
         machine_resync();
         return ERR_LOCKED;
     }
+    gc = next;
     return machine_execute(&blk);
 }
 

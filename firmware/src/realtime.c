@@ -27,25 +27,34 @@ void realtime_raise(uint8_t flags)
 void realtime_alarm_isr(uint8_t code)
 {
     stepper_halt();
-    /* the first alarm wins: ALARM:10 is not overwritten by a limit it caused */
-    if (!rt_alarm)
-        rt_alarm = code;
-    rt_flags |= RT_ALARM;
+    /* atomic: the receive interrupt calls this with interrupts on, and a
+     * limit or button interrupt may come in between */
+    ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
+    {
+        /* the first alarm wins: ALARM:10 is not overwritten by a limit it caused */
+        if (!rt_alarm)
+            rt_alarm = code;
+        rt_flags |= RT_ALARM;
+    }
 }
 
+/* The receive interrupt calls this with interrupts on (serial.c): the flags
+ * go up through realtime_raise, atomic against the limit and button
+ * interrupts that raise them too. */
 uint8_t realtime_byte(uint8_t c)
 {
+    uint8_t flag;
     switch (c) {
-    case '?': rt_flags |= RT_STATUS; return 1;
-    case '!': rt_flags |= RT_HOLD; return 1;
-    case '~': rt_flags |= RT_RESUME; return 1;
-    case 0x85: rt_flags |= RT_JOG_CANCEL; return 1;
+    case '?': flag = RT_STATUS; break;
+    case '!': flag = RT_HOLD; break;
+    case '~': flag = RT_RESUME; break;
+    case 0x85: flag = RT_JOG_CANCEL; break;
     case 0x18:
         /* stop at once; a reset that interrupts motion loses the position */
         if (stepper_halt())
             realtime_alarm_isr(ALARM_ABORT_CYCLE);
-        rt_flags |= RT_RESET;
-        return 1;
+        flag = RT_RESET;
+        break;
     default:
         if (c >= 0x90 && c <= 0x94)
             step_override(OV_FEED, (uint8_t)(c - 0x90));
@@ -55,9 +64,10 @@ uint8_t realtime_byte(uint8_t c)
             step_override(OV_SPINDLE, (uint8_t)(c - 0x99));
         else /* GRBL's other extended bytes (0x80-0xFF): swallowed, never part of a line */
             return c >= 0x80;
-        rt_flags |= RT_OVERRIDE;
-        return 1;
+        flag = RT_OVERRIDE;
     }
+    realtime_raise(flag);
+    return 1;
 }
 
 uint8_t realtime_take(void)

@@ -19,7 +19,7 @@ extern volatile uint8_t rt_ov[3];
 extern volatile uint8_t rt_flags;
 extern volatile uint8_t rt_alarm;
 
-uint8_t realtime_byte(uint8_t c);   /* ISR context: 1 if c was a realtime byte */
+uint8_t realtime_byte(uint8_t c);   /* receive interrupt, interrupts on: 1 if c was a realtime byte */
 void realtime_raise(uint8_t flags); /* ISR or main */
 void realtime_alarm_isr(uint8_t code); /* stop the steppers now and raise an alarm */
 uint8_t realtime_take(void);        /* main: fetch and clear all flags */

@@ -48,10 +48,19 @@ __asm__(".pushsection .text.realtime_byte_saving,\"ax\",@progbits\n"
         "  ret\n"
         ".popsection\n");
 
+/* With interrupts on: a step tick due meanwhile goes first (held up by the
+ * ~150 cycles of this path it would come late enough to read as a faster
+ * step rate), with this interrupt's own source off so that a byte already
+ * waiting in the UART cannot nest in ahead of this one. realtime.c's
+ * updates of the flags other interrupts also raise are atomic. */
 static inline __attribute__((always_inline)) uint8_t realtime_byte_in_isr(uint8_t c)
 {
     register uint8_t b __asm__("r24") = c;
+    UCSR0B &= (uint8_t)~(1 << RXCIE0);
+    sei();
     __asm__ volatile("call realtime_byte_saving" : "+r"(b) : : "memory");
+    cli();
+    UCSR0B |= 1 << RXCIE0;
     return b;
 }
 

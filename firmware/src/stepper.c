@@ -22,9 +22,10 @@ static uint8_t enabled;
 
 /* state of the step interrupt */
 /* in general purpose I/O registers: read or written in one cycle instead of
- * two, and GPIOR0's bits tested in place (sbis) */
-#define PENDING_STEPS GPIOR1    /* DRIVE_X / DRIVE_Y bits to step at the next tick */
-#define DIR_NEGATIVE GPIOR0     /* axes of the current block that move negative */
+ * two, and GPIOR0's bits set in place (sbi: the tick sets each axis's step
+ * bit as it finds it, no register held across both axes) */
+#define PENDING_STEPS GPIOR0    /* DRIVE_X / DRIVE_Y bits to step at the next tick */
+#define DIR_NEGATIVE GPIOR1     /* axes of the current block that move negative */
 static uint16_t seg_left;
 /* the current block's Bresenham terms, copied from its step_block_t when
  * it starts: one load each a tick, no pointer to fetch first */
@@ -166,15 +167,20 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * old block's last step made at the top of the tick (past its hold time).
  *
  * Cycle budget, measured by bench/firmware_bench.py at 50 kHz on both axes
- * (a period of 320 cycles), entry and exit included: on the 328P 213 cycles
- * on average (153 body + 60 entry/exit), 290 at worst on the tick that
- * loads a segment starting a block; on the 2560 215 and 294 (its 3-byte
- * return address: 68 entry/exit). The busiest period holds a worst tick
- * alone: a tick that outlasts the pulse ends it itself, so the pulse-end
- * interrupt below (50 cycles worst) runs only after short ticks. Nothing
- * here calls a function (a call would make the compiler save every
- * call-clobbered register on each tick: 86 cycles of entry/exit instead
- * of 60) and nothing is 32-bit (the main loop folds the 16-bit counts). */
+ * (a period of 320 cycles), entry and exit included: on the 328P 179 cycles
+ * on average (117 body + 62 entry/exit as the bench counts them: the
+ * prologue and epilogue save 6 registers, ~50 cycles with the response and
+ * reti; the bench also counts the body's in/out on r1x), 269 at worst on the
+ * tick that loads a segment starting a block; on the 2560 187 and 277 (its
+ * 3-byte return address: 70 entry/exit). Was 213/290 and 215/294. The
+ * busiest period holds a worst tick alone: a tick that outlasts the pulse
+ * ends it itself, so the pulse-end interrupt below (23 cycles worst) runs
+ * only after short ticks. Per 0.5 mm line of the bench's CPU-bound run
+ * (about 36 ticks) 5,409 cycles (was 6,941). Nothing here calls a function
+ * (a call would make the compiler save every call-clobbered register on
+ * each tick) and nothing is 32-bit (the main loop folds the 16-bit counts).
+ * Nothing else may hold a due tick up for long (a late edge is a short step
+ * period for the driver): see servo.c's and serial.c's interrupts. */
 ISR(TIMER1_COMPA_vect)
 {
 #ifdef BENCH_ISR_PIN
@@ -182,8 +188,9 @@ ISR(TIMER1_COMPA_vect)
 #endif
 #if DRIVE_PULSED
     /* a pulse still up (its end came late: never at the planned rates) falls
-     * first, keeping edges paired; with none up this toggles nothing */
-    if (drive_pulsing)
+     * first, keeping edges paired (on a shared port with none up this
+     * writes 0: no toggle, and no test) */
+    if (DRIVE_ONE_PORT || drive_pulsing)
         drive_step_end();
     drive_step(PENDING_STEPS);
     TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse; no wrap to handle */
@@ -210,9 +217,9 @@ ISR(TIMER1_COMPA_vect)
             const step_block_t *b = seg->block;
             int16_t events = b->events;
             blk_events = events;
-            blk_steps[0] = b->steps[0];
-            blk_steps[1] = b->steps[1];
             counter[0] = counter[1] = (int16_t)(events >> 1);
+            blk_steps[0] = b->steps[0]; /* (after: the same registers serve) */
+            blk_steps[1] = b->steps[1];
             uint8_t negative = b->dir_negative;
             DIR_NEGATIVE = negative;
             drive_set_dir(negative);
@@ -223,23 +230,24 @@ ISR(TIMER1_COMPA_vect)
     if (--left == 0)
         seg_tail++;
     seg_left = left;
-    /* each counter stored before the position count: fewer registers held */
-    uint8_t steps = 0;
+    /* each counter stored before the position count, each step bit set
+     * where it is found: fewer registers held */
     int16_t c = counter[0] - blk_steps[0];
     if (c < 0) {
         counter[0] = c + blk_events;
-        steps = DRIVE_X;
+        PENDING_STEPS = DRIVE_X;
         if (DIR_NEGATIVE & 1)
             done[0]--;
         else
             done[0]++;
     } else {
         counter[0] = c;
+        PENDING_STEPS = 0;
     }
     c = counter[1] - blk_steps[1];
     if (c < 0) {
         counter[1] = c + blk_events;
-        steps |= DRIVE_Y;
+        PENDING_STEPS |= DRIVE_Y;
         if (DIR_NEGATIVE & 2)
             done[1]--;
         else
@@ -247,7 +255,6 @@ ISR(TIMER1_COMPA_vect)
     } else {
         counter[1] = c;
     }
-    PENDING_STEPS = steps;
 #if DRIVE_PULSED
     if (TIFR0 & (1 << OCF0A)) {
         /* a long tick (a block starts) outlasted the pulse: end it now rather
@@ -269,7 +276,8 @@ ISR(TIMER1_COMPA_vect)
  * comes), so it saves only that one; the compiler's version also saved r0,
  * r1 and SREG. It runs after a tick shorter than the pulse (one or no axis
  * stepping); a longer tick ends the pulse itself. Cycle budget, measured by
- * bench/firmware_bench.py: 22 cycles worst, entry and exit included (was 39).
+ * bench/firmware_bench.py: 23 cycles worst, entry and exit included (was 39
+ * to 50; 25 on the 2560).
  * The step port must be in I/O space (ports A-G), as both boards' are. */
 ISR(TIMER0_COMPA_vect, ISR_NAKED)
 {

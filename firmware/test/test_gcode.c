@@ -10,7 +10,15 @@
 static gc_state_t st;
 static gc_block_t blk;
 
-static uint8_t parse(const char *line) { return gc_parse(line, &st, &blk, 0); }
+/* parse a line and commit its modal state as protocol.c does */
+static uint8_t parse(const char *line)
+{
+    gc_state_t next;
+    uint8_t e = gc_parse(line, &st, &next, &blk, 0);
+    if (!e)
+        st = next;
+    return e;
+}
 
 void test_gcode_valid(void)
 {
@@ -105,10 +113,11 @@ void test_gcode_errors(void)
     CHECK(memcmp(&before, &st, sizeof(st)) == 0);
     /* jog rules */
     gc_block_t j;
-    CHECK(gc_parse("G91X10F1000", &st, &j, 1) == STATUS_OK && j.action == ACT_LINE);
-    CHECK(gc_parse("X10", &st, &j, 1) == ERR_INVALID_JOG);
-    CHECK(gc_parse("G0X10F100", &st, &j, 1) == ERR_INVALID_JOG);
-    CHECK(gc_parse("M3X1F100", &st, &j, 1) == ERR_INVALID_JOG);
+    gc_state_t after;
+    CHECK(gc_parse("G91X10F1000", &st, &after, &j, 1) == STATUS_OK && j.action == ACT_LINE);
+    CHECK(gc_parse("X10", &st, &after, &j, 1) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G0X10F100", &st, &after, &j, 1) == ERR_INVALID_JOG);
+    CHECK(gc_parse("M3X1F100", &st, &after, &j, 1) == ERR_INVALID_JOG);
 }
 
 void test_gcode_arcs(void)
