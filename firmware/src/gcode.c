@@ -23,6 +23,23 @@ static const uint8_t word_of_letter[26] PROGMEM = {
 #define WB(w) (1u << (w))
 #define MAX_LINE_NUMBER 10000000.0f /* GRBL's limit on N (exact in a float) */
 
+/* A float's bits: on the AVR every float compare or add is a library call
+ * (50-100 cycles), and the tests below on every axis word of every line are
+ * exact on the bits. */
+static inline uint32_t float_bits(float v)
+{
+    uint32_t b;
+    memcpy(&b, &v, sizeof(b));
+    return b;
+}
+
+/* |v| > limit for a finite v and a positive limit: the magnitudes' bit
+ * patterns order as their values do */
+static uint8_t magnitude_above(float v, float limit)
+{
+    return (float_bits(v) & 0x7FFFFFFFu) > float_bits(limit);
+}
+
 /* non-modal G commands (GRBL's group 0, one per line) */
 enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1, NM_G10, NM_SET_HOME };
 #define N_COORD_SYSTEMS 6 /* G54..G59 */
@@ -220,7 +237,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         if (seen & WB(w))
             return ERR_WORD_REPEATED;
         /* words whose value must not be negative (GRBL's rule) */
-        if (v < 0.0f && w >= W_F)
+        if (w >= W_F && v < 0.0f) /* (the float compare only for those words) */
             return ERR_NEGATIVE;
         seen |= (uint16_t)WB(w);
         val[w] = v;
@@ -279,7 +296,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             if ((motion >= 0 ? motion : st->motion) == MOTION_NONE)
                 return ERR_AXIS_WORDS_UNUSED;
             float z = st->incremental ? st->z + val[W_Z] : val[W_Z] + gc_wco(st, 2);
-            if (fabsf(z) > GC_MAX_COORD)
+            if (magnitude_above(z, GC_MAX_COORD))
                 return ERR_INVALID_TARGET;
             st->z = z;
             if (pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
@@ -302,9 +319,13 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             target[a] = v;
         else if (st->incremental)
             target[a] = st->pos[a] + v;
-        else
-            target[a] = v + gc_wco(st, a);
-        if (fabsf(target[a]) > GC_MAX_COORD)
+        else {
+            float off = gc_wco(st, a);
+            /* no offset, the usual case: the word itself, no float add (the
+             * add would turn -0 into +0, so -0 takes it) */
+            target[a] = float_bits(off) == 0 && float_bits(v) != 0x80000000u ? v : v + off;
+        }
+        if (magnitude_above(target[a], GC_MAX_COORD))
             return ERR_INVALID_TARGET;
     }
 

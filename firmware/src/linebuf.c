@@ -16,48 +16,40 @@ static inline uint8_t plain(uint8_t c)
 
 uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
 {
+    uint8_t f = lb->flags;
     if (c == '\n' || c == '\r') {
-        if (c == '\n' && (lb->flags & LBF_AFTER_CR)) {
+        if (c == '\n' && (f & LBF_AFTER_CR)) {
             lb->flags = 0;
             return LB_NONE;
         }
-        uint8_t f = lb->flags;
         uint8_t result = f & LBF_OVERFLOW ? LB_OVERFLOW : f & LBF_BAD_BYTE ? LB_BAD_BYTE : LB_LINE;
         lb->text[lb->len] = 0;
         lb->len = 0; /* text stays readable until the next byte */
         lb->flags = c == '\r' ? LBF_AFTER_CR : 0;
         return result;
     }
-    uint8_t f = lb->flags & (uint8_t)~LBF_AFTER_CR;
-    lb->flags = f;
-    if (f & LBF_SEMICOLON)
-        return LB_NONE;
-    if (f & LBF_PAREN) {
+    f &= (uint8_t)~LBF_AFTER_CR;
+    if (f & LBF_SEMICOLON) {
+        /* the rest of the line is a comment */
+    } else if (f & LBF_PAREN) {
         if (c == ')')
-            lb->flags = f & (uint8_t)~LBF_PAREN;
-        return LB_NONE;
+            f &= (uint8_t)~LBF_PAREN;
+    } else if (c == '(') {
+        f |= LBF_PAREN;
+    } else if (c == ';') {
+        f |= LBF_SEMICOLON;
+    } else if (c == ' ' || c == '\t') {
+        /* spaces are dropped */
+    } else if (c < 0x20 || c > 0x7E) { /* control bytes, NUL and binary noise */
+        f |= LBF_BAD_BYTE;
+    } else if (lb->len >= LINE_SIZE) {
+        f |= LBF_OVERFLOW;
+    } else {
+        if (c >= 'a' && c <= 'z')
+            c = (uint8_t)(c - 'a' + 'A');
+        lb->text[lb->len++] = (char)c;
     }
-    if (c == '(') {
-        lb->flags = f | LBF_PAREN;
-        return LB_NONE;
-    }
-    if (c == ';') {
-        lb->flags = f | LBF_SEMICOLON;
-        return LB_NONE;
-    }
-    if (c == ' ' || c == '\t')
-        return LB_NONE;
-    if (c < 0x20 || c > 0x7E) { /* control bytes, NUL and binary noise */
-        lb->flags = f | LBF_BAD_BYTE;
-        return LB_NONE;
-    }
-    if (c >= 'a' && c <= 'z')
-        c = (uint8_t)(c - 'a' + 'A');
-    if (lb->len >= LINE_SIZE) {
-        lb->flags = f | LBF_OVERFLOW;
-        return LB_NONE;
-    }
-    lb->text[lb->len++] = (char)c;
+    lb->flags = f;
     return LB_NONE;
 }
 

@@ -76,7 +76,7 @@ uint8_t read_number(const char *line, uint8_t *pos, float *out)
         else
             v *= p;
     }
-    if (v > MAX_MAGNITUDE)
+    if (sig + exponent > 9 && v > MAX_MAGNITUDE) /* (under ten integer digits it cannot be) */
         return 0;
     *out = negative ? -v : v;
     return 1;

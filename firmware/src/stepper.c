@@ -10,7 +10,7 @@
 
 /* Running: Timer1's compare interrupt is on (it is only ever on while the
  * steppers run; no RAM for a flag). */
-#define RUNNING() (TIMSK1 != 0)
+#define RUNNING() TIMSK1 /* nonzero: running */
 /* Motor position: a 32-bit base plus signed 16-bit step counts that the
  * interrupt keeps (no 32-bit read-modify-write per step) and the main loop
  * folds into the base whenever it polls (stepper_start). Between two polls
@@ -102,7 +102,7 @@ uint8_t stepper_halt(void)
     uint8_t was;
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
-        was = RUNNING();
+        was = RUNNING() != 0;
         TCCR1B = 1 << WGM12;
         TIMSK1 = 0;
         TIMSK0 = 0;
