@@ -176,7 +176,7 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * busiest period holds a worst tick alone: a tick that outlasts the pulse
  * ends it itself, so the pulse-end interrupt below (23 cycles worst) runs
  * only after short ticks. Per 0.5 mm line of the bench's CPU-bound run
- * (about 36 ticks) 5,409 cycles (was 6,941). Nothing here calls a function
+ * (about 36 ticks) 5,435 cycles (was 6,941). Nothing here calls a function
  * (a call would make the compiler save every call-clobbered register on
  * each tick) and nothing is 32-bit (the main loop folds the 16-bit counts).
  * Nothing else may hold a due tick up for long (a late edge is a short step
