@@ -77,5 +77,15 @@
 #define PLAN_SIZE 34         /* 33 blocks, 792 B: what 2 KiB less the stack's 512 B holds */
 #endif
 #endif
+/* The 2560 (and the host library) keep each queued block's float geometry
+ * (plan_motion_t, 16 B a block: 1 KiB for 63) beside the ring, so the
+ * segment preparer does not derive it a second time (a square root, two
+ * divisions and ~10 multiplies, ~2,700 cycles a block). The 328P has no
+ * RAM for it and derives it again. Either way the values are the same. */
+#if defined(__AVR_ATmega328P__)
+#define PLAN_CACHE_MOTION 0
+#else
+#define PLAN_CACHE_MOTION 1
+#endif
 
 #endif

@@ -12,6 +12,9 @@
  * slot is kept free) */
 #define RING_SLOTS (PLAN_SIZE - 1)
 static plan_block_t ring[RING_SLOTS];
+#if PLAN_CACHE_MOTION
+static plan_motion_t motion[RING_SLOTS]; /* ring[i]'s geometry, as geometry() gave it */
+#endif
 static uint8_t head, tail, count;
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
@@ -83,24 +86,48 @@ uint16_t plan_events(const plan_block_t *b)
     return events;
 }
 
+/* The scaling by PLAN_SQR_SCALE is an integer add to the float's exponent
+ * field instead of a multiply (~150 cycles here), and the range checks are
+ * integer compares of its bits. Exact for normal numbers; a subnormal one
+ * comes out below 1 either way, i.e. 0. */
+#define SQR_EXPONENT ((int32_t)PLAN_SQR_SHIFT << 23)
+#define FLOAT_INF_BITS 0x7F800000L
+#define SQR_MAX_BITS (0x4E800000L - SQR_EXPONENT) /* PLAN_SQR_MAX, 2^30, unscaled */
+_Static_assert(PLAN_SQR_MAX == 1UL << 30, "SQR_MAX_BITS is 2^30's exponent");
+
 plan_sqr_t plan_sqr_from_float(float v_sqr)
 {
-    float f = v_sqr * PLAN_SQR_SCALE;
-    if (!(f > 0.0f)) /* negative rounding leftovers (and NaN) are a stop */
+    int32_t bits;
+    memcpy(&bits, &v_sqr, sizeof(bits));
+    if (bits <= 0 || bits > FLOAT_INF_BITS) /* negative rounding leftovers (and NaN) are a stop */
         return 0;
-    return f < (float)PLAN_SQR_MAX ? (plan_sqr_t)f : PLAN_SQR_MAX;
+    if (bits >= SQR_MAX_BITS)
+        return PLAN_SQR_MAX;
+    bits += SQR_EXPONENT;
+    memcpy(&v_sqr, &bits, sizeof(v_sqr));
+    return (plan_sqr_t)v_sqr;
 }
 
-float plan_sqr_to_float(plan_sqr_t v) { return (float)v * (1.0f / PLAN_SQR_SCALE); }
+float plan_sqr_to_float(plan_sqr_t v)
+{
+    float f = (float)v;
+    if (v) { /* at least 1: a normal number */
+        int32_t bits;
+        memcpy(&bits, &f, sizeof(bits));
+        bits -= SQR_EXPONENT;
+        memcpy(&f, &bits, sizeof(f));
+    }
+    return f;
+}
 
 /* In 16-bit halves of the float's bits: the shifts are by one place, where
  * 32-bit shifts by 15 would be loops here. */
 plan_f16_t plan_f16_from_float(float v)
 {
     uint32_t bits;
-    if (!(v > 0.0f)) /* (and NaN) */
-        return 0;
     memcpy(&bits, &v, sizeof(bits));
+    if ((int32_t)bits <= 0 || bits > FLOAT_INF_BITS) /* not above 0 (or NaN) */
+        return 0;
     uint16_t hi = (uint16_t)(bits >> 16), lo = (uint16_t)bits;
     return (plan_f16_t)((uint16_t)(hi << 1) | ((lo & 0x8000u) ? 1u : 0u));
 }
@@ -224,10 +251,10 @@ static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float event
         speed = feed * (1.0f / 60.0f);
         if (feed_pct != 100 && !(flags & PB_JOG))
             speed *= (float)feed_pct * 0.01f;
-        if (speed * s_per_mm > 1.0f)
+        if (plan_lt(1.0f, speed * s_per_mm))
             speed = 1.0f / s_per_mm;
     }
-    if (speed * events_per_mm < MIN_STEP_RATE)
+    if (plan_lt(speed * events_per_mm, MIN_STEP_RATE))
         speed = MIN_STEP_RATE / events_per_mm;
     return speed;
 }
@@ -239,9 +266,9 @@ static float axis_s_per_mm(const float *unit)
     float s_per_mm = 0.0f;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float u = fabsf(unit[a]);
-        if (u > 1.0e-6f) {
+        if (plan_lt(1.0e-6f, u)) {
             float r = u * axis.s_per_mm[a];
-            if (r > s_per_mm)
+            if (plan_lt(s_per_mm, r))
                 s_per_mm = r;
         }
     }
@@ -261,7 +288,7 @@ static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
         d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
         mm2 += d_mm[a] * d_mm[a];
         float r = fabsf(d_mm[a]) * axis.inv_accel[a];
-        if (r > x)
+        if (plan_lt(x, r))
             x = r;
     }
     m->mm = sqrtf(mm2);
@@ -274,7 +301,14 @@ static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
             unit[a] = d_mm[a] * inv_mm;
 }
 
-void plan_block_motion(const plan_block_t *b, plan_motion_t *m) { geometry(b, m, 0); }
+void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
+{
+#if PLAN_CACHE_MOTION
+    *m = motion[b - ring]; /* the axis settings cannot change while blocks are queued */
+#else
+    geometry(b, m, 0);
+#endif
+}
 
 /* The block's cruise speed squared as stored (16 bits, never above the
  * float one), from its feed, flags and direction with the overrides. */
@@ -306,7 +340,7 @@ uint8_t plan_override_step(void)
         float nominal = set_nominal(b, &m, unit);
         /* a junction is never faster than the cruise speeds on either side */
         if (ov_at != tail) {
-            float cap = ov_prev_nominal < nominal ? ov_prev_nominal : nominal;
+            float cap = plan_lt(ov_prev_nominal, nominal) ? ov_prev_nominal : nominal;
             plan_sqr_t c = plan_sqr_from_float(cap);
             if (b->max_entry_sqr > c)
                 b->max_entry_sqr = c;
@@ -337,7 +371,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     refresh_axis();
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = target[a] * settings.steps_per_mm[a];
-        if (!(fabsf(t) < PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
+        if (!plan_lt(fabsf(t), PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
             return 0;
         cart[a] = lroundf(t);
         delta[a] = cart[a] - position[a];
@@ -359,7 +393,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->line = line_number;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    if (feed != last_feed) { /* F is modal: converted once per change */
+    if (plan_fkey(feed) != plan_fkey(last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
     }
@@ -367,16 +401,19 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     plan_motion_t m;
     float unit[N_AXIS];
     geometry(b, &m, unit);
+#if PLAN_CACHE_MOTION
+    motion[head] = m;
+#endif
     float nominal = set_nominal(b, &m, unit);
     b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
 
     float junction = 0.0f;
     if (count) {
         float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
-        float cap = prev_nominal_sqr < nominal ? prev_nominal_sqr : nominal;
-        if (cos_theta < STRAIGHT_COS) {
+        float cap = plan_lt(prev_nominal_sqr, nominal) ? prev_nominal_sqr : nominal;
+        if (plan_lt(cos_theta, STRAIGHT_COS)) {
             junction = cap;
-        } else if (cos_theta < REVERSAL_COS) {
+        } else if (plan_lt(cos_theta, REVERSAL_COS)) {
             /* circle of radius r through the corner, deviating junction_deviation
              * from it: r = jd * sin(t/2) / (1 - sin(t/2)), v^2 = a * r, at most
              * cap. With k = a * jd, k s / (1 - s) >= cap exactly when
@@ -385,7 +422,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
             float k = m.accel * settings.junction_deviation;
             float s2 = 0.5f * (1.0f - cos_theta);
             float kc = k + cap;
-            if (s2 * kc * kc >= cap * cap) {
+            if (!plan_lt(s2 * kc * kc, cap * cap)) {
                 junction = cap;
             } else {
                 float sin_half = sqrtf(s2);

@@ -4,6 +4,7 @@
 #ifndef PLANNER_H
 #define PLANNER_H
 #include <stdint.h>
+#include <string.h>
 #include "config.h"
 
 #define PLAN_MAX_EVENTS 30000 /* the step interrupt counts in 16 bits: longer moves are split */
@@ -12,10 +13,23 @@
  * never above a limit), saturated at PLAN_SQR_MAX (4096 mm/s) so that a sum
  * of two never overflows. */
 typedef uint32_t plan_sqr_t;
-#define PLAN_SQR_SCALE 64.0f
+#define PLAN_SQR_SHIFT 6     /* the scale is a power of two: conversions add to the exponent */
+#define PLAN_SQR_SCALE ((float)(1 << PLAN_SQR_SHIFT))
 #define PLAN_SQR_MAX (1UL << 30)
 plan_sqr_t plan_sqr_from_float(float v_sqr);
 float plan_sqr_to_float(plan_sqr_t v);
+
+/* Float order by integer compare: plan_lt(a, b) exactly when a < b for any
+ * floats but NaN (-0 sorts just below +0, which no caller minds). The
+ * main loop compares ~35 floats a line; the float library's compare is
+ * ~80 cycles on the AVR, this ~10 (less against a constant). */
+static inline int32_t plan_fkey(float f)
+{
+    int32_t i;
+    memcpy(&i, &f, sizeof(i));
+    return i < 0 ? i ^ INT32_MAX : i; /* sign and magnitude to two's complement */
+}
+static inline uint8_t plan_lt(float a, float b) { return plan_fkey(a) < plan_fkey(b); }
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
