@@ -286,7 +286,8 @@ static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
     plan_cart_from_motor(motor, cart);
     for (uint8_t a = 0; a < N_AXIS; a++) {
         d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
-        mm2 += d_mm[a] * d_mm[a];
+        float sq = d_mm[a] * d_mm[a];
+        mm2 = a ? mm2 + sq : sq; /* (0 + x is an add the compiler may not drop) */
         float r = fabsf(d_mm[a]) * axis.inv_accel[a];
         if (plan_lt(x, r))
             x = r;

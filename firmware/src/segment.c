@@ -212,6 +212,21 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     plan_block_motion(b, &p->m);
 }
 
+/* Step-timer ticks per event for n events in `time` seconds, rounded, within
+ * the timer's range: one division per segment, in integers (the segment's
+ * ticks, 16 bits unless it is over 32 ms: ~200 cycles, where a float
+ * division is ~550). */
+static uint16_t event_period(float time, uint16_t n)
+{
+    float ticks = time * (float)STEP_TIMER_HZ + 0.5f;
+    uint32_t total = plan_lt(ticks, 4.0e9f) ? (uint32_t)ticks : 4000000000UL; /* (and NaN) */
+    total += n >> 1;
+    uint32_t period = total <= 0xFFFFu ? (uint16_t)total / n : total / n;
+    if (period < STEP_PERIOD_MIN)
+        period = STEP_PERIOD_MIN;
+    return period > 0xFFFFu ? 0xFFFFu : (uint16_t)period;
+}
+
 /* seg_fill once there is a block (its register saves are not for every
  * idle main-loop pass) */
 static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
@@ -236,10 +251,12 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
         do {
             time += advance(p, b, SEGMENT_S);
             ended = !plan_lt(p->s, p->m.mm);
-            float e = p->s * p->m.events_per_mm;
-            target = ended ? p->events : (uint32_t)(e + 0.5f); /* a step is due half way */
-            if (target > p->events)
-                target = p->events;
+            target = p->events;
+            if (!ended) { /* a step is due half way */
+                uint32_t e = (uint32_t)(p->s * p->m.events_per_mm + 0.5f);
+                if (e < target)
+                    target = e;
+            }
         } while (target == p->done && !ended && !(p->hold && p->stopped) && ++rounds < 8);
         if (target == p->done && !ended && !(p->hold && p->stopped))
             target = p->done + 1; /* slower than the timer can time: one step anyway */
@@ -261,14 +278,9 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
         }
         uint32_t n = target - p->done;
         if (n > 0) {
-            float period = time * (float)STEP_TIMER_HZ / (float)n + 0.5f; /* one division per segment */
-            if (plan_lt(period, STEP_PERIOD_MIN))
-                period = STEP_PERIOD_MIN;
-            if (plan_lt(65535.0f, period))
-                period = 65535.0f;
             segment_t *seg = &seg_ring[ring_slot(seg_head, SEG_SIZE)];
             seg->events = (uint16_t)n;
-            seg->period = (uint16_t)(period - 1.0f); /* CTC: a period is OCR1A + 1 ticks */
+            seg->period = (uint16_t)(event_period(time, (uint16_t)n) - 1); /* CTC: OCR1A + 1 ticks */
             seg->block = &step_blocks[p->block];
             seg->flags = p->first ? SEG_FIRST : 0;
             p->first = 0;
