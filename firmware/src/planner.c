@@ -18,15 +18,16 @@ static plan_motion_t motion[RING_SLOTS]; /* ring[i]'s geometry, as geometry() ga
 static uint8_t head, tail, count;
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
-static float prev_nominal_sqr;
+static plan_f16_t prev_nominal;   /* the last block's cruise speed^2 as stored */
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
-static float last_feed;        /* the last block's feed, and as stored in blocks */
+static float last_feed;        /* the last block's feed, as stored in blocks, and in mm/s */
 static uint16_t last_feed_u16;
+static float last_feed_mm_s;
 /* an override change's recompute under way (plan_override_step) */
 #define OV_SLICE 4
 static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
-static float ov_prev_nominal;      /* the cruise speed^2 of the block before ov_at */
+static plan_f16_t ov_prev_nominal; /* the cruise speed^2 of the block before ov_at */
 static plan_line_t line_number; /* for the blocks queued next */
 void plan_set_line_number(plan_line_t n) { line_number = n; }
 
@@ -64,7 +65,7 @@ static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 
 void plan_reset(void)
 {
     head = tail = count = ov_left = 0;
-    prev_nominal_sqr = 0.0f;
+    prev_nominal = 0;
     exec_exit_limit = 0;
     memset(prev_unit, 0, sizeof(prev_unit));
 }
@@ -236,11 +237,11 @@ static void recalculate(uint8_t full)
     }
 }
 
-/* Cruise speed of a block: the programmed feed (mm/min) or, for a rapid,
+/* Cruise speed of a block: the programmed feed (in mm/s) or, for a rapid,
  * the axis limit, each scaled by its override (jogs keep theirs), within
  * the axis limits along the move (s_per_mm: the largest |u_axis| / max
  * rate), and no slower than the step timer can time. */
-static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float events_per_mm)
+static float cruise_speed(float feed_mm_s, uint8_t flags, float s_per_mm, float events_per_mm)
 {
     float speed;
     if (flags & PB_RAPID) {
@@ -248,7 +249,7 @@ static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float event
         if (rapid_pct != 100)
             speed *= (float)rapid_pct * 0.01f;
     } else {
-        speed = feed * (1.0f / 60.0f);
+        speed = feed_mm_s;
         if (feed_pct != 100 && !(flags & PB_JOG))
             speed *= (float)feed_pct * 0.01f;
         if (plan_lt(1.0f, speed * s_per_mm))
@@ -311,11 +312,15 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #endif
 }
 
+/* A block's feed as stored (mm/min, rounded) in mm/s. */
+static float feed_mm_s(uint16_t feed) { return (float)feed * (1.0f / 60.0f); }
+
 /* The block's cruise speed squared as stored (16 bits, never above the
- * float one), from its feed, flags and direction with the overrides. */
-static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+ * float one), from its feed (feed_mm_s of b->feed), flags and direction
+ * with the overrides. */
+static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit, float feed)
 {
-    float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
+    float speed = cruise_speed(feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
     b->nominal_sqr = plan_f16_from_float(speed * speed);
     return plan_f16_to_float(b->nominal_sqr);
 }
@@ -338,19 +343,19 @@ uint8_t plan_override_step(void)
         plan_motion_t m;
         float unit[N_AXIS];
         geometry(b, &m, unit);
-        float nominal = set_nominal(b, &m, unit);
+        float nominal = set_nominal(b, &m, unit, feed_mm_s(b->feed));
         /* a junction is never faster than the cruise speeds on either side */
         if (ov_at != tail) {
-            float cap = plan_lt(ov_prev_nominal, nominal) ? ov_prev_nominal : nominal;
-            plan_sqr_t c = plan_sqr_from_float(cap);
+            float before = plan_f16_to_float(ov_prev_nominal);
+            plan_sqr_t c = plan_sqr_from_float(plan_lt(before, nominal) ? before : nominal);
             if (b->max_entry_sqr > c)
                 b->max_entry_sqr = c;
         }
-        ov_prev_nominal = nominal;
+        ov_prev_nominal = b->nominal_sqr;
         ov_at = next_index(ov_at);
     }
     if (!ov_left)
-        prev_nominal_sqr = ov_prev_nominal; /* the newest block's: plan_line's next junction */
+        prev_nominal = ov_prev_nominal; /* the newest block's: plan_line's next junction */
     recalculate(1);
     return ov_left != 0;
 }
@@ -397,6 +402,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     if (plan_fkey(feed) != plan_fkey(last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
+        last_feed_mm_s = feed_mm_s(last_feed_u16);
     }
     b->feed = last_feed_u16;
     plan_motion_t m;
@@ -405,29 +411,32 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
 #if PLAN_CACHE_MOTION
     motion[head] = m;
 #endif
-    float nominal = set_nominal(b, &m, unit);
+    float nominal = set_nominal(b, &m, unit, last_feed_mm_s);
     b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
 
     float junction = 0.0f;
     if (count) {
         float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
-        float cap = plan_lt(prev_nominal_sqr, nominal) ? prev_nominal_sqr : nominal;
+        float before = plan_f16_to_float(prev_nominal);
+        float cap = plan_lt(before, nominal) ? before : nominal;
         if (plan_lt(cos_theta, STRAIGHT_COS)) {
             junction = cap;
         } else if (plan_lt(cos_theta, REVERSAL_COS)) {
             /* circle of radius r through the corner, deviating junction_deviation
-             * from it: r = jd * sin(t/2) / (1 - sin(t/2)), v^2 = a * r, at most
-             * cap. With k = a * jd, k s / (1 - s) >= cap exactly when
-             * s^2 (k + cap)^2 >= cap^2: gentle corners (most of a curve) need
-             * neither the square root nor the division. */
+             * from it: r = jd * s / (1 - s) with s = sin(t/2), v^2 = a * r, at
+             * most cap. With k = a * jd and s^2 = (1 - cos t) / 2, k s^2 >=
+             * cap (1 - s^2), i.e. k (1 - cos t) >= cap (1 + cos t), is enough
+             * for k s / (1 - s) >= cap (s >= s^2 between 0 and 1): gentle
+             * corners (most of a curve) need neither the square root nor the
+             * division, and three multiplies. */
             float k = m.accel * settings.junction_deviation;
-            float s2 = 0.5f * (1.0f - cos_theta);
-            float kc = k + cap;
-            if (!plan_lt(s2 * kc * kc, cap * cap)) {
+            if (!plan_lt(k * (1.0f - cos_theta), cap * (1.0f + cos_theta))) {
                 junction = cap;
             } else {
-                float sin_half = sqrtf(s2);
+                float sin_half = sqrtf(0.5f * (1.0f - cos_theta));
                 junction = k * sin_half / (1.0f - sin_half);
+                if (plan_lt(cap, junction))
+                    junction = cap;
             }
         }
     }
@@ -435,7 +444,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->entry_sqr = 0;
 
     memcpy(prev_unit, unit, sizeof(prev_unit));
-    prev_nominal_sqr = nominal;
+    prev_nominal = b->nominal_sqr;
     memcpy(position, cart, sizeof(cart));
     head = next_index(head);
     if (ov_left)
