@@ -109,17 +109,20 @@ plan_sqr_t plan_sqr_from_float(float v_sqr)
     return (plan_sqr_t)v_sqr;
 }
 
-float plan_sqr_to_float(plan_sqr_t v)
+/* v / 2^(exponent >> 23) */
+static float sqr_to_float(plan_sqr_t v, int32_t exponent)
 {
     float f = (float)v;
     if (v) { /* at least 1: a normal number */
         int32_t bits;
         memcpy(&bits, &f, sizeof(bits));
-        bits -= SQR_EXPONENT;
+        bits -= exponent;
         memcpy(&f, &bits, sizeof(f));
     }
     return f;
 }
+
+float plan_sqr_to_float(plan_sqr_t v) { return sqr_to_float(v, SQR_EXPONENT); }
 
 /* In 16-bit halves of the float's bits: the shifts are by one place, where
  * 32-bit shifts by 15 would be loops here. */
@@ -276,11 +279,11 @@ static float axis_s_per_mm(const float *unit)
     return s_per_mm;
 }
 
-/* Length, events per mm, acceleration along the move and (when unit is
- * given) the direction. The axis limits along the move: accel <= accel /
- * |u| for every moving axis; the tightest has the largest |u| / limit, i.e.
- * the largest |d_mm| / limit. */
-static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
+/* Length, events per mm, 1 / acceleration along the move and (when unit
+ * is given) the direction; returns 1 / length. The axis limits along the
+ * move: accel <= accel / |u| for every moving axis; the tightest has the
+ * largest |u| / limit, i.e. the largest |d_mm| / limit. */
+static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
 {
     int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
     float d_mm[N_AXIS], mm2 = 0.0f, x = 0.0f;
@@ -296,11 +299,24 @@ static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
     m->mm = sqrtf(mm2);
     float inv_mm = 1.0f / m->mm;
     m->events_per_mm = (float)plan_events(b) * inv_mm;
-    m->inv_accel = x * inv_mm;
-    m->accel = 1.0f / m->inv_accel; /* some axis moves: x > 0 */
+    m->inv_accel = x * inv_mm; /* some axis moves: x > 0 */
     if (unit)
         for (uint8_t a = 0; a < N_AXIS; a++)
             unit[a] = d_mm[a] * inv_mm;
+    return inv_mm;
+}
+
+/* The acceleration the segment preparer runs a block at: the one its
+ * accel_dist2 (2 a mm, rounded down to 1/64 (mm/s)^2) stands for, so it
+ * slows over the block by just what the planner counted on; a multiply
+ * where 1 / inv_accel is a division (~550 cycles). Below 64 (mm/s)^2,
+ * where the rounding could be more than 2^-12 of it, the division. */
+static void run_accel(const plan_block_t *b, plan_motion_t *m, float inv_mm)
+{
+    if (b->accel_dist2 >= 4096)
+        m->accel = sqr_to_float(b->accel_dist2, SQR_EXPONENT + (1L << 23)) * inv_mm; /* / 2 mm */
+    else
+        m->accel = 1.0f / m->inv_accel;
 }
 
 void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
@@ -308,7 +324,7 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #if PLAN_CACHE_MOTION
     *m = motion[b - ring]; /* the axis settings cannot change while blocks are queued */
 #else
-    geometry(b, m, 0);
+    run_accel(b, m, geometry(b, m, 0));
 #endif
 }
 
@@ -399,7 +415,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->line = line_number;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    if (plan_fkey(feed) != plan_fkey(last_feed)) { /* F is modal: converted once per change */
+    if (memcmp(&feed, &last_feed, sizeof(feed))) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
         last_feed_mm_s = feed_mm_s(last_feed_u16);
@@ -407,19 +423,23 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->feed = last_feed_u16;
     plan_motion_t m;
     float unit[N_AXIS];
-    geometry(b, &m, unit);
-#if PLAN_CACHE_MOTION
-    motion[head] = m;
-#endif
+    float inv_mm = geometry(b, &m, unit);
+    float accel = 1.0f / m.inv_accel;
     float nominal = set_nominal(b, &m, unit, last_feed_mm_s);
-    b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
+    b->accel_dist2 = plan_sqr_from_float(2.0f * accel * m.mm);
+#if PLAN_CACHE_MOTION
+    run_accel(b, &m, inv_mm);
+    motion[head] = m;
+#else
+    (void)inv_mm;
+#endif
 
     float junction = 0.0f;
     if (count) {
         float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
         float before = plan_f16_to_float(prev_nominal);
         float cap = plan_lt(before, nominal) ? before : nominal;
-        if (plan_lt(cos_theta, STRAIGHT_COS)) {
+        if (plan_lt(-STRAIGHT_COS, -cos_theta)) { /* (plan_lt: one side not negative) */
             junction = cap;
         } else if (plan_lt(cos_theta, REVERSAL_COS)) {
             /* circle of radius r through the corner, deviating junction_deviation
@@ -429,7 +449,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
              * for k s / (1 - s) >= cap (s >= s^2 between 0 and 1): gentle
              * corners (most of a curve) need neither the square root nor the
              * division, and three multiplies. */
-            float k = m.accel * settings.junction_deviation;
+            float k = accel * settings.junction_deviation;
             if (!plan_lt(k * (1.0f - cos_theta), cap * (1.0f + cos_theta))) {
                 junction = cap;
             } else {

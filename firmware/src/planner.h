@@ -19,17 +19,19 @@ typedef uint32_t plan_sqr_t;
 plan_sqr_t plan_sqr_from_float(float v_sqr);
 float plan_sqr_to_float(plan_sqr_t v);
 
-/* Float order by integer compare: plan_lt(a, b) exactly when a < b for any
- * floats but NaN (-0 sorts just below +0, which no caller minds). The
- * main loop compares ~35 floats a line; the float library's compare is
- * ~80 cycles on the AVR, this ~10 (less against a constant). */
-static inline int32_t plan_fkey(float f)
+/* Float order by integer compare: plan_lt(a, b) exactly when a < b, for
+ * floats of which at least one is not negative (IEEE bits read as a signed
+ * integer order the values so; two negative ones would compare reversed),
+ * neither NaN; -0 sorts just below +0, which no caller minds. The main loop
+ * compares ~35 floats a line; the float library's compare is ~80 cycles on
+ * the AVR with its call, this a few (a constant side is folded). */
+static inline uint8_t plan_lt(float a, float b)
 {
-    int32_t i;
-    memcpy(&i, &f, sizeof(i));
-    return i < 0 ? i ^ INT32_MAX : i; /* sign and magnitude to two's complement */
+    int32_t i, j;
+    memcpy(&i, &a, sizeof(i));
+    memcpy(&j, &b, sizeof(j));
+    return i < j;
 }
-static inline uint8_t plan_lt(float a, float b) { return plan_fkey(a) < plan_fkey(b); }
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
@@ -77,7 +79,7 @@ typedef struct {
 typedef struct {
     float mm;                 /* length in mm */
     float events_per_mm;
-    float accel;              /* mm/s^2 along the move */
+    float accel;              /* mm/s^2 along the move, as accel_dist2 gives it */
     float inv_accel;          /* 1 / accel, so the segment preparer multiplies */
 } plan_motion_t;
 void plan_block_motion(const plan_block_t *b, plan_motion_t *m);
