@@ -33,7 +33,10 @@ void plan_set_line_number(plan_line_t n) { line_number = n; }
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
- * whenever one of the settings they come from has changed. */
+ * whenever one of the settings they come from has changed. Settings change
+ * only with the planner empty (the firmware answers error:8 while blocks
+ * are queued; the host library resets it after configuring), so only a
+ * block queued into an empty planner looks (a 24-byte compare). */
 static struct {
     float seen[3 * N_AXIS];       /* $100.., $110.., $120.. as last seen (adjacent in settings_t) */
     float mm_per_step[N_AXIS];
@@ -57,6 +60,14 @@ static void refresh_axis(void)
         axis.s_per_mm[a] = 60.0f / settings.max_rate[a];
         axis.inv_accel[a] = 1.0f / settings.accel[a];
     }
+}
+
+static uint8_t same_bits(float a, float b)
+{
+    uint32_t i, j;
+    memcpy(&i, &a, sizeof(i));
+    memcpy(&j, &b, sizeof(j));
+    return i == j;
 }
 
 static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == RING_SLOTS ? 0 : i + 1); }
@@ -353,7 +364,6 @@ uint8_t plan_override_step(void)
 {
     if (!ov_left)
         return 0;
-    refresh_axis();
     for (uint8_t n = OV_SLICE; n && ov_left; n--, ov_left--) {
         plan_block_t *b = &ring[ov_at];
         plan_motion_t m;
@@ -390,7 +400,8 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
 {
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
-    refresh_axis();
+    if (!count)
+        refresh_axis();
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = target[a] * settings.steps_per_mm[a];
         if (!plan_lt(fabsf(t), PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
@@ -415,7 +426,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->line = line_number;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    if (memcmp(&feed, &last_feed, sizeof(feed))) { /* F is modal: converted once per change */
+    if (!same_bits(feed, last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
         last_feed_mm_s = feed_mm_s(last_feed_u16);
