@@ -165,11 +165,12 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         s += d_cru;
     }
     /* deceleration to the exit speed (or as close as the distance allows) */
+    /* v is now sqrt(peak2): peak2 stands for its square (two multiplies less) */
     float left = remaining - s;
-    float vend2 = v * v - 2.0f * a * left;
+    float vend2 = peak2 - (a + a) * left;
     if (plan_lt(vend2, ve2))
         vend2 = ve2;
-    float vend = plan_lt(vend2, v * v) ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
+    float vend = plan_lt(vend2, peak2) ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
     float td = (v - vend) * p->m.inv_accel;
     if (plan_lt(0.0f, td) && plan_lt(dt, t + td)) {
         float tt = dt - t;
