@@ -12,11 +12,10 @@ static struct prep_state {
     uint8_t block;       /* its step_blocks index */
     uint8_t first;       /* next segment is the block's first */
     uint8_t hold, stopped;
-    uint32_t done;       /* events prepared */
+    uint16_t done;       /* events prepared */
     uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
-    float mm_per_event;  /* 0 until a segment ends inside the block */
     plan_motion_t m;     /* the block's length and acceleration */
 } prep;
 
@@ -209,7 +208,6 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     p->first = 1;
     p->s = 0.0f;
     p->done = 0;
-    p->mm_per_event = 0.0f; /* a division that short blocks never need */
     plan_block_motion(b, &p->m);
 }
 
@@ -264,13 +262,11 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
         if (!ended && plan_lt(0.0f, p->v)) {
             /* end the segment exactly on its last step, so its rate is exact;
              * the distance to that step is moved over to the next segment */
-            if (p->mm_per_event == 0.0f)
-                p->mm_per_event = p->m.mm / (float)p->events;
-            float extra = p->s - (float)target * p->mm_per_event;
-            float back = extra / p->v;
+            float epm = p->m.events_per_mm;
+            float back = (p->s * epm - (float)target) / (epm * p->v); /* seconds past the step */
             if (plan_lt(fabsf(back), 0.25f * time)) { /* when slow, v is too rough an estimate */
                 time -= back;
-                p->s -= extra;
+                p->s -= back * p->v;
             }
         }
         if (target - p->done > 60000u) { /* absurd rates: keep a segment within 16 bits */
@@ -285,7 +281,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             seg->block = &step_blocks[p->block];
             seg->flags = p->first ? SEG_FIRST : 0;
             p->first = 0;
-            p->done = target;
+            p->done = (uint16_t)target;
             seg_head++; /* publish after the segment is complete */
             added = 1;
         }
