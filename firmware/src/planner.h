@@ -58,10 +58,11 @@ typedef uint32_t plan_line_t;
 /* A queued move, 24 bytes: only what the queue and the segment preparer
  * need. The planner passes run on every queued block for every new one, so
  * they work on squared speeds in fixed point (plan_sqr_t: integer adds and
- * compares); the length and acceleration are not stored but derived from
- * the steps when needed (plan_block_motion: once when the block is queued,
- * once when its segments are prepared), so the same RAM holds about twice
- * the blocks of a float block. */
+ * compares); the length and acceleration are not stored in it but derived
+ * from the steps when needed (plan_block_motion: once when the block is
+ * queued, once when its segments are prepared), so the same RAM holds about
+ * twice the blocks of a float block. The 2560 and the host library keep
+ * that geometry beside the ring instead (config.h PLAN_CACHE_MOTION). */
 typedef struct {
     int16_t steps[N_AXIS];    /* signed motor steps, |steps| <= PLAN_MAX_EVENTS;
                                * step events: the largest |steps| (plan_events) */
@@ -75,12 +76,14 @@ typedef struct {
 } plan_block_t;
 
 /* The float view of a block's geometry (main loop only), from its steps
- * with the present axis settings. */
+ * with the present axis settings: one square root and one division (the
+ * length's reciprocal; the acceleration comes from accel_dist2). */
 typedef struct {
     float mm;                 /* length in mm */
     float events_per_mm;
-    float accel;              /* mm/s^2 along the move, as accel_dist2 gives it */
-    float inv_accel;          /* 1 / accel, so the segment preparer multiplies */
+    float accel;              /* mm/s^2 along the move as accel_dist2 stands for it
+                               * (at most 2^-12 below the exact one) */
+    float inv_accel;          /* 1 / the exact one, so the segment preparer multiplies */
 } plan_motion_t;
 void plan_block_motion(const plan_block_t *b, plan_motion_t *m);
 
