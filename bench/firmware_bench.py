@@ -99,8 +99,8 @@ def build(board: Board, tmp: Path) -> tuple[Path, Path]:
 
 def planner_depth(board: Board) -> int:
     """Usable planner blocks of the board's build (config.h PLAN_SIZE - 1)."""
-    return int(run(["make", "-s", "-C", str(FW), f"BOARD={board.name}",
-                    "print-BOARD_PLAN_SIZE"]).strip()) - 1
+    return int(run(["make", "-s", "--no-print-directory", "-C", str(FW),
+                    f"BOARD={board.name}", "print-BOARD_PLAN_SIZE"]).strip()) - 1
 
 
 def _has_pc(name: str) -> bool:
