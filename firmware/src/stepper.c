@@ -13,9 +13,9 @@
 #define RUNNING() TIMSK1 /* nonzero: running */
 /* Motor position: a 32-bit base plus signed 16-bit step counts that the
  * interrupt keeps (no 32-bit read-modify-write per step) and the main loop
- * folds into the base whenever it polls (stepper_start). Between two polls
- * the steppers run at most the segment ring: 7 segments of at most 64 ms
- * at 50 kHz, 22,400 steps, inside int16. */
+ * folds into the base when it polls (stepper_start) and a count has passed
+ * 255. Between two polls the steppers run at most the segment ring: 7
+ * segments of at most 64 ms at 50 kHz, 22,400 steps, inside int16. */
 static volatile int32_t position[N_AXIS];
 static volatile int16_t done[N_AXIS];
 static uint8_t enabled;
@@ -73,9 +73,19 @@ static inline __attribute__((always_inline)) void fold_counts(void)
     done[0] = done[1] = 0;
 }
 
+/* An axis's count may have passed 255 steps either way: its high byte
+ * (one byte, so read atomically) is neither 0x00 nor 0xFF. */
+static inline uint8_t count_large(uint8_t a)
+{
+    return (uint8_t)(((volatile uint8_t *)&done[a])[1] + 1u) > 1u;
+}
+
 void stepper_start(void)
 {
-    if (RUNNING() || done[0] || done[1]) /* (stopped, the interrupt leaves them alone) */
+    /* fold only once a count is large (at most ~22,700 then, inside int16):
+     * a fold on every poll cost ~60 cycles with interrupts shut; every
+     * reader of the position adds the counts anyway */
+    if (count_large(0) || count_large(1))
         ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
         {
             fold_counts();
@@ -176,7 +186,7 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * busiest period holds a worst tick alone: a tick that outlasts the pulse
  * ends it itself, so the pulse-end interrupt below (23 cycles worst) runs
  * only after short ticks. Per 0.5 mm line of the bench's CPU-bound run
- * (about 36 ticks) 5,435 cycles (was 6,941). Nothing here calls a function
+ * (about 36 ticks) 5,431 cycles (was 6,941). Nothing here calls a function
  * (a call would make the compiler save every call-clobbered register on
  * each tick) and nothing is 32-bit (the main loop folds the 16-bit counts).
  * Nothing else may hold a due tick up for long (a late edge is a short step
