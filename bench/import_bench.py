@@ -140,16 +140,13 @@ def bench_motion_library(lines: int) -> None:
     rng = np.random.default_rng(1)
     steps = rng.uniform(-1, 1, size=(lines, 2))
     pts = np.clip(np.cumsum(steps, axis=0) + np.array([150.0, 110.0]), 1, 219)
+    kind = np.full(lines, library.LINE, np.uint8)
+    xs, ys = pts[:, 0].astype(np.float32), pts[:, 1].astype(np.float32)
+    feed = np.full(lines, 3000.0, np.float32)
+    nbytes = np.full(lines, 28, np.uint16)
     e = Estimator(MachineProfile())
-    e.kind.frombytes(bytes([1]) * lines)
-    e.x.fromlist(pts[:, 0].tolist())
-    e.y.fromlist(pts[:, 1].tolist())
-    zeros = [0.0] * lines
-    e.i.fromlist(zeros)
-    e.j.fromlist(zeros)
-    e.feed.fromlist([3000.0] * lines)
-    e.bytes.fromlist([28] * lines)
     t = time.perf_counter()
+    e.moves(kind, xs, ys, feed, nbytes)
     e.flush()
     took = time.perf_counter() - t
     print(f"    of which the motion library (firmware planner + segments, C): {took:.2f} s "

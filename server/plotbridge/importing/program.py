@@ -293,7 +293,7 @@ class ProgramWriter:
                                    f"Y{y:.3f} is outside the work area: clamped to its edge")
         if self.layers:
             self._end_layer()
-        self.planner.flush()
+        self.planner.end()    # the caller waits for the estimate (Estimator.wait)
         self.flush()
 
     def bounds_dict(self) -> dict[str, float]:
