@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import itertools
 import math
+import queue
 import re
+import threading
 from collections.abc import Iterable, Iterator
+from typing import TypeVar
 
 import numpy as np
 
@@ -42,6 +45,7 @@ _AXIS_WORDS = frozenset("XYZIJRFSPNT")
 PLAIN_LINES = 256       # plain lines whose words GcodeReader keeps
 ARC_RADIUS_ABS = 0.005
 ARC_RADIUS_REL = 0.001
+T = TypeVar("T")
 
 
 def _num(v: float) -> str:
@@ -88,6 +92,42 @@ def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
     return text
 
 
+def _ahead(items: Iterator[T], depth: int = 2) -> Iterator[T]:
+    """The items, made up to `depth` ahead on a thread of their own: reading a chunk of
+    the file and gcodescan.c's scan of it let go of the GIL, so they run beside the
+    importer's work on the chunk before. An error making an item is raised in its place."""
+    q: queue.Queue = queue.Queue(depth)
+    stop = threading.Event()
+
+    def work() -> None:
+        try:
+            for item in items:
+                if stop.is_set():
+                    return
+                q.put((True, item))
+            q.put((False, None))
+        except BaseException as e:  # raised to the reader in the item's place
+            q.put((False, e))
+
+    worker = threading.Thread(target=work, daemon=True, name="gcode-scan")
+    worker.start()
+    try:
+        while True:
+            more, item = q.get()
+            if not more:
+                if item is not None:
+                    raise item
+                return
+            yield item
+    finally:
+        stop.set()
+        while worker.is_alive():    # the reader stopped early: free a put that waits
+            try:
+                q.get(timeout=0.05)
+            except queue.Empty:
+                pass
+
+
 class GcodeReader:
     """State machine over G-code lines; iterate `ops(lines)`."""
 
@@ -130,8 +170,7 @@ class GcodeReader:
             self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
             return
         out: list[tuple] = []
-        for first, text in chunks:
-            lines = scan(text, MAX_LINE)
+        for first, lines in _ahead((first, scan(text, MAX_LINE)) for first, text in chunks):
             kind = lines.kind
             common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
