@@ -79,7 +79,7 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
     tmp_preview = dest_dir / f".{PREVIEW}.part"
     writer: ProgramWriter | None = None
     try:
-        with tmp_program.open("w", encoding="ascii", newline="\n") as out:
+        with tmp_program.open("wb") as out:
             writer = ProgramWriter(out, transform, profile, errors)
             writer.write_ops(ops_factory())
             writer.finish()
