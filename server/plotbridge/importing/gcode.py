@@ -174,8 +174,9 @@ class GcodeReader:
             kind = lines.kind
             common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
-            for a, b in itertools.pairwise(cuts):
-                if common[a] and not self.relative and not self.inches:
+            firsts = common[cuts[:-1]].tolist()     # is each stretch common lines?
+            for a, b, is_common in zip(cuts[:-1], cuts[1:], firsts, strict=True):
+                if is_common and not self.relative and not self.inches:
                     self._run(out, first + a, kind[a:b], lines.x[a:b], lines.y[a:b],
                               lines.feed[a:b])
                 else:
@@ -203,15 +204,17 @@ class GcodeReader:
         x = x + self.off_x
         y = y + self.off_y
         # The feed of each line: the last F given at or before it, else the one before
-        # the run; a G1 with no feed ever given warns once and takes the default.
-        before = self.feed
-        if before is None:
-            unfed = np.flatnonzero(draw & np.isnan(feed))
-            if len(unfed):
-                self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
-                before = self.default_feed
-        if before is not None:
-            feed = np.where(np.isnan(feed), before, feed)
+        # the run; a G1 with no feed ever given warns once and takes the default. (The
+        # feeds are NaN only before the run's first F.)
+        if feed[0] != feed[0]:
+            before = self.feed
+            if before is None:
+                unfed = np.flatnonzero(draw & np.isnan(feed))
+                if len(unfed):
+                    self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
+                    before = self.default_feed
+            if before is not None:
+                feed = np.where(np.isnan(feed), before, feed)
         last = float(feed[-1])
         if last == last:
             self.feed = last
