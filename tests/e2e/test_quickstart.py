@@ -15,6 +15,7 @@ import pytest
 
 from tests.fixtures.artifacts import ARTIFACTS
 from tests.fixtures.server import free_port
+from tests.fixtures.waits import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 LOGIN_LINE = re.compile(r"plotbridge: open (http://\S+/login\?token=(\S+))")
@@ -30,16 +31,6 @@ def wait_for_login_line(log: Path, proc: subprocess.Popen, timeout: float) -> re
         assert proc.poll() is None, f"make run exited:\n{log.read_text()[-4000:]}"
         time.sleep(0.2)
     raise AssertionError(f"no login link after {timeout} s:\n{log.read_text()[-4000:]}")
-
-
-def wait_until(check, timeout: float, what: str):
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        value = check()
-        if value:
-            return value
-        time.sleep(0.1)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 @pytest.mark.e2e
@@ -60,7 +51,8 @@ def test_make_run_from_a_clean_clone_serves_and_plots(tmp_path):
         match = wait_for_login_line(log, proc, timeout=420)
         url, token = match.group(1).replace(f"{os.uname().nodename}:", "127.0.0.1:"), match.group(2)
         with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30) as browser:
-            page = wait_until(lambda: _get_or_none(browser, url), 60, "the first page")
+            page = wait_until(lambda: browser.get(url, follow_redirects=True), bool, 60,
+                              "the first page", every=0.1, errors=(httpx.HTTPError,))
             first_page_s = time.monotonic() - started
             assert page.status_code == 200 and "<html" in page.text.lower()
             assert "plotbridge_session" in browser.cookies
@@ -74,18 +66,21 @@ def test_make_run_from_a_clean_clone_serves_and_plots(tmp_path):
             headers={"Authorization": f"Bearer {token}"},
         )  # fmt: skip
         with api:
-            wait_until(lambda: api.get("/api/machine").json()["connected"], 60, "the plotter")
+
+            def machine() -> dict:
+                return api.get("/api/machine").json()
+
+            wait_until(machine, lambda m: m["connected"], 60, "the plotter")
             assert api.post("/api/machine/home").status_code in (200, 202)
-            wait_until(lambda: api.get("/api/machine").json()["state"] == "Idle", 60, "homing")
+            wait_until(machine, lambda m: m["state"] == "Idle", 60, "homing")
             job = api.post(
                 "/api/jobs", params={"name": "square"}, content=SQUARE,
                 headers={"Content-Type": "text/plain"},
             ).json()  # fmt: skip
             assert api.post(f"/api/jobs/{job['id']}/start").status_code == 200
-            done = wait_until(
-                lambda: (j := api.get(f"/api/jobs/{job['id']}").json())["state"]
-                not in ("queued", "running") and j, 120, "the job to end",
-            )  # fmt: skip
+            done = wait_until(lambda: api.get(f"/api/jobs/{job['id']}").json(),
+                              lambda j: j["state"] not in ("queued", "running"), 120,
+                              "the job to end")
             assert done["state"] == "done", done
             strokes = api.get("/api/sim/trace").json()["strokes"]
             corners = [(round(x), round(y)) for x, y in strokes[-1]]
@@ -98,9 +93,3 @@ def test_make_run_from_a_clean_clone_serves_and_plots(tmp_path):
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait(5)
 
-
-def _get_or_none(client: httpx.Client, url: str) -> httpx.Response | None:
-    try:
-        return client.get(url, follow_redirects=True)
-    except httpx.HTTPError:
-        return None
