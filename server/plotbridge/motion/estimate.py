@@ -114,10 +114,10 @@ class Estimator:
     """Feed it the program line by line (`receive`, then what the line does; runs of
     lines at once with `moves`); after `flush`, `time` is the estimate and `timeline`
     the progress samples. The start is (0, 0) with the pen up, as the firmware after
-    homing. A program of more than BATCH lines runs through the library a batch at a
-    time on a thread of its own while the caller goes on (ctypes lets go of the GIL);
-    `end` then `wait` (what `flush` does) let the caller work while the last batch
-    runs; `close` drops a program not to be finished."""
+    homing. The library runs on a thread of its own, given each batch of BATCH lines as
+    it fills while the caller goes on (ctypes lets go of the GIL), the last one at
+    `end`; `end` then `wait` (what `flush` does) let the caller work while the last
+    batch runs; `close` drops a program not to be finished."""
 
     def __init__(self, profile: MachineProfile, start: tuple[float, float] = (0.0, 0.0)):
         if start != (0.0, 0.0):
