@@ -25,9 +25,10 @@ board profile measured: uno-cnc-shield (ATmega328P) and mega-ramps14
 pulse-end interrupt).
 
 Run: .venv/bin/python bench/firmware_bench.py [--board NAME ...]
-     .venv/bin/python bench/firmware_bench.py --profile [--check]  (where the
-     cycles of the CPU-bound throughput run, or of the check-mode run, go, per
-     function, from program-counter samples)
+     .venv/bin/python bench/firmware_bench.py --profile [--check | --accel A]
+     (where the cycles of the CPU-bound throughput run, of the check-mode run,
+     or with --accel of the F18000 run at A mm/s^2, go, per function, from
+     program-counter samples)
 """
 
 from __future__ import annotations
@@ -98,8 +99,8 @@ def build(board: Board, tmp: Path) -> tuple[Path, Path]:
 
 def planner_depth(board: Board) -> int:
     """Usable planner blocks of the board's build (config.h PLAN_SIZE - 1)."""
-    return int(run(["make", "-s", "-C", str(FW), f"BOARD={board.name}",
-                    "print-BOARD_PLAN_SIZE"]).strip()) - 1
+    return int(run(["make", "-s", "--no-print-directory", "-C", str(FW),
+                    f"BOARD={board.name}", "print-BOARD_PLAN_SIZE"]).strip()) - 1
 
 
 def _has_pc(name: str) -> bool:
@@ -335,7 +336,10 @@ def main() -> int:
         if "--profile" in args:
             board = BOARDS[names[0]]
             elf, harness = build(board, tmp)
-            profile(harness, elf, tmp, board=board, check="--check" in args)
+            accel = float(args[args.index("--accel") + 1]) if "--accel" in args else CPU_ACCEL
+            feed = 18000 if "--accel" in args else 24000
+            profile(harness, elf, tmp, feed=feed, accel=accel, board=board,
+                    check="--check" in args)
             return 0
         met = [measure(BOARDS[n], tmp) for n in names]
     print("all targets met" if all(met) else "SHORTFALL: see the figures above")

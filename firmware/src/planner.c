@@ -12,24 +12,31 @@
  * slot is kept free) */
 #define RING_SLOTS (PLAN_SIZE - 1)
 static plan_block_t ring[RING_SLOTS];
+#if PLAN_CACHE_MOTION
+static plan_motion_t motion[RING_SLOTS]; /* ring[i]'s geometry, as geometry() gave it */
+#endif
 static uint8_t head, tail, count;
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
-static float prev_nominal_sqr;
+static plan_f16_t prev_nominal;   /* the last block's cruise speed^2 as stored */
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
-static float last_feed;        /* the last block's feed, and as stored in blocks */
+static float last_feed;        /* the last block's feed, as stored in blocks, and in mm/s */
 static uint16_t last_feed_u16;
+static float last_feed_mm_s;
 /* an override change's recompute under way (plan_override_step) */
 #define OV_SLICE 4
 static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
-static float ov_prev_nominal;      /* the cruise speed^2 of the block before ov_at */
+static plan_f16_t ov_prev_nominal; /* the cruise speed^2 of the block before ov_at */
 static plan_line_t line_number; /* for the blocks queued next */
 void plan_set_line_number(plan_line_t n) { line_number = n; }
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
- * whenever one of the settings they come from has changed. */
+ * whenever one of the settings they come from has changed. Settings change
+ * only with the planner empty (the firmware answers error:8 while blocks
+ * are queued; the host library resets it after configuring), so only a
+ * block queued into an empty planner looks (a 24-byte compare). */
 static struct {
     float seen[3 * N_AXIS];       /* $100.., $110.., $120.. as last seen (adjacent in settings_t) */
     float mm_per_step[N_AXIS];
@@ -55,13 +62,21 @@ static void refresh_axis(void)
     }
 }
 
+static uint8_t same_bits(float a, float b)
+{
+    uint32_t i, j;
+    memcpy(&i, &a, sizeof(i));
+    memcpy(&j, &b, sizeof(j));
+    return i == j;
+}
+
 static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == RING_SLOTS ? 0 : i + 1); }
 static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 : i - 1); }
 
 void plan_reset(void)
 {
     head = tail = count = ov_left = 0;
-    prev_nominal_sqr = 0.0f;
+    prev_nominal = 0;
     exec_exit_limit = 0;
     memset(prev_unit, 0, sizeof(prev_unit));
 }
@@ -83,24 +98,51 @@ uint16_t plan_events(const plan_block_t *b)
     return events;
 }
 
+/* The scaling by PLAN_SQR_SCALE is an integer add to the float's exponent
+ * field instead of a multiply (~150 cycles here), and the range checks are
+ * integer compares of its bits. Exact for normal numbers; a subnormal one
+ * comes out below 1 either way, i.e. 0. */
+#define SQR_EXPONENT ((int32_t)PLAN_SQR_SHIFT << 23)
+#define FLOAT_INF_BITS 0x7F800000L
+#define SQR_MAX_BITS (0x4E800000L - SQR_EXPONENT) /* PLAN_SQR_MAX, 2^30, unscaled */
+_Static_assert(PLAN_SQR_MAX == 1UL << 30, "SQR_MAX_BITS is 2^30's exponent");
+
 plan_sqr_t plan_sqr_from_float(float v_sqr)
 {
-    float f = v_sqr * PLAN_SQR_SCALE;
-    if (!(f > 0.0f)) /* negative rounding leftovers (and NaN) are a stop */
+    int32_t bits;
+    memcpy(&bits, &v_sqr, sizeof(bits));
+    if (bits <= 0 || bits > FLOAT_INF_BITS) /* negative rounding leftovers (and NaN) are a stop */
         return 0;
-    return f < (float)PLAN_SQR_MAX ? (plan_sqr_t)f : PLAN_SQR_MAX;
+    if (bits >= SQR_MAX_BITS)
+        return PLAN_SQR_MAX;
+    bits += SQR_EXPONENT;
+    memcpy(&v_sqr, &bits, sizeof(v_sqr));
+    return (plan_sqr_t)v_sqr;
 }
 
-float plan_sqr_to_float(plan_sqr_t v) { return (float)v * (1.0f / PLAN_SQR_SCALE); }
+/* v / 2^(exponent >> 23) */
+static float sqr_to_float(plan_sqr_t v, int32_t exponent)
+{
+    float f = (float)v;
+    if (v) { /* at least 1: a normal number */
+        int32_t bits;
+        memcpy(&bits, &f, sizeof(bits));
+        bits -= exponent;
+        memcpy(&f, &bits, sizeof(f));
+    }
+    return f;
+}
+
+float plan_sqr_to_float(plan_sqr_t v) { return sqr_to_float(v, SQR_EXPONENT); }
 
 /* In 16-bit halves of the float's bits: the shifts are by one place, where
  * 32-bit shifts by 15 would be loops here. */
 plan_f16_t plan_f16_from_float(float v)
 {
     uint32_t bits;
-    if (!(v > 0.0f)) /* (and NaN) */
-        return 0;
     memcpy(&bits, &v, sizeof(bits));
+    if ((int32_t)bits <= 0 || bits > FLOAT_INF_BITS) /* not above 0 (or NaN) */
+        return 0;
     uint16_t hi = (uint16_t)(bits >> 16), lo = (uint16_t)bits;
     return (plan_f16_t)((uint16_t)(hi << 1) | ((lo & 0x8000u) ? 1u : 0u));
 }
@@ -209,11 +251,11 @@ static void recalculate(uint8_t full)
     }
 }
 
-/* Cruise speed of a block: the programmed feed (mm/min) or, for a rapid,
+/* Cruise speed of a block: the programmed feed (in mm/s) or, for a rapid,
  * the axis limit, each scaled by its override (jogs keep theirs), within
  * the axis limits along the move (s_per_mm: the largest |u_axis| / max
  * rate), and no slower than the step timer can time. */
-static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float events_per_mm)
+static float cruise_speed(float feed_mm_s, uint8_t flags, float s_per_mm, float events_per_mm)
 {
     float speed;
     if (flags & PB_RAPID) {
@@ -221,13 +263,13 @@ static float cruise_speed(float feed, uint8_t flags, float s_per_mm, float event
         if (rapid_pct != 100)
             speed *= (float)rapid_pct * 0.01f;
     } else {
-        speed = feed * (1.0f / 60.0f);
+        speed = feed_mm_s;
         if (feed_pct != 100 && !(flags & PB_JOG))
             speed *= (float)feed_pct * 0.01f;
-        if (speed * s_per_mm > 1.0f)
+        if (plan_lt(1.0f, speed * s_per_mm))
             speed = 1.0f / s_per_mm;
     }
-    if (speed * events_per_mm < MIN_STEP_RATE)
+    if (plan_lt(speed * events_per_mm, MIN_STEP_RATE))
         speed = MIN_STEP_RATE / events_per_mm;
     return speed;
 }
@@ -239,48 +281,73 @@ static float axis_s_per_mm(const float *unit)
     float s_per_mm = 0.0f;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float u = fabsf(unit[a]);
-        if (u > 1.0e-6f) {
+        if (plan_lt(1.0e-6f, u)) {
             float r = u * axis.s_per_mm[a];
-            if (r > s_per_mm)
+            if (plan_lt(s_per_mm, r))
                 s_per_mm = r;
         }
     }
     return s_per_mm;
 }
 
-/* Length, events per mm, acceleration along the move and (when unit is
- * given) the direction. The axis limits along the move: accel <= accel /
- * |u| for every moving axis; the tightest has the largest |u| / limit, i.e.
- * the largest |d_mm| / limit. */
-static void geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
+/* Length, events per mm, 1 / acceleration along the move and (when unit
+ * is given) the direction; returns 1 / length. The axis limits along the
+ * move: accel <= accel / |u| for every moving axis; the tightest has the
+ * largest |u| / limit, i.e. the largest |d_mm| / limit. */
+static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
 {
     int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
     float d_mm[N_AXIS], mm2 = 0.0f, x = 0.0f;
     plan_cart_from_motor(motor, cart);
     for (uint8_t a = 0; a < N_AXIS; a++) {
         d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
-        mm2 += d_mm[a] * d_mm[a];
+        float sq = d_mm[a] * d_mm[a];
+        mm2 = a ? mm2 + sq : sq; /* (0 + x is an add the compiler may not drop) */
         float r = fabsf(d_mm[a]) * axis.inv_accel[a];
-        if (r > x)
+        if (plan_lt(x, r))
             x = r;
     }
     m->mm = sqrtf(mm2);
     float inv_mm = 1.0f / m->mm;
     m->events_per_mm = (float)plan_events(b) * inv_mm;
-    m->inv_accel = x * inv_mm;
-    m->accel = 1.0f / m->inv_accel; /* some axis moves: x > 0 */
+    m->inv_accel = x * inv_mm; /* some axis moves: x > 0 */
     if (unit)
         for (uint8_t a = 0; a < N_AXIS; a++)
             unit[a] = d_mm[a] * inv_mm;
+    return inv_mm;
 }
 
-void plan_block_motion(const plan_block_t *b, plan_motion_t *m) { geometry(b, m, 0); }
+/* The acceleration the segment preparer runs a block at: the one its
+ * accel_dist2 (2 a mm, rounded down to 1/64 (mm/s)^2) stands for, so it
+ * slows over the block by just what the planner counted on; a multiply
+ * where 1 / inv_accel is a division (~550 cycles). Below 64 (mm/s)^2,
+ * where the rounding could be more than 2^-12 of it, the division. */
+static void run_accel(const plan_block_t *b, plan_motion_t *m, float inv_mm)
+{
+    if (b->accel_dist2 >= 4096)
+        m->accel = sqr_to_float(b->accel_dist2, SQR_EXPONENT + (1L << 23)) * inv_mm; /* / 2 mm */
+    else
+        m->accel = 1.0f / m->inv_accel;
+}
+
+void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
+{
+#if PLAN_CACHE_MOTION
+    *m = motion[b - ring]; /* the axis settings cannot change while blocks are queued */
+#else
+    run_accel(b, m, geometry(b, m, 0));
+#endif
+}
+
+/* A block's feed as stored (mm/min, rounded) in mm/s. */
+static float feed_mm_s(uint16_t feed) { return (float)feed * (1.0f / 60.0f); }
 
 /* The block's cruise speed squared as stored (16 bits, never above the
- * float one), from its feed, flags and direction with the overrides. */
-static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+ * float one), from its feed (feed_mm_s of b->feed), flags and direction
+ * with the overrides. */
+static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit, float feed)
 {
-    float speed = cruise_speed((float)b->feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
+    float speed = cruise_speed(feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
     b->nominal_sqr = plan_f16_from_float(speed * speed);
     return plan_f16_to_float(b->nominal_sqr);
 }
@@ -297,25 +364,24 @@ uint8_t plan_override_step(void)
 {
     if (!ov_left)
         return 0;
-    refresh_axis();
     for (uint8_t n = OV_SLICE; n && ov_left; n--, ov_left--) {
         plan_block_t *b = &ring[ov_at];
         plan_motion_t m;
         float unit[N_AXIS];
         geometry(b, &m, unit);
-        float nominal = set_nominal(b, &m, unit);
+        float nominal = set_nominal(b, &m, unit, feed_mm_s(b->feed));
         /* a junction is never faster than the cruise speeds on either side */
         if (ov_at != tail) {
-            float cap = ov_prev_nominal < nominal ? ov_prev_nominal : nominal;
-            plan_sqr_t c = plan_sqr_from_float(cap);
+            float before = plan_f16_to_float(ov_prev_nominal);
+            plan_sqr_t c = plan_sqr_from_float(plan_lt(before, nominal) ? before : nominal);
             if (b->max_entry_sqr > c)
                 b->max_entry_sqr = c;
         }
-        ov_prev_nominal = nominal;
+        ov_prev_nominal = b->nominal_sqr;
         ov_at = next_index(ov_at);
     }
     if (!ov_left)
-        prev_nominal_sqr = ov_prev_nominal; /* the newest block's: plan_line's next junction */
+        prev_nominal = ov_prev_nominal; /* the newest block's: plan_line's next junction */
     recalculate(1);
     return ov_left != 0;
 }
@@ -334,10 +400,11 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
 uint8_t plan_line(const float *target, float feed, uint8_t flags)
 {
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
-    refresh_axis();
+    if (!count)
+        refresh_axis();
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = target[a] * settings.steps_per_mm[a];
-        if (!(fabsf(t) < PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
+        if (!plan_lt(fabsf(t), PLAN_MAX_STEPS)) /* out of step-counter range (or NaN): refuse */
             return 0;
         cart[a] = lroundf(t);
         delta[a] = cart[a] - position[a];
@@ -359,37 +426,48 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->line = line_number;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    if (feed != last_feed) { /* F is modal: converted once per change */
+    if (!same_bits(feed, last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
+        last_feed_mm_s = feed_mm_s(last_feed_u16);
     }
     b->feed = last_feed_u16;
     plan_motion_t m;
     float unit[N_AXIS];
-    geometry(b, &m, unit);
-    float nominal = set_nominal(b, &m, unit);
-    b->accel_dist2 = plan_sqr_from_float(2.0f * m.accel * m.mm);
+    float inv_mm = geometry(b, &m, unit);
+    float accel = 1.0f / m.inv_accel;
+    float nominal = set_nominal(b, &m, unit, last_feed_mm_s);
+    b->accel_dist2 = plan_sqr_from_float(2.0f * accel * m.mm);
+#if PLAN_CACHE_MOTION
+    run_accel(b, &m, inv_mm);
+    motion[head] = m;
+#else
+    (void)inv_mm;
+#endif
 
     float junction = 0.0f;
     if (count) {
         float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
-        float cap = prev_nominal_sqr < nominal ? prev_nominal_sqr : nominal;
-        if (cos_theta < STRAIGHT_COS) {
+        float before = plan_f16_to_float(prev_nominal);
+        float cap = plan_lt(before, nominal) ? before : nominal;
+        if (plan_lt(-STRAIGHT_COS, -cos_theta)) { /* (plan_lt: one side not negative) */
             junction = cap;
-        } else if (cos_theta < REVERSAL_COS) {
+        } else if (plan_lt(cos_theta, REVERSAL_COS)) {
             /* circle of radius r through the corner, deviating junction_deviation
-             * from it: r = jd * sin(t/2) / (1 - sin(t/2)), v^2 = a * r, at most
-             * cap. With k = a * jd, k s / (1 - s) >= cap exactly when
-             * s^2 (k + cap)^2 >= cap^2: gentle corners (most of a curve) need
-             * neither the square root nor the division. */
-            float k = m.accel * settings.junction_deviation;
-            float s2 = 0.5f * (1.0f - cos_theta);
-            float kc = k + cap;
-            if (s2 * kc * kc >= cap * cap) {
+             * from it: r = jd * s / (1 - s) with s = sin(t/2), v^2 = a * r, at
+             * most cap. With k = a * jd and s^2 = (1 - cos t) / 2, k s^2 >=
+             * cap (1 - s^2), i.e. k (1 - cos t) >= cap (1 + cos t), is enough
+             * for k s / (1 - s) >= cap (s >= s^2 between 0 and 1): gentle
+             * corners (most of a curve) need neither the square root nor the
+             * division, and three multiplies. */
+            float k = accel * settings.junction_deviation;
+            if (!plan_lt(k * (1.0f - cos_theta), cap * (1.0f + cos_theta))) {
                 junction = cap;
             } else {
-                float sin_half = sqrtf(s2);
+                float sin_half = sqrtf(0.5f * (1.0f - cos_theta));
                 junction = k * sin_half / (1.0f - sin_half);
+                if (plan_lt(cap, junction))
+                    junction = cap;
             }
         }
     }
@@ -397,7 +475,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     b->entry_sqr = 0;
 
     memcpy(prev_unit, unit, sizeof(prev_unit));
-    prev_nominal_sqr = nominal;
+    prev_nominal = b->nominal_sqr;
     memcpy(position, cart, sizeof(cart));
     head = next_index(head);
     if (ov_left)

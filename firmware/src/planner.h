@@ -4,6 +4,7 @@
 #ifndef PLANNER_H
 #define PLANNER_H
 #include <stdint.h>
+#include <string.h>
 #include "config.h"
 
 #define PLAN_MAX_EVENTS 30000 /* the step interrupt counts in 16 bits: longer moves are split */
@@ -12,10 +13,25 @@
  * never above a limit), saturated at PLAN_SQR_MAX (4096 mm/s) so that a sum
  * of two never overflows. */
 typedef uint32_t plan_sqr_t;
-#define PLAN_SQR_SCALE 64.0f
+#define PLAN_SQR_SHIFT 6     /* the scale is a power of two: conversions add to the exponent */
+#define PLAN_SQR_SCALE ((float)(1 << PLAN_SQR_SHIFT))
 #define PLAN_SQR_MAX (1UL << 30)
 plan_sqr_t plan_sqr_from_float(float v_sqr);
 float plan_sqr_to_float(plan_sqr_t v);
+
+/* Float order by integer compare: plan_lt(a, b) exactly when a < b, for
+ * floats of which at least one is not negative (IEEE bits read as a signed
+ * integer order the values so; two negative ones would compare reversed),
+ * neither NaN; -0 sorts just below +0, which no caller minds. The main loop
+ * compares ~35 floats a line; the float library's compare is ~80 cycles on
+ * the AVR with its call, this a few (a constant side is folded). */
+static inline uint8_t plan_lt(float a, float b)
+{
+    int32_t i, j;
+    memcpy(&i, &a, sizeof(i));
+    memcpy(&j, &b, sizeof(j));
+    return i < j;
+}
 #define PB_RAPID 0x01
 #define PB_JOG 0x02
 
@@ -42,10 +58,11 @@ typedef uint32_t plan_line_t;
 /* A queued move, 24 bytes: only what the queue and the segment preparer
  * need. The planner passes run on every queued block for every new one, so
  * they work on squared speeds in fixed point (plan_sqr_t: integer adds and
- * compares); the length and acceleration are not stored but derived from
- * the steps when needed (plan_block_motion: once when the block is queued,
- * once when its segments are prepared), so the same RAM holds about twice
- * the blocks of a float block. */
+ * compares); the length and acceleration are not stored in it but derived
+ * from the steps when needed (plan_block_motion: once when the block is
+ * queued, once when its segments are prepared), so the same RAM holds about
+ * twice the blocks of a float block. The 2560 and the host library keep
+ * that geometry beside the ring instead (config.h PLAN_CACHE_MOTION). */
 typedef struct {
     int16_t steps[N_AXIS];    /* signed motor steps, |steps| <= PLAN_MAX_EVENTS;
                                * step events: the largest |steps| (plan_events) */
@@ -59,12 +76,14 @@ typedef struct {
 } plan_block_t;
 
 /* The float view of a block's geometry (main loop only), from its steps
- * with the present axis settings. */
+ * with the present axis settings: one square root and one division (the
+ * length's reciprocal; the acceleration comes from accel_dist2). */
 typedef struct {
     float mm;                 /* length in mm */
     float events_per_mm;
-    float accel;              /* mm/s^2 along the move */
-    float inv_accel;          /* 1 / accel, so the segment preparer multiplies */
+    float accel;              /* mm/s^2 along the move as accel_dist2 stands for it
+                               * (at most 2^-12 below the exact one) */
+    float inv_accel;          /* 1 / the exact one, so the segment preparer multiplies */
 } plan_motion_t;
 void plan_block_motion(const plan_block_t *b, plan_motion_t *m);
 

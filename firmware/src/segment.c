@@ -12,11 +12,10 @@ static struct prep_state {
     uint8_t block;       /* its step_blocks index */
     uint8_t first;       /* next segment is the block's first */
     uint8_t hold, stopped;
-    uint32_t done;       /* events prepared */
+    uint16_t done;       /* events prepared */
     uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
-    float mm_per_event;  /* 0 until a segment ends inside the block */
     plan_motion_t m;     /* the block's length and acceleration */
 } prep;
 
@@ -99,24 +98,24 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
     float ve2 = plan_next_entry_sqr();
     float vn2 = plan_f16_to_float(b->nominal_sqr); /* read each time: overrides change it */
     float v2 = v * v;
-    if (v2 > vn2 && v2 > vn2 * 1.0001f) { /* (the first test spares the multiply) */
+    if (plan_lt(vn2, v2) && plan_lt(vn2 * 1.0001f, v2)) { /* (the first test spares the multiply) */
         /* above the cruise speed (a feed override lowered it): slow down to
          * it first, where the block leaves room; otherwise the profile below
          * decelerates to the exit */
         float tn = (v - sqrtf(vn2)) * p->m.inv_accel;
-        float tt = dt < tn ? dt : tn;
+        float tt = plan_lt(dt, tn) ? dt : tn;
         float ds = v * tt - 0.5f * a * tt * tt;
-        if (ds < remaining) {
+        if (plan_lt(ds, remaining)) {
             p->s += ds;
             p->v = v - a * tt;
             return tt;
         }
     }
-    if (v2 >= vn2 && ve2 >= v2 && v > 0.0f) {
+    if (!plan_lt(v2, vn2) && !plan_lt(ve2, v2) && plan_lt(0.0f, v)) {
         /* cruising on at the block's speed to an exit no slower: the
          * profile below comes down to this, without its dozen float steps */
         float tc = remaining / v;
-        if (tc >= dt) {
+        if (!plan_lt(tc, dt)) {
             p->s += v * dt;
             return dt;
         }
@@ -124,27 +123,27 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         return tc;
     }
     float peak2 = 0.5f * (v2 + ve2) + a * remaining;
-    if (peak2 > vn2)
+    if (plan_lt(vn2, peak2))
         peak2 = vn2;
     /* no acceleration phase (cruising on from the last block): no sqrt */
     float vp = v;
-    if (peak2 > v2)
+    if (plan_lt(v2, peak2))
         vp = sqrtf(peak2);
     else
         peak2 = v2;
     float half_inv_a = 0.5f * p->m.inv_accel;
     float d_acc = (peak2 - v2) * half_inv_a;
     float d_dec = (peak2 - ve2) * half_inv_a;
-    if (d_dec < 0.0f)
+    if (plan_lt(d_dec, 0.0f))
         d_dec = 0.0f;
     float d_cru = remaining - d_acc - d_dec;
-    if (d_cru < 0.0f)
+    if (plan_lt(d_cru, 0.0f))
         d_cru = 0.0f;
     float s = 0.0f;
     /* acceleration */
-    if (d_acc > 0.0f) {
+    if (plan_lt(0.0f, d_acc)) {
         float ta = (vp - v) * p->m.inv_accel;
-        if (ta >= dt) {
+        if (!plan_lt(ta, dt)) {
             p->s += v * dt + 0.5f * a * dt * dt;
             p->v = v + a * dt;
             return dt;
@@ -154,9 +153,9 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         v = vp;
     }
     /* cruise */
-    if (d_cru > 0.0f && v > 0.0f) {
+    if (plan_lt(0.0f, d_cru) && plan_lt(0.0f, v)) {
         float tc = d_cru / v;
-        if (t + tc >= dt) {
+        if (!plan_lt(t + tc, dt)) {
             p->s += s + v * (dt - t);
             p->v = v;
             return dt;
@@ -165,21 +164,22 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         s += d_cru;
     }
     /* deceleration to the exit speed (or as close as the distance allows) */
+    /* v is now sqrt(peak2): peak2 stands for its square (two multiplies less) */
     float left = remaining - s;
-    float vend2 = v * v - 2.0f * a * left;
-    if (vend2 < ve2)
+    float vend2 = peak2 - (a + a) * left;
+    if (plan_lt(vend2, ve2))
         vend2 = ve2;
-    float vend = vend2 < v * v ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
+    float vend = plan_lt(vend2, peak2) ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
     float td = (v - vend) * p->m.inv_accel;
-    if (td > 0.0f && t + td > dt) {
+    if (plan_lt(0.0f, td) && plan_lt(dt, t + td)) {
         float tt = dt - t;
         p->s += s + v * tt - 0.5f * a * tt * tt;
         p->v = v - a * tt;
         return dt;
     }
-    if (td <= 0.0f && left > 0.0f && v > 0.0f) {  /* rounding left a sliver at constant speed */
+    if (!plan_lt(0.0f, td) && plan_lt(0.0f, left) && plan_lt(0.0f, v)) {  /* rounding left a sliver at constant speed */
         float tc = left / v;
-        if (t + tc > dt) {
+        if (plan_lt(dt, t + tc)) {
             p->s += s + v * (dt - t);
             return dt;
         }
@@ -187,7 +187,7 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
     }
     p->s = p->m.mm;
     p->v = vend;
-    return t + (td > 0.0f ? td : 0.0f);
+    return t + (plan_lt(0.0f, td) ? td : 0.0f);
 }
 
 static void start_block(struct prep_state *p, const plan_block_t *b)
@@ -208,8 +208,22 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     p->first = 1;
     p->s = 0.0f;
     p->done = 0;
-    p->mm_per_event = 0.0f; /* a division that short blocks never need */
     plan_block_motion(b, &p->m);
+}
+
+/* Step-timer ticks per event for n events in `time` seconds, rounded, within
+ * the timer's range: one division per segment, in integers (the segment's
+ * ticks, 16 bits unless it is over 32 ms: ~200 cycles, where a float
+ * division is ~550). */
+static uint16_t event_period(float time, uint16_t n)
+{
+    float ticks = time * (float)STEP_TIMER_HZ + 0.5f;
+    uint32_t total = plan_lt(ticks, 4.0e9f) ? (uint32_t)ticks : 4000000000UL; /* (and NaN) */
+    total += n >> 1;
+    uint32_t period = total <= 0xFFFFu ? (uint16_t)total / n : total / n;
+    if (period < STEP_PERIOD_MIN)
+        period = STEP_PERIOD_MIN;
+    return period > 0xFFFFu ? 0xFFFFu : (uint16_t)period;
 }
 
 /* seg_fill once there is a block (its register saves are not for every
@@ -235,24 +249,24 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
         uint8_t rounds = 0;
         do {
             time += advance(p, b, SEGMENT_S);
-            ended = p->s >= p->m.mm;
-            float e = p->s * p->m.events_per_mm;
-            target = ended ? p->events : (uint32_t)(e + 0.5f); /* a step is due half way */
-            if (target > p->events)
-                target = p->events;
+            ended = !plan_lt(p->s, p->m.mm);
+            target = p->events;
+            if (!ended) { /* a step is due half way */
+                uint32_t e = (uint32_t)(p->s * p->m.events_per_mm + 0.5f);
+                if (e < target)
+                    target = e;
+            }
         } while (target == p->done && !ended && !(p->hold && p->stopped) && ++rounds < 8);
         if (target == p->done && !ended && !(p->hold && p->stopped))
             target = p->done + 1; /* slower than the timer can time: one step anyway */
-        if (!ended && p->v > 0.0f) {
+        if (!ended && plan_lt(0.0f, p->v)) {
             /* end the segment exactly on its last step, so its rate is exact;
              * the distance to that step is moved over to the next segment */
-            if (p->mm_per_event == 0.0f)
-                p->mm_per_event = p->m.mm / (float)p->events;
-            float extra = p->s - (float)target * p->mm_per_event;
-            float back = extra / p->v;
-            if (fabsf(back) < 0.25f * time) { /* when slow, v is too rough an estimate */
+            float epm = p->m.events_per_mm;
+            float back = (p->s * epm - (float)target) / (epm * p->v); /* seconds past the step */
+            if (plan_lt(fabsf(back), 0.25f * time)) { /* when slow, v is too rough an estimate */
                 time -= back;
-                p->s -= extra;
+                p->s -= back * p->v;
             }
         }
         if (target - p->done > 60000u) { /* absurd rates: keep a segment within 16 bits */
@@ -261,18 +275,13 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
         }
         uint32_t n = target - p->done;
         if (n > 0) {
-            float period = time * (float)STEP_TIMER_HZ / (float)n + 0.5f; /* one division per segment */
-            if (period < STEP_PERIOD_MIN)
-                period = STEP_PERIOD_MIN;
-            if (period > 65535.0f)
-                period = 65535.0f;
             segment_t *seg = &seg_ring[ring_slot(seg_head, SEG_SIZE)];
             seg->events = (uint16_t)n;
-            seg->period = (uint16_t)(period - 1.0f); /* CTC: a period is OCR1A + 1 ticks */
+            seg->period = (uint16_t)(event_period(time, (uint16_t)n) - 1); /* CTC: OCR1A + 1 ticks */
             seg->block = &step_blocks[p->block];
             seg->flags = p->first ? SEG_FIRST : 0;
             p->first = 0;
-            p->done = target;
+            p->done = (uint16_t)target;
             seg_head++; /* publish after the segment is complete */
             added = 1;
         }

@@ -46,7 +46,7 @@ static uint64_t worst_alone, worst_pair_isr, worst_pair_mark;
  * cycles (odd, so no loop aliases with it) and write "byte_address count"
  * lines; bench/firmware_bench.py --profile maps them to functions. */
 #define PROFILE_EVERY 97
-#define FLASH_WORDS 16384
+#define FLASH_WORDS 131072 /* the 2560's 256 KiB (its image is past 32 KiB) */
 static uint32_t *profile;
 static size_t profile_from; /* HARNESS_PROFILE_FROM: first line acknowledged */
 
