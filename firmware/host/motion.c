@@ -4,8 +4,8 @@
  * runs the same motion model as the board. Host-only glue: it never goes into
  * the AVR build.
  *
- * One call runs a whole program (a batch of decoded lines) and returns when
- * each line was acknowledged (planned) and when motion ended. Time is
+ * Calls run a program (batches of decoded lines, then its end) and return
+ * when each line was acknowledged (planned) and when motion ended. Time is
  * simulated: segments run for events * (period + 1) step-timer ticks, as the
  * step interrupt runs them; lines arrive over the serial line under
  * character counting and cost the main loop `line_cpu_s` each (both host-side
@@ -177,10 +177,10 @@ static void acked(int bytes)
 
 /* Runs n lines: kind[k] (OP_*), end point x, y (arcs: centre offsets i, j),
  * feed (mm/min), bytes (line length with its newline). ack[k]: seconds when
- * line k was acknowledged. Returns the time when motion (and a final pen
- * settle) ended. */
-double motion_run(int n, const uint8_t *kind, const float *x, const float *y, const float *i,
-                  const float *j, const float *feed, const uint16_t *bytes, double *ack)
+ * line k was acknowledged. The program goes on in the next call (the server
+ * feeds a long one in batches while it writes the rest); motion_end ends it. */
+void motion_feed(int n, const uint8_t *kind, const float *x, const float *y, const float *i,
+                 const float *j, const float *feed, const uint16_t *bytes, double *ack)
 {
     for (int k = 0; k < n; k++) {
         double at = arrive(bytes[k]);
@@ -231,6 +231,12 @@ double motion_run(int n, const uint8_t *kind, const float *x, const float *y, co
         ack[k] = t_main;
         acked(bytes[k]);
     }
+}
+
+/* The end of the program fed: returns the time when motion (and a final pen
+ * settle) ended. */
+double motion_end(void)
+{
     sync_motion();
     return t_main;
 }

@@ -256,7 +256,8 @@ def test_move_lines_round_as_python_formats_and_keep_feed_texts(monkeypatch):
         feeds = rng.choice(np.r_[rng.uniform(1, 9000, 20), [np.nan, 1500.0]], n)
         lines = run.run(x, y, feeds, (0.0, 0.0), 0.0)
         assert lines is not None
-        assert lines.text == _python_lines(x, y, feeds, (0.0, 0.0), feed_text)
+        text = lines.text.decode("ascii")
+        assert text == _python_lines(x, y, feeds, (0.0, 0.0), feed_text)
         assert [str(v) for v in lines.xy.ravel()] == [
-            str(float(t)) for t in re.findall(r"[XY](\S+)", lines.text)]
+            str(float(t)) for t in re.findall(r"[XY](\S+)", text)]
     assert run.run(np.array([5.0, 2e6]), np.zeros(2), np.ones(2), (0.0, 0.0), 0.0) is None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 import tempfile
+import threading
 from pathlib import Path
 
 import pytest
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile
 from plotbridge.importing.gcode import read_ops
 from plotbridge.importing.models import ErrorLog
-from plotbridge.importing.ops import single_moves
+from plotbridge.importing.ops import MOVE, PEN, single_moves
 
 from tests.fixtures.imports import drawn_strokes, program_lines, run_import
 
@@ -237,3 +238,31 @@ def test_common_lines_read_as_the_general_parser_reads_them(lines):
             assert ops == ops_n
             assert errors == [{**e, "message": re.sub(r"'N\d+ ", "'", e["message"])}
                               for e in errors_n]
+
+
+def _chunks_then(error: BaseException):
+    """Two chunks of G-code, then `error` (a failing read)."""
+    yield 1, "G0 X1 Y1\nM3\n"
+    yield 3, "G1 X2 Y2 F600\n"
+    raise error
+
+
+def test_a_failing_read_is_raised_after_the_chunks_before_it():
+    # The chunks are read and scanned on a thread of their own (gcode._ahead).
+    got = []
+    with pytest.raises(OSError, match="disk gone"):
+        for op in read_ops(_chunks_then(OSError("disk gone")), ImportOptions(), ErrorLog()):
+            got.append(op[:2])
+    assert got == [(MOVE, 1), (PEN, 2), (MOVE, 3)]
+
+
+def test_a_reader_stopped_early_leaves_no_thread_behind():
+    def endless():
+        n = 1
+        while True:
+            yield n, "G1 X1 Y1 F600\nG1 X2 Y2\n"
+            n += 2
+    ops = read_ops(endless(), ImportOptions(), ErrorLog())
+    next(ops)
+    ops.close()
+    assert not [t for t in threading.enumerate() if t.name == "gcode-scan"]

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import asyncio
+import ctypes
 import os
 import signal
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 
 import pytest
@@ -44,6 +46,30 @@ def alive(process_id: int) -> bool:
         return stat.read().split(") ")[1][0] != "Z"
 
 
+def thread_address_space() -> int:
+    """KB of address space a thread that calls malloc adds while it lives."""
+    def size() -> int:
+        with open("/proc/self/status") as status:
+            return next(int(line.split()[1]) for line in status if line.startswith("VmSize"))
+    libc = ctypes.CDLL(None)
+    libc.malloc.restype = ctypes.c_void_p
+    started, done = threading.Event(), threading.Event()
+
+    def work() -> None:
+        block = libc.malloc(64)
+        started.set()
+        done.wait(30)
+        libc.free(ctypes.c_void_p(block))
+    before = size()
+    thread = threading.Thread(target=work)
+    thread.start()
+    started.wait(30)
+    grown = size() - before
+    done.set()
+    thread.join()
+    return grown
+
+
 @pytest.fixture
 async def service():
     imports = ImportService(Limits(workers=2, time_limit=20, memory_mb=400, small_bytes=1000))
@@ -68,6 +94,12 @@ async def test_time_and_memory_limits_answer_what_was_too_big(service):
     with pytest.raises(ImportLimit, match="more than the 400 MB memory limit"):
         await service.call(hog, 600)
     assert await service.call(hog, 10) == 10 * 1024 * 1024
+
+
+async def test_an_imports_threads_share_one_malloc_arena(service):
+    # (the estimate and the G-code scan run on threads of their own; an arena of a
+    # thread's own would reserve 64 MB of the worker's limited address space)
+    assert await service.call(thread_address_space) < 32 * 1024
 
 
 async def test_small_uploads_do_not_wait_behind_a_large_one(service):

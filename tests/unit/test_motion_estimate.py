@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 from plotbridge.importing import MachineProfile
-from plotbridge.motion import library
+from plotbridge.motion import estimate, library
 from plotbridge.motion.estimate import Estimator, thin_timeline
 from plotbridge.motion.eta import eta, share_done
 from plotbridge.motion.timing import GRBL_PLANNER_BLOCKS, stock_grbl
@@ -192,3 +192,43 @@ def test_share_done_weighs_a_stretch_of_lines_by_its_estimated_time():
     assert share_done(timeline, 11, 30, 20) == pytest.approx(10 / 15)  # time, not lines
     assert share_done(timeline, 11, 30, 30) == 1.0
     assert share_done([], 1, 4, 1) == 0.25  # no timeline: by lines
+
+
+def _zigzag(e: Estimator, n: int) -> Estimator:
+    kind = np.full(n, library.LINE, np.uint8)
+    kind[::50] = library.RAPID
+    x = (np.arange(n) % 7).astype(np.float32)
+    y = (np.arange(n) % 5).astype(np.float32) * 0.5
+    feed = np.where(kind == library.LINE, 3000.0, 0.0).astype(np.float32)
+    e.receive(3)
+    e.stop(1, P.pen_settle_s)
+    e.moves(kind, x, y, feed, np.full(n, 24, np.uint16))
+    return e
+
+
+def test_batches_run_as_one_program(monkeypatch):
+    whole = _zigzag(Estimator(P), 5000)
+    whole.flush()
+    monkeypatch.setattr(estimate, "BATCH", 1000)    # 6 batches, the thread fed as it goes
+    batched = _zigzag(Estimator(P), 5000)
+    batched.flush()
+    assert batched.time == whole.time
+    assert np.array_equal(batched.ack, whole.ack) and len(whole.ack) == 5001
+
+
+def test_a_closed_program_frees_the_library(monkeypatch):
+    monkeypatch.setattr(estimate, "BATCH", 1000)
+    dropped = _zigzag(Estimator(P), 5000)    # its thread holds the library
+    dropped.close()
+    assert library.run_lock.acquire(timeout=30)    # another estimate can run
+    library.run_lock.release()
+
+
+def test_a_library_failure_is_raised_by_flush(monkeypatch):
+    def missing(board=library.DEFAULT_BOARD):
+        raise library.MotionLibraryMissing("no libmotion")
+    monkeypatch.setattr(estimate, "BATCH", 1000)
+    monkeypatch.setattr(library, "load", missing)
+    e = _zigzag(Estimator(P), 5000)    # more batches than the queue holds: none blocks
+    with pytest.raises(library.MotionLibraryMissing):
+        e.flush()

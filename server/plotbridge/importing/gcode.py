@@ -8,8 +8,11 @@ from __future__ import annotations
 
 import itertools
 import math
+import queue
 import re
+import threading
 from collections.abc import Iterable, Iterator
+from typing import TypeVar
 
 import numpy as np
 
@@ -42,6 +45,7 @@ _AXIS_WORDS = frozenset("XYZIJRFSPNT")
 PLAIN_LINES = 256       # plain lines whose words GcodeReader keeps
 ARC_RADIUS_ABS = 0.005
 ARC_RADIUS_REL = 0.001
+T = TypeVar("T")
 
 
 def _num(v: float) -> str:
@@ -88,6 +92,42 @@ def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
     return text
 
 
+def _ahead(items: Iterator[T], depth: int = 2) -> Iterator[T]:
+    """The items, made up to `depth` ahead on a thread of their own: reading a chunk of
+    the file and gcodescan.c's scan of it let go of the GIL, so they run beside the
+    importer's work on the chunk before. An error making an item is raised in its place."""
+    q: queue.Queue = queue.Queue(depth)
+    stop = threading.Event()
+
+    def work() -> None:
+        try:
+            for item in items:
+                if stop.is_set():
+                    return
+                q.put((True, item))
+            q.put((False, None))
+        except BaseException as e:  # raised to the reader in the item's place
+            q.put((False, e))
+
+    worker = threading.Thread(target=work, daemon=True, name="gcode-scan")
+    worker.start()
+    try:
+        while True:
+            more, item = q.get()
+            if not more:
+                if item is not None:
+                    raise item
+                return
+            yield item
+    finally:
+        stop.set()
+        while worker.is_alive():    # the reader stopped early: free a put that waits
+            try:
+                q.get(timeout=0.05)
+            except queue.Empty:
+                pass
+
+
 class GcodeReader:
     """State machine over G-code lines; iterate `ops(lines)`."""
 
@@ -130,13 +170,13 @@ class GcodeReader:
             self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
             return
         out: list[tuple] = []
-        for first, text in chunks:
-            lines = scan(text, MAX_LINE)
+        for first, lines in _ahead((first, scan(text, MAX_LINE)) for first, text in chunks):
             kind = lines.kind
             common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
-            for a, b in itertools.pairwise(cuts):
-                if common[a] and not self.relative and not self.inches:
+            firsts = common[cuts[:-1]].tolist()     # is each stretch common lines?
+            for a, b, is_common in zip(cuts[:-1], cuts[1:], firsts, strict=True):
+                if is_common and not self.relative and not self.inches:
                     self._run(out, first + a, kind[a:b], lines.x[a:b], lines.y[a:b],
                               lines.feed[a:b])
                 else:
@@ -164,15 +204,17 @@ class GcodeReader:
         x = x + self.off_x
         y = y + self.off_y
         # The feed of each line: the last F given at or before it, else the one before
-        # the run; a G1 with no feed ever given warns once and takes the default.
-        before = self.feed
-        if before is None:
-            unfed = np.flatnonzero(draw & np.isnan(feed))
-            if len(unfed):
-                self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
-                before = self.default_feed
-        if before is not None:
-            feed = np.where(np.isnan(feed), before, feed)
+        # the run; a G1 with no feed ever given warns once and takes the default. (The
+        # feeds are NaN only before the run's first F.)
+        if feed[0] != feed[0]:
+            before = self.feed
+            if before is None:
+                unfed = np.flatnonzero(draw & np.isnan(feed))
+                if len(unfed):
+                    self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
+                    before = self.default_feed
+            if before is not None:
+                feed = np.where(np.isnan(feed), before, feed)
         last = float(feed[-1])
         if last == last:
             self.feed = last

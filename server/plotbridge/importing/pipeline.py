@@ -77,8 +77,9 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
     preview = dest_dir / PREVIEW
     tmp_program = dest_dir / f".{PROGRAM}.part"
     tmp_preview = dest_dir / f".{PREVIEW}.part"
+    writer: ProgramWriter | None = None
     try:
-        with tmp_program.open("w", encoding="ascii", newline="\n") as out:
+        with tmp_program.open("wb") as out:
             writer = ProgramWriter(out, transform, profile, errors)
             writer.write_ops(ops_factory())
             writer.finish()
@@ -86,10 +87,13 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
         if writer.pen_lifts == 0:
             raise ImportFailed.one(422, "nothing to draw: the input has no pen-down moves")
         bounds = writer.bounds_dict()
-        writer.preview.write(tmp_preview, bounds)
+        writer.preview.write(tmp_preview, bounds)   # while the estimate's last batch runs
+        writer.planner.wait()
         os.replace(tmp_program, program)
         os.replace(tmp_preview, preview)
     except BaseException:
+        if writer is not None:
+            writer.planner.close()
         for p in (tmp_program, tmp_preview):
             p.unlink(missing_ok=True)
         raise

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..native.previewjson import strokes_json
-from .simplify import simplify_all, simplify_mask
+from .simplify import kept_pieces, simplify_all, simplify_mask
 
 MAX_POINTS = 200_000
 BASE_TOLERANCE = 0.1   # mm: below what a preview on any screen shows
@@ -142,10 +142,8 @@ class PreviewBuilder:
         ends = np.cumsum(sizes)
         fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
         keep = simplify_mask(pts, self.tolerance, fixed)
-        starts = (ends - np.array(sizes)).tolist()
-        for (_, _, continues, colour, lines), lo, hi in zip(self._pending, starts,
-                                                            ends.tolist(), strict=True):
-            piece = pts[lo:hi][keep[lo:hi]]
+        pieces = kept_pieces(pts, keep, ends - np.array(sizes), ends)
+        for (_, _, continues, colour, lines), piece in zip(self._pending, pieces, strict=True):
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])
                 self._open = None

@@ -46,7 +46,7 @@ class ProgramWriter:
         self.pen_lifts = 0
         self.bounds = [math.inf, math.inf, -math.inf, -math.inf]
         self._area = (-EPS, -EPS, profile.width + EPS, profile.height + EPS)
-        self._buf: list[str] = []    # texts of whole lines, each ending with a newline
+        self._buf: list[bytes] = []  # whole lines (ASCII), each ending with a newline
         self._buffered = 0           # lines in _buf
         self.last = ""
         self._feed_texts: dict[float, str] = {}
@@ -65,14 +65,14 @@ class ProgramWriter:
         self.last = text
         self.line += 1
         self.planner.receive(len(text) + 1)
-        self._buf.append(text + "\n")
+        self._buf.append(f"{text}\n".encode("ascii"))
         self._buffered += 1
         if self._buffered >= 4096:
             self.flush()
 
     def flush(self) -> None:
         if self._buf:
-            self.out.write("".join(self._buf))
+            self.out.write(b"".join(self._buf))
             self._buf = []
             self._buffered = 0
 
@@ -236,7 +236,7 @@ class ProgramWriter:
         self.planner.moves(lines.kind, lines.x32, lines.y32, lines.f32, lines.nbytes)
         self.line += n
         text = lines.text
-        self.last = text[text.rfind("\n", 0, -1) + 1:-1]
+        self.last = text[text.rfind(b"\n", 0, -1) + 1:-1].decode("ascii")
         self._buf.append(text)
         self._buffered += n
         if self._buffered >= 4096:
@@ -293,7 +293,7 @@ class ProgramWriter:
                                    f"Y{y:.3f} is outside the work area: clamped to its edge")
         if self.layers:
             self._end_layer()
-        self.planner.flush()
+        self.planner.end()    # the caller waits for the estimate (Estimator.wait)
         self.flush()
 
     def bounds_dict(self) -> dict[str, float]:

@@ -29,7 +29,17 @@ def simplify_all(polylines: list[np.ndarray], tolerance: float) -> list[np.ndarr
     starts = ends - sizes
     pts = np.concatenate(polylines)
     keep = simplify_mask(pts, tolerance, np.unique(np.concatenate([starts, ends - 1])))
-    return [pts[a:b][keep[a:b]] for a, b in zip(starts.tolist(), ends.tolist(), strict=True)]
+    return kept_pieces(pts, keep, starts, ends)
+
+
+def kept_pieces(points: np.ndarray, keep: np.ndarray, starts: np.ndarray,
+                ends: np.ndarray) -> list[np.ndarray]:
+    """points[a:b][keep[a:b]] for each piece [a, b) of starts and ends, taken at once (a
+    file of short strokes has thousands of pieces): views of one array of the kept
+    points."""
+    kept = points[keep]
+    at = np.concatenate([[0], np.cumsum(keep, dtype=np.intp)])
+    return [kept[a:b] for a, b in zip(at[starts].tolist(), at[ends].tolist(), strict=True)]
 
 
 def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np.ndarray:

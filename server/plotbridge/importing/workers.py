@@ -99,9 +99,13 @@ class Worker:
     def __init__(self, memory_bytes: int) -> None:
         context = multiprocessing.get_context("spawn")
         self.conn, child = context.Pipe()
-        env = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+        # Inherited by the spawned interpreter: one BLAS thread, and one malloc arena (an
+        # import's own threads, the estimate's and the G-code scan's, would each reserve
+        # 64 MB of the address space the worker is limited to for an arena of their own).
+        env = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+               "MALLOC_ARENA_MAX": "1"}
         saved = {key: os.environ.get(key) for key in env}
-        os.environ.update(env)  # inherited by the spawned interpreter: one BLAS thread
+        os.environ.update(env)
         try:
             self.process = context.Process(
                 target=_serve, args=(child, memory_bytes), name="plotbridge-import", daemon=True

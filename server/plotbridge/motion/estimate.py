@@ -1,11 +1,12 @@
 """The plot time estimate: the program's lines, collected as arrays and run through the
-firmware's own motion code in one call (library.py), with the host-side timing of
-timing.py."""
+firmware's own motion code (library.py) in batches on a thread beside the caller, with
+the host-side timing of timing.py."""
 
 from __future__ import annotations
 
 import ctypes
-from array import array
+import queue
+import threading
 
 import numpy as np
 
@@ -14,6 +15,8 @@ from . import library as lib
 from .library import ARC_CCW, ARC_CW, DWELL, LINE, OTHER, RAPID
 
 TIMELINE_SAMPLES = 2000
+BATCH = 1 << 16     # lines the library runs at a time, while the next batch is collected
+QUEUED = 4          # full batches waiting for the library at most (bounded memory)
 
 
 def _config(p: MachineProfile) -> lib.Config:
@@ -30,10 +33,6 @@ def _config(p: MachineProfile) -> lib.Config:
     c.line_cpu_s = p.plan_block_s
     c.rx_size = 128
     return c
-
-
-def _ptr(a: array, ctype):
-    return ctypes.cast(a.buffer_info()[0], ctypes.POINTER(ctype))
 
 
 def thin_timeline(ack: np.ndarray, line: int, total: float,
@@ -53,44 +52,110 @@ class Timeline:
         self.owner = owner
 
     def finish(self, line: int, t: float) -> list[tuple[int, float]]:
-        return thin_timeline(np.frombuffer(self.owner.ack, dtype=np.float64), line, t)
+        return thin_timeline(self.owner.ack, line, t)
+
+
+class _Batch:
+    """The library's inputs for up to BATCH lines (motion.c's motion_feed)."""
+
+    def __init__(self) -> None:
+        self.kind = np.empty(BATCH, np.uint8)
+        self.x, self.y, self.i, self.j, self.feed = (np.empty(BATCH, np.float32)
+                                                     for _ in range(5))
+        self.bytes = np.empty(BATCH, np.uint16)
+        self.n = 0
+
+    def args(self) -> tuple:
+        """The arrays as motion_feed and motion_plan take them."""
+        f = ctypes.POINTER(ctypes.c_float)
+        return (self.n, self.kind.ctypes.data_as(ctypes.POINTER(ctypes.c_uint8)),
+                *(a.ctypes.data_as(f) for a in (self.x, self.y, self.i, self.j, self.feed)),
+                self.bytes.ctypes.data_as(ctypes.POINTER(ctypes.c_uint16)))
+
+
+_ABORT = object()
+
+
+class _Runner:
+    """The library on a thread of its own, run through the batches put in `queue` in
+    order, then None (the end: `time`) or _ABORT. The thread holds the library's lock
+    from the first batch to the end (the firmware code keeps its state in globals)."""
+
+    def __init__(self, profile: MachineProfile) -> None:
+        self.queue: queue.Queue = queue.Queue(QUEUED)
+        self.acks: list[np.ndarray] = []
+        self.time = 0.0
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._work, args=(profile,), daemon=True,
+                                       name="estimate")
+        self.thread.start()
+
+    def _work(self, profile: MachineProfile) -> None:
+        item: object = self
+        try:
+            library = lib.load()
+            config = _config(profile)
+            with lib.run_lock:
+                library.motion_configure(ctypes.byref(config))
+                while isinstance(item := self.queue.get(), _Batch):
+                    ack = np.empty(item.n)
+                    library.motion_feed(*item.args(),
+                                        ack.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+                    self.acks.append(ack)
+                if item is None:
+                    self.time = library.motion_end()
+        except BaseException as e:     # given to the caller by Estimator.wait
+            self.error = e
+            while item is not None and item is not _ABORT:   # the caller goes on putting
+                item = self.queue.get()
 
 
 class Estimator:
-    """Feed it the program line by line (`receive`, then what the line does); after
-    `flush`, `time` is the estimate and `timeline` the progress samples. The start is
-    (0, 0) with the pen up, as the firmware after homing."""
+    """Feed it the program line by line (`receive`, then what the line does; runs of
+    lines at once with `moves`); after `flush`, `time` is the estimate and `timeline`
+    the progress samples. The start is (0, 0) with the pen up, as the firmware after
+    homing. The library runs on a thread of its own, given each batch of BATCH lines as
+    it fills while the caller goes on (ctypes lets go of the GIL), the last one at
+    `end`; `end` then `wait` (what `flush` does) let the caller work while the last
+    batch runs; `close` drops a program not to be finished."""
 
     def __init__(self, profile: MachineProfile, start: tuple[float, float] = (0.0, 0.0)):
         if start != (0.0, 0.0):
             raise ValueError("the estimate starts at (0, 0)")
         self.profile = profile
-        self.kind = array("B")
-        self.x = array("f")
-        self.y = array("f")
-        self.i = array("f")
-        self.j = array("f")
-        self.feed = array("f")
-        self.bytes = array("H")
-        self.ack = array("d")
+        self._batch = _Batch()
+        self._runner: _Runner | None = None
+        self.ack = np.empty(0)
         self.time = 0.0
         self.timeline = Timeline(self)
 
+    def _send(self) -> _Batch:
+        """The full batch goes to the library; returns the next one."""
+        if self._runner is None:
+            self._runner = _Runner(self.profile)
+        self._runner.queue.put(self._batch)
+        self._batch = _Batch()
+        return self._batch
+
     def receive(self, nbytes: int) -> None:
         """The next program line, `nbytes` long with its newline."""
-        self.kind.append(OTHER)
-        self.bytes.append(min(nbytes, 65535))
-        for a in (self.x, self.y, self.i, self.j, self.feed):
-            a.append(0.0)
+        b = self._batch if self._batch.n < BATCH else self._send()
+        k = b.n
+        b.kind[k] = OTHER
+        b.bytes[k] = min(nbytes, 65535)
+        b.x[k] = b.y[k] = b.i[k] = b.j[k] = b.feed[k] = 0.0
+        b.n = k + 1
 
     def _set(self, kind: int, x: float, y: float, feed: float, i: float = 0.0,
              j: float = 0.0) -> None:
-        self.kind[-1] = kind
-        self.x[-1] = x
-        self.y[-1] = y
-        self.feed[-1] = feed
-        self.i[-1] = i
-        self.j[-1] = j
+        b = self._batch
+        k = b.n - 1
+        b.kind[k] = kind
+        b.x[k] = x
+        b.y[k] = y
+        b.feed[k] = feed
+        b.i[k] = i
+        b.j[k] = j
 
     def move(self, line: int, x: float, y: float, feed: float | None) -> None:
         self._set(RAPID if feed is None else LINE, x, y, feed or 0.0)
@@ -100,14 +165,20 @@ class Estimator:
         """`receive` and `move` for each of a run of lines, given as the library takes
         them: kind (uint8, RAPID or LINE), x, y, feed (float32, 0 for rapids), bytes
         (uint16)."""
-        self.kind.frombytes(kind)
-        self.bytes.frombytes(nbytes.view(np.uint8))
-        self.x.frombytes(x.view(np.uint8))
-        self.y.frombytes(y.view(np.uint8))
-        self.feed.frombytes(feed.view(np.uint8))
-        zeros = bytes(4 * len(x))
-        self.i.frombytes(zeros)
-        self.j.frombytes(zeros)
+        done, n = 0, len(kind)
+        while done < n:
+            b = self._batch if self._batch.n < BATCH else self._send()
+            k = min(BATCH - b.n, n - done)
+            to, src = slice(b.n, b.n + k), slice(done, done + k)
+            b.kind[to] = kind[src]
+            b.bytes[to] = nbytes[src]
+            b.x[to] = x[src]
+            b.y[to] = y[src]
+            b.feed[to] = feed[src]
+            b.i[to] = 0.0
+            b.j[to] = 0.0
+            b.n += k
+            done += k
 
     def arc(self, line: int, x: float, y: float, i: float, j: float, feed: float,
             cw: bool) -> None:
@@ -117,40 +188,53 @@ class Estimator:
         """Wait for motion to end, then hold still for `seconds` (pen settle, dwell)."""
         self._set(DWELL, seconds, 0.0, 0.0)
 
-    def flush(self) -> None:
-        n = len(self.kind)
-        self.ack = array("d", bytes(8 * n))
-        if not n:
-            self.time = 0.0
+    def end(self) -> None:
+        """The program is complete: its last lines go to the library (`wait` for the
+        result)."""
+        if self._runner is None and not self._batch.n:
+            return      # nothing to run
+        if self._batch.n:
+            self._send()
+        assert self._runner is not None
+        self._runner.queue.put(None)
+
+    def wait(self) -> None:
+        """The estimate of the program ended with `end`: `time`, `ack`."""
+        runner, self._runner = self._runner, None
+        self._batch = _Batch()
+        if runner is None:
+            self.time, self.ack = 0.0, np.empty(0)
             return
-        library = lib.load()
-        with lib.run_lock:
-            library.motion_configure(ctypes.byref(_config(self.profile)))
-            f = ctypes.c_float
-            self.time = library.motion_run(
-                n, _ptr(self.kind, ctypes.c_uint8), _ptr(self.x, f), _ptr(self.y, f),
-                _ptr(self.i, f), _ptr(self.j, f), _ptr(self.feed, f),
-                _ptr(self.bytes, ctypes.c_uint16), _ptr(self.ack, ctypes.c_double))
-        self._clear()
+        runner.thread.join()
+        if runner.error is not None:
+            raise runner.error
+        self.time = runner.time
+        self.ack = np.concatenate(runner.acks) if runner.acks else np.empty(0)
+
+    def flush(self) -> None:
+        self.end()
+        self.wait()
+
+    def close(self) -> None:
+        """Drops the program (after a failed import); nothing runs on."""
+        runner, self._runner = self._runner, None
+        self._batch = _Batch()
+        if runner is not None:
+            runner.queue.put(_ABORT)
+            runner.thread.join()
 
     def planned_blocks(self) -> list[bytes]:
-        """Plans the lines received so far with nothing executing and returns the queued
-        planner blocks, oldest first, as the firmware lays them out in RAM (the
-        differential test compares them with the board's)."""
+        """Plans the lines received so far (at most BATCH) with nothing executing and
+        returns the queued planner blocks, oldest first, as the firmware lays them out in
+        RAM (the differential test compares them with the board's)."""
+        if self._runner is not None:
+            raise ValueError(f"planned_blocks plans at most {BATCH} lines")
         library = lib.load()
         size = library.motion_block_size()
         out = ctypes.create_string_buffer(size * 256)
         with lib.run_lock:
             library.motion_configure(ctypes.byref(_config(self.profile)))
-            f = ctypes.c_float
-            library.motion_plan(
-                len(self.kind), _ptr(self.kind, ctypes.c_uint8), _ptr(self.x, f),
-                _ptr(self.y, f), _ptr(self.i, f), _ptr(self.j, f), _ptr(self.feed, f))
+            library.motion_plan(*self._batch.args()[:7])
             n = library.motion_blocks(out, 256)
-        self._clear()
+        self._batch = _Batch()
         return [out.raw[k * size:(k + 1) * size] for k in range(n)]
-
-    def _clear(self) -> None:
-        """The inputs are no longer needed."""
-        for name in ("kind", "x", "y", "i", "j", "feed", "bytes"):
-            setattr(self, name, array(getattr(self, name).typecode))

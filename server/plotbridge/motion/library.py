@@ -3,8 +3,9 @@
 
 ctypes rather than cffi: it is in the standard library, needs no compiler or build
 step at import time (the library is built by the firmware's make, like the firmware
-itself), and the interface is one struct and one call per program, so ctypes' per-call
-overhead does not matter: the whole program goes in as arrays in a single call.
+itself), and the interface is one struct and a call per batch of thousands of lines, so
+ctypes' per-call overhead does not matter. ctypes lets go of the GIL during a call, so the
+estimate runs on a thread beside the import writing the program (estimate.py).
 """
 
 from __future__ import annotations
@@ -76,11 +77,12 @@ def load(board: str = DEFAULT_BOARD) -> ctypes.CDLL:
             lib.motion_configure.restype = None
             lib.motion_plan_size.restype = ctypes.c_int
             f = ctypes.POINTER(ctypes.c_float)
-            lib.motion_run.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_uint8), f, f, f, f,
-                                       f, ctypes.POINTER(ctypes.c_uint16),
-                                       ctypes.POINTER(ctypes.c_double)]
-            lib.motion_run.restype = ctypes.c_double
-            lib.motion_plan.argtypes = lib.motion_run.argtypes[:7]
+            lib.motion_feed.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_uint8), f, f, f,
+                                        f, f, ctypes.POINTER(ctypes.c_uint16),
+                                        ctypes.POINTER(ctypes.c_double)]
+            lib.motion_feed.restype = None
+            lib.motion_end.restype = ctypes.c_double
+            lib.motion_plan.argtypes = lib.motion_feed.argtypes[:7]
             lib.motion_plan.restype = None
             lib.motion_blocks.argtypes = [ctypes.c_char_p, ctypes.c_int]
             lib.motion_blocks.restype = ctypes.c_int

@@ -51,10 +51,10 @@ def _fn():
 
 class Lines(NamedTuple):
     """The kept moves of a run (arrays valid until the MoveLines' next run): their text
-    (one line each, with newlines); rounded points (n x 2); the running length given
+    (ASCII, one line each, with newlines); rounded points (n x 2); the running length given
     plus theirs; the estimate's inputs (Estimator.moves); min x, min y, max x, max y."""
 
-    text: str
+    text: bytes
     xy: np.ndarray
     length: float
     kind: np.ndarray
@@ -62,7 +62,7 @@ class Lines(NamedTuple):
     y32: np.ndarray
     f32: np.ndarray
     nbytes: np.ndarray
-    bounds: tuple[float, float, float, float]
+    bounds: list[float]
 
 
 class MoveLines:
@@ -141,7 +141,6 @@ class MoveLines:
         if k < 0:
             return None
         w = self._w
-        out = self._text[:w.text_len].tobytes().decode("ascii")
-        return Lines(out, self._xy[:k], w.length, self._kind[:k],
+        return Lines(self._text[:w.text_len].tobytes(), self._xy[:k], w.length, self._kind[:k],
                      self._x32[:k], self._y32[:k], self._f32[:k], self._nbytes[:k],
-                     tuple(w.bounds))
+                     w.bounds[:])
