@@ -53,6 +53,19 @@ async def test_connect_with_banner_asks_for_the_build():
         assert link.status.firmware == "1.1h.20190825"
 
 
+async def test_connected_only_once_the_state_is_known():
+    # A board that announced itself with its banner has sent no report yet: the link
+    # asks for one before it says it is connected (a sender checking for Alarm at the
+    # connect must not read the placeholder "Disconnected").
+    board = FakeBoard(banner_on_connect=True)
+    board.state = "Alarm"
+    async with running(board) as link:
+        kinds = [e.kind for e in link.events]
+        first = link.events[kinds.index("connected") + 1]
+        assert first.kind == "status" and first.status is not None
+        assert first.status.connected and first.status.state == "Alarm"
+
+
 async def test_no_grbl_board_is_retried_not_fatal():
     board = FakeBoard()
     board.muted = True

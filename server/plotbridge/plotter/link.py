@@ -650,6 +650,8 @@ class Link:
         self._transport = await self._open_port()
         self._last_rx = time.monotonic()
         await self._handshake()
+        if self.status.state == "Disconnected":   # alive by its banner: no report yet
+            await self._next_status(STATUS_AFTER_S)
         self._ready = True
         self.status.connected = True
         log.info("connected to %s: GRBL %s, state %s", self.device,
