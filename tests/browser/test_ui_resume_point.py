@@ -34,6 +34,10 @@ def test_pick_a_point_on_the_preview_and_resume_from_it(desktop, server, plotter
     page.click(f"#queue li[data-key='{job['id']}'] .name")
     page.wait_for_selector("#resume-point:not([hidden])")
     page.wait_for_function("() => window.plotbridge.preview.view !== null")
+    # a click picks only once the job's drawing is loaded (before, it is ignored)
+    page.wait_for_function(
+        "id => { const e = window.plotbridge.store.state.previews[id]; return e && e.geom; }",
+        arg=job["id"])
     assert page.locator("#resume-here").is_disabled()  # nothing picked yet
 
     click_at_mm(page, 59.2, 20.6)  # near the L's corner
