@@ -33,7 +33,6 @@ SWITCHES = {"uno-cnc-shield": "one", "uno-uln2003": None, "mega-l298n": None,
             "mega-stepdir": "min+max", "mega-ramps14": "min+max"}  # fmt: skip
 FOUR_WIRE = {"uno-uln2003", "mega-l298n"}
 FEED = 1500  # mm/min: within every profile's $110 (the 28BYJ-48's is 1800)
-BANNER = r"^Grbl 1\.1h \['\$' for help\]$"
 
 
 def elf(board: str) -> Path:
@@ -71,8 +70,7 @@ def plotters(builds, tmp_path_factory) -> Iterator[dict[str, tuple[Plotter, Grbl
 
 
 def boot(g: Grbl) -> None:
-    g.ser.write(b"\x18")  # the banner went out before we connected
-    g.wait_for(BANNER, 30)
+    g.reset(30)  # the banner went out before we connected
     g.ok("$X")
 
 
@@ -189,8 +187,7 @@ def test_idle_deenergize_reset_and_move_lose_no_step(plotters, board: str) -> No
         g.ok(f"G1 X{target[0]} Y{target[1]} F1000")
         g.wait_state("Idle", 300)
         p.wait_trace(lambda t: not t["enabled"], timeout=20)
-        g.ser.write(b"\x18")  # soft reset while de-energized
-        g.wait_for(BANNER, 30)
+        g.reset(30)  # soft reset while de-energized
         g.send("$X")  # boards with switches boot locked; the others answer ok as well
         t = p.trace()
         want = {"x": math.floor(target[0] * spm + 0.5), "y": math.floor(target[1] * spm + 0.5)}
@@ -257,8 +254,7 @@ def test_boards_without_switches_boot_idle(plotters, board: str) -> None:
     p.restart()
     g2 = Grbl(p.port)
     try:
-        g2.ser.write(b"\x18")
-        g2.wait_for(BANNER, 30)
+        g2.reset(30)
         assert g2.status().startswith("<Idle")
         settings = g2.ok("$$")
         assert "$22=0" in settings and "$21=0" in settings

@@ -154,8 +154,7 @@ def test_homing_from_anywhere(plotter_factory) -> None:
     plotter = plotter_factory(start=(57.3, 31.9))
     g = Grbl(plotter.port)
     try:
-        g.ser.write(b"\x18")
-        g.wait_for(r"^Grbl 1\.1h")
+        g.reset()
         g.ok("$H", timeout=120)
         status = g.status()
         assert status.startswith("<Idle|MPos:1.000,1.000,"), status
@@ -241,8 +240,7 @@ def test_soft_reset_mid_move(plotter, grbl: Grbl) -> None:
     grbl.ser.write(b"G1 X250 Y150 F3000\n")
     grbl.wait_state("Run", 10)
     time.sleep(0.1)
-    grbl.ser.write(b"\x18")
-    lines = grbl.wait_for(r"^Grbl 1\.1h", 10)
+    lines = grbl.reset(10)
     assert "ALARM:3" in lines
     status = grbl.wait_state("Alarm")
     trace = plotter.trace()
@@ -350,8 +348,7 @@ def test_corexy_kinematics_and_homing(plotter_factory) -> None:
     plotter = plotter_factory(args=["--corexy"], start=(40.0, 30.0))
     g = Grbl(plotter.port)
     try:
-        g.ser.write(b"\x18")
-        g.wait_for(r"^Grbl 1\.1h")
+        g.reset()
         g.ok("$63=1")
         g.ok("$H", timeout=120)
         assert mpos(g.status()) == (1.0, 1.0)
@@ -369,8 +366,7 @@ def test_long_move_split_into_pieces_stays_exact_and_straight(plotter_factory) -
     plotter = plotter_factory(args=["--steps-per-mm", "400"])
     g = Grbl(plotter.port)
     try:
-        g.ser.write(b"\x18")
-        g.wait_for(r"^Grbl 1\.1h")
+        g.reset()
         for line in ["$100=400", "$101=400", "$X", "G0 X1 Y1", "M3", "G1 X201 Y151 F3000", "M5"]:
             g.ok(line)
         g.wait_state("Idle")

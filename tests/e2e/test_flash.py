@@ -45,8 +45,7 @@ def test_make_flash_through_the_real_bootloader(sim_build, tmp_path, board: str)
         assert "bytes of flash verified" in flash.stdout + flash.stderr
         g = Grbl(chip.port)
         try:
-            g.ser.write(b"\x18")  # the power-up banner went out while avrdude held the port
-            g.wait_for(r"^Grbl 1\.1h \['\$' for help\]$", 30)
+            g.reset(30)  # the power-up banner went out while avrdude held the port
             g.ok("$X")
             for line in ("G0 X10 Y10", "M3", "G1 X30 F3000", "G1 Y30", "G1 X10", "G1 Y10", "M5"):
                 g.ok(line)

@@ -18,14 +18,13 @@ from pathlib import Path
 
 import pytest
 
-from tests.fixtures.grbl import Grbl, clean, mpos
+from tests.fixtures.grbl import BANNER, Grbl, clean, mpos
 from tests.fixtures.plotsim import PLOTSIM, Plotter, board_firmware
 
 pytestmark = pytest.mark.e2e
 
 REPO = Path(__file__).resolve().parents[2]
 README = REPO / "firmware" / "README.md"
-BANNER = r"^Grbl 1\.1h \['\$' for help\]$"
 
 
 def shared_grbl() -> Path:
@@ -76,8 +75,7 @@ def table_rows() -> list[Row]:
 
 def fresh(g: Grbl) -> None:
     """Soft reset, forget what came before, unlock."""
-    g.ser.write(b"\x18")
-    g.wait_for(BANNER, 20)
+    g.reset()
     g.read_lines(0.05)
     g.queue.clear()
     g.ok("$X")
@@ -305,8 +303,7 @@ def test_feed_override_changes_the_plotted_speed(plotter) -> None:
         assert full == pytest.approx(20.0, rel=0.05)
         assert half == pytest.approx(10.0, rel=0.05)
         g.ser.write(b"\x90")
-        g.ser.write(b"\x18")
-        g.wait_for(BANNER, 20)
+        g.reset()
     finally:
         g.close()
 
@@ -402,8 +399,7 @@ def test_startup_lines_run_after_each_reset(mega) -> None:
     assert g.send("$N1=G4 P0") == ["error:8"]  # storing waits for Idle, as GRBL
     g.wait_state("Idle")
     assert g.send("$N1=G5") == ["error:20"]  # a bad line is not stored
-    g.ser.write(b"\x18")
-    g.wait_for(BANNER, 20)
+    g.reset()
     got = g.wait_for(r"^>G0X1:ok$", 20)
     assert ">G20G91:ok" in got
     g.wait_state("Idle")
@@ -457,8 +453,7 @@ def test_sleep_lifts_the_pen_and_a_reset_wakes_it_locked(plotter, g: Grbl) -> No
     assert g.status().startswith("<Sleep|")
     g.ser.write(b"G0 X50\n")  # waits in the ring; the reset flushes it
     assert g.read_lines(0.5) == []
-    g.ser.write(b"\x18")
-    g.wait_for(BANNER, 20)
+    g.reset()
     g.wait_for(r"^\[MSG:'\$H'\|'\$X' to unlock\]$", 10)
     assert g.status().startswith("<Alarm")
     g.ok("$X")

@@ -16,7 +16,7 @@ import signal
 import time
 
 import pytest
-from plotbridge.plotter.runner import JOB_POLL_HZ
+from plotbridge.plotter.runner import JOB_POLL_HZ, MARK_FILE
 from websockets.sync.client import connect
 
 from tests.fixtures.drawings import FEED, TWO_STROKES
@@ -196,7 +196,7 @@ def test_server_killed_mid_stroke_redraws_at_most_one_report(plotter_factory, tm
         server.wait_machine(lambda m: m["line"] is not None, 10)  # Ln: names the executing line
         # what the claim is about: a server that has written a report's mark, then dies (on
         # a starved host the first write can come late; without a mark it redraws more)
-        mark = server.data_dir / "jobs" / job["id"] / "resume.mark"
+        mark = server.data_dir / "jobs" / job["id"] / MARK_FILE
         wait_until(mark.exists, bool, 30, "the job's first resume mark")
         killed = server.proc.pid if server.proc else None
         server.kill()

@@ -13,23 +13,17 @@ import time
 
 import pytest
 
-from tests.fixtures.grbl import BANNER, Grbl
+from tests.fixtures.grbl import Grbl, unlocked
 from tests.fixtures.plotsim import Plotter, PlotterFactory
 from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
 
+
 def connected(plotter: Plotter) -> Grbl:
     """A client after a soft reset (the banner went out before it connected)."""
     grbl = Grbl(plotter.port)
-    grbl.ser.write(b"\x18")
-    grbl.wait_for(BANNER, 10)
-    return grbl
-
-
-def unlocked(plotter: Plotter) -> Grbl:
-    grbl = connected(plotter)
-    grbl.ok("$X")
+    grbl.reset(10)
     return grbl
 
 
@@ -47,7 +41,7 @@ def test_banner_status_and_pen_servo(plotter: Plotter) -> None:
 
 
 def test_buttons_show_in_pn(plotter: Plotter) -> None:
-    grbl = unlocked(plotter)
+    grbl = unlocked(connected(plotter))
     assert pins(grbl) == ""
     for name, letter in (("pause", "H"), ("resume", "S"), ("estop", "R")):
         plotter.press(name)
@@ -64,7 +58,7 @@ def test_limit_switch_shows_in_pn(plotter_factory: PlotterFactory) -> None:
 
 
 def test_drawing_shows_in_the_trace(plotter: Plotter) -> None:
-    grbl = unlocked(plotter)
+    grbl = unlocked(connected(plotter))
     for line in ["G21 G90", "G0 X10 Y10", "M3", "G1 X30 Y10 F3000", "G1 X30 Y25", "M5"]:
         grbl.ok(line)
     assert grbl.wait_state("Idle").startswith("<Idle|MPos:30.000,25.000,")
@@ -81,7 +75,7 @@ def test_drawing_shows_in_the_trace(plotter: Plotter) -> None:
 
 
 def test_settings_persist_across_restart(plotter: Plotter) -> None:
-    grbl = unlocked(plotter)
+    grbl = unlocked(connected(plotter))
     eeprom = plotter.eeprom_path
     saved = eeprom.read_bytes() if eeprom.exists() else b""
     grbl.ok("$110=4321")
@@ -109,7 +103,7 @@ def test_homing_ends_pull_off_from_the_switches(plotter_factory: PlotterFactory)
 
 def test_corexy_drawing_matches(plotter_factory: PlotterFactory) -> None:
     p = plotter_factory(args=["--corexy"])
-    grbl = unlocked(p)
+    grbl = unlocked(connected(p))
     grbl.ok("$63=1")  # the firmware's kinematics setting, as the machine is built
     for line in ["G21 G90", "G0 X10 Y10", "M3", "G1 X30 Y10 F3000", "G1 X30 Y25", "M5"]:
         grbl.ok(line)
@@ -121,7 +115,7 @@ def test_corexy_drawing_matches(plotter_factory: PlotterFactory) -> None:
 
 
 def test_stop_button_halts_the_steppers(plotter: Plotter) -> None:
-    grbl = unlocked(plotter)
+    grbl = unlocked(connected(plotter))
     grbl.ok("G1 X290 F3000")
     plotter.wait_trace(lambda t: t["position"]["x"] > 5)
     plotter.press("estop")

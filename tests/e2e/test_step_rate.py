@@ -23,8 +23,7 @@ def test_two_axes_at_50_khz_without_late_steps_or_short_pulses(plotter_factory) 
     plotter = plotter_factory(args=["--max-step-rate", str(int(RATE_HZ * 1.6))])
     g = Grbl(plotter.port)
     try:
-        g.ser.write(b"\x18")
-        g.wait_for(r"^Grbl 1\.1h")
+        g.reset()
         feed = per_axis * 60 * math.sqrt(2)
         for line in ["$X", f"$110={per_axis * 60:.0f}", f"$111={per_axis * 60:.0f}",
                      f"$120={ACCEL}", f"$121={ACCEL}", "G0 X5 Y5", "M3"]:

@@ -650,8 +650,6 @@ class Link:
         self._transport = await self._open_port()
         self._last_rx = time.monotonic()
         await self._handshake()
-        if self.status.state == "Disconnected":   # alive by its banner: no report yet
-            await self._next_status(STATUS_AFTER_S)
         self._ready = True
         self.status.connected = True
         log.info("connected to %s: GRBL %s, state %s", self.device,
@@ -676,6 +674,8 @@ class Link:
             self._write(STATUS_QUERY, urgent=True)
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._alive.wait(), 0.5)
+        if self.status.state == "Disconnected":   # alive by its banner: no report yet
+            await self._next_status(STATUS_AFTER_S)
         if build_of(self.status.firmware) is None:   # the banner tells no build
             try:
                 await self._exchange_or_lost("$I", 2.0)
