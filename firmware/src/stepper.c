@@ -6,6 +6,7 @@
 #include "ring.h"
 #include "segment.h"
 #include "settings.h"
+#include "step_tick.h"
 #include "stepper.h"
 
 /* Running: Timer1's compare interrupt is on (it is only ever on while the
@@ -17,7 +18,7 @@
  * 255. Between two polls the steppers run at most the segment ring: 7
  * segments of at most 64 ms at 50 kHz, 22,400 steps, inside int16. */
 static volatile int32_t position[N_AXIS];
-static volatile int16_t done[N_AXIS];
+volatile int16_t tick_done[N_AXIS];
 static uint8_t enabled;
 
 /* state of the step interrupt */
@@ -26,11 +27,10 @@ static uint8_t enabled;
  * bit as it finds it, no register held across both axes) */
 #define PENDING_STEPS GPIOR0    /* DRIVE_X / DRIVE_Y bits to step at the next tick */
 #define DIR_NEGATIVE GPIOR1     /* axes of the current block that move negative */
-static uint16_t seg_left;
-/* the current block's Bresenham terms, copied from its step_block_t when
- * it starts: one load each a tick, no pointer to fetch first */
-static int16_t blk_steps[N_AXIS], blk_events;
-static int16_t counter[N_AXIS]; /* Bresenham: 16-bit, blocks are at most PLAN_MAX_EVENTS */
+/* the rest of the tick's state: step_tick.h (step_tick.S reads it by name) */
+uint16_t tick_left;
+int16_t tick_steps[N_AXIS], tick_events;
+int16_t tick_counter[N_AXIS];
 
 void stepper_apply_settings(void)
 {
@@ -68,16 +68,16 @@ uint8_t stepper_busy(void) { return RUNNING(); }
 /* The step counts into the base position (interrupts off). */
 static inline __attribute__((always_inline)) void fold_counts(void)
 {
-    position[0] += done[0];
-    position[1] += done[1];
-    done[0] = done[1] = 0;
+    position[0] += tick_done[0];
+    position[1] += tick_done[1];
+    tick_done[0] = tick_done[1] = 0;
 }
 
 /* An axis's count may have passed 255 steps either way: its high byte
  * (one byte, so read atomically) is neither 0x00 nor 0xFF. */
 static inline uint8_t count_large(uint8_t a)
 {
-    return (uint8_t)(((volatile uint8_t *)&done[a])[1] + 1u) > 1u;
+    return (uint8_t)(((volatile uint8_t *)&tick_done[a])[1] + 1u) > 1u;
 }
 
 void stepper_start(void)
@@ -97,7 +97,7 @@ void stepper_start(void)
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
         PENDING_STEPS = 0;
-        seg_left = 0;
+        tick_left = 0;
         /* simavr never fires a CTC timer whose compare value is 0: load one first */
         OCR1A = 100;
         TCNT1 = 0;
@@ -119,9 +119,9 @@ uint8_t stepper_halt(void)
         drive_step_end();
         /* steps counted but never pulsed: take them back so the position stays true */
         if (PENDING_STEPS & DRIVE_X)
-            done[0] += (DIR_NEGATIVE & 1) ? 1 : -1;
+            tick_done[0] += (DIR_NEGATIVE & 1) ? 1 : -1;
         if (PENDING_STEPS & DRIVE_Y)
-            done[1] += (DIR_NEGATIVE & 2) ? 1 : -1;
+            tick_done[1] += (DIR_NEGATIVE & 2) ? 1 : -1;
         fold_counts();
         PENDING_STEPS = 0;
     }
@@ -133,7 +133,7 @@ void stepper_get_position(int32_t *motor)
     ATOMIC_BLOCK(ATOMIC_RESTORESTATE)
     {
         for (uint8_t a = 0; a < N_AXIS; a++)
-            motor[a] = position[a] + done[a];
+            motor[a] = position[a] + tick_done[a];
     }
 }
 
@@ -143,7 +143,7 @@ void stepper_set_position(const int32_t *motor)
     {
         for (uint8_t a = 0; a < N_AXIS; a++) {
             position[a] = motor[a];
-            done[a] = 0;
+            tick_done[a] = 0;
         }
     }
 }
@@ -162,6 +162,39 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
 #endif
 }
 
+/* The tick found its segment done (interrupts off): the next segment's
+ * period and, for a block's first, its Bresenham terms and directions; or,
+ * the ring empty, the stop (Timer0 still ends the pulse just raised).
+ * Returns the segment's events (at least 1), 0 when stopped. */
+static inline __attribute__((always_inline)) uint16_t tick_load(void)
+{
+    if (seg_head == seg_tail) {
+        TCCR1B = 1 << WGM12;
+        TIMSK1 = 0;
+        PENDING_STEPS = 0;
+        return 0;
+    }
+    const segment_t *seg = &seg_ring[ring_slot(seg_tail, SEG_SIZE)];
+    OCR1A = seg->period;
+    if (seg->flags & SEG_FIRST) {
+        const step_block_t *b = seg->block;
+        int16_t events = b->events;
+        tick_events = events;
+        tick_counter[0] = tick_counter[1] = (int16_t)(events >> 1);
+        tick_steps[0] = b->steps[0];
+        tick_steps[1] = b->steps[1];
+        uint8_t negative = b->dir_negative;
+        DIR_NEGATIVE = negative;
+        drive_set_dir(negative);
+    }
+    return seg->events;
+}
+
+#if STEP_TICK_ASM
+/* The boards step_tick.h names run the tick in step_tick.S; this is its
+ * slow path (a call: it saves what the call clobbers, only on this path). */
+uint16_t stepper_tick_load(void) { return tick_load(); }
+#else
 /* Timer1 runs in CTC mode at 2 MHz: compare A (OCR1A, the segment's
  * period) is the step tick. Timer0 runs at 2 MHz and is reset to 0 at
  * the rising edge; its compare A (OCR0A = $0 in ticks) ends the pulse, so
@@ -176,8 +209,10 @@ void stepper_pulse(uint8_t mask, uint8_t dir_negative)
  * step: a whole period before that step's edge, and after the edge of the
  * old block's last step made at the top of the tick (past its hold time).
  *
+ * The C tick, for the boards that do not run step_tick.S (step_tick.h).
  * Cycle budget, measured by bench/firmware_bench.py at 50 kHz on both axes
- * (a period of 320 cycles), entry and exit included: on the 328P 179 cycles
+ * (a period of 320 cycles) when uno-cnc-shield and mega-ramps14 still ran
+ * it, entry and exit included: on the 328P 179 cycles
  * on average (117 body + 62 entry/exit as the bench counts them: the
  * prologue and epilogue save 6 registers, ~50 cycles with the response and
  * reti; the bench also counts the body's in/out on r1x), 269 at worst on the
@@ -209,61 +244,45 @@ ISR(TIMER1_COMPA_vect)
 #else
     drive_step(PENDING_STEPS);
 #endif
-    uint16_t left = seg_left;
+    uint16_t left = tick_left;
     if (left == 0) {
-        if (seg_head == seg_tail) { /* nothing left: stop (Timer0 still ends this pulse) */
-            TCCR1B = 1 << WGM12;
-            TIMSK1 = 0;
-            PENDING_STEPS = 0;
+        left = tick_load();
+        if (left == 0) {
 #ifdef BENCH_ISR_PIN
             IO_LOW(BENCH_ISR);
 #endif
             return;
-        }
-        const segment_t *seg = &seg_ring[ring_slot(seg_tail, SEG_SIZE)];
-        OCR1A = seg->period;
-        left = seg->events;
-        if (seg->flags & SEG_FIRST) {
-            const step_block_t *b = seg->block;
-            int16_t events = b->events;
-            blk_events = events;
-            counter[0] = counter[1] = (int16_t)(events >> 1);
-            blk_steps[0] = b->steps[0]; /* (after: the same registers serve) */
-            blk_steps[1] = b->steps[1];
-            uint8_t negative = b->dir_negative;
-            DIR_NEGATIVE = negative;
-            drive_set_dir(negative);
         }
     }
     /* the segment's last event: its slot may be refilled (all of it is
      * copied above) */
     if (--left == 0)
         seg_tail++;
-    seg_left = left;
+    tick_left = left;
     /* each counter stored before the position count, each step bit set
      * where it is found: fewer registers held */
-    int16_t c = counter[0] - blk_steps[0];
+    int16_t c = tick_counter[0] - tick_steps[0];
     if (c < 0) {
-        counter[0] = c + blk_events;
+        tick_counter[0] = c + tick_events;
         PENDING_STEPS = DRIVE_X;
         if (DIR_NEGATIVE & 1)
-            done[0]--;
+            tick_done[0]--;
         else
-            done[0]++;
+            tick_done[0]++;
     } else {
-        counter[0] = c;
+        tick_counter[0] = c;
         PENDING_STEPS = 0;
     }
-    c = counter[1] - blk_steps[1];
+    c = tick_counter[1] - tick_steps[1];
     if (c < 0) {
-        counter[1] = c + blk_events;
+        tick_counter[1] = c + tick_events;
         PENDING_STEPS |= DRIVE_Y;
         if (DIR_NEGATIVE & 2)
-            done[1]--;
+            tick_done[1]--;
         else
-            done[1]++;
+            tick_done[1]++;
     } else {
-        counter[1] = c;
+        tick_counter[1] = c;
     }
 #if DRIVE_PULSED
     if (TIFR0 & (1 << OCF0A)) {
@@ -277,6 +296,8 @@ ISR(TIMER1_COMPA_vect)
     IO_LOW(BENCH_ISR);
 #endif
 }
+
+#endif /* STEP_TICK_ASM */
 
 #if DRIVE_PULSED
 #if DRIVE_ONE_PORT
