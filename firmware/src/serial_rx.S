@@ -20,8 +20,9 @@
  * cycles an ordinary byte on the 328P (823 a line), 61 on the 2560 (842),
  * entry and exit included (the C version: ~82, 1,125 a line); a realtime
  * byte adds 20 saves and restores and realtime_byte (a reset: the steppers'
- * halt). Interrupts are shut for at most ~45 cycles of it: a due step tick
- * waits no longer than that. */
+ * halt). An ordinary byte runs with interrupts shut throughout: a due step
+ * tick waits at most its ~60 cycles (the realtime path opens them before
+ * its call). */
 #include <avr/io.h>
 #include "config.h"
 
