@@ -12,14 +12,14 @@
  * take (0x7E..0xFF but unknown, 0x7F) goes on into the ring.
  *
  * Registers: SREG kept in r0; the byte, the head and Z for the store; the
- * realtime path saves the rest a C call may clobber itself, so an ordinary
- * byte does not pay for it.
+ * realtime path saves the rest a C call may clobber itself (r0 too: SREG's
+ * copy), so an ordinary byte does not pay for it.
  *
  * Cycle budget, measured in the bench's CPU-bound run (bench/firmware_bench.py
  * --profile, the vector over the 13.7 bytes of a compact line): about 60
  * cycles an ordinary byte on the 328P (823 a line), 61 on the 2560 (842),
  * entry and exit included (the C version: ~82, 1,125 a line); a realtime
- * byte adds 20 saves and restores and realtime_byte (a reset: the steppers'
+ * byte adds 22 saves and restores and realtime_byte (a reset: the steppers'
  * halt). An ordinary byte runs with interrupts shut throughout: a due step
  * tick waits at most its ~60 cycles (the realtime path opens them before
  * its call). */
@@ -95,8 +95,15 @@ half:
     brlo store
     rjmp done
 
-/* realtime_byte(c) (r24 in, r24 out: 1 if it took the byte) */
+/* realtime_byte(c) (r24 in, r24 out: 1 if it took the byte), with
+ * interrupts on from before the saves to after the restores (nested
+ * interrupts keep their own registers) and this interrupt's source off */
 realtime:
+    lds r25, UCSR0B
+    andi r25, ~(1 << RXCIE0)
+    sts UCSR0B, r25
+    sei
+    push r0                 /* SREG's copy: r0 is scratch to C */
     push r1
     push r18
     push r19
@@ -108,15 +115,7 @@ realtime:
     push r27
     push r24                /* the byte, for the ring if it is not taken */
     clr r1
-    lds r25, UCSR0B
-    andi r25, ~(1 << RXCIE0)
-    sts UCSR0B, r25
-    sei
     call realtime_byte
-    cli
-    lds r25, UCSR0B
-    ori r25, 1 << RXCIE0
-    sts UCSR0B, r25
     mov r25, r24
     pop r24
     pop r27
@@ -128,6 +127,11 @@ realtime:
     pop r19
     pop r18
     pop r1
+    pop r0
+    cli
+    lds r30, UCSR0B
+    ori r30, 1 << RXCIE0
+    sts UCSR0B, r30
     tst r25
     brne done
     rjmp ordinary

@@ -1,34 +1,34 @@
 /* The step tick (Timer1 compare A) in assembly, for the boards step_tick.h
  * names: the same work as the C tick in stepper.c, which the other boards
- * keep (read its comment for the timing design), at about two thirds of
- * its cycles. Pins come from the board header (through config.h); nothing
- * here names one.
+ * keep (read its comment for the timing design). Pins come from the board
+ * header (through config.h); nothing here names one.
  *
  * Per tick: the pulse still up (if any) falls, the step computed last tick
  * rises, Timer0 restarts from 0 so its compare A ends the pulse $0 us
  * later; then one event of the segment under way: Bresenham per axis, the
- * step bit set in PENDING for the next tick, the axis's count moved by one
- * toward its direction. A tick that finds its segment done calls the C slow
- * path (stepper_tick_load: the next segment, a new block's Bresenham terms
- * and directions, or the stop). A tick that outlasts the pulse ends it on
- * its way out.
+ * step bit set in PENDING for the next tick. No step is counted: a block's
+ * signed steps go into the position when it starts (the position is where
+ * the block ends) and stepper.c's readers take off what its Bresenham
+ * state says is still to come. A tick that finds its segment done takes
+ * the slow path below (the next segment; a new block's Bresenham terms,
+ * directions and steps; or the stop), in assembly too: as a C call it
+ * cost the worst tick 11 register saves and restores on top. A tick that
+ * outlasts the pulse ends it on its way out.
  *
  * Registers: SREG is kept in r0 (pushed); r24-r26 are the only others the
  * common path touches (a 16-bit subtract from memory needs a pair and one
- * byte: lds leaves the carry alone). The slow path saves what a C call may
- * clobber itself, so the common path does not pay for it. r1 is not
- * assumed zero (the interrupt may land mid-multiply).
+ * byte: lds leaves the carry alone); the slow path saves the 4 more it
+ * uses. r1 is not assumed zero (the interrupt may land mid-multiply).
  *
  * Cycle budget, measured by bench/firmware_bench.py at 50 kHz on both axes
- * (a period of 320 cycles), entry and exit included: on the 328P 140 cycles
- * on average (111 body + 29 entry/exit: the response, the vector's jump,
- * 4 pushes and pops, reti), 303 at worst on the tick that loads a segment
- * (the slow path's 11 saves and the C call); on the 2560 142 and 307 (its
- * 3-byte return addresses). The C tick took 179/269 and 187/277. Per 0.5 mm
- * line of the bench's CPU-bound run (about 36 ticks) 4,317 cycles on the
- * 328P plus ~110 in stepper_tick_load (the C tick: 5,431); being shorter
- * than the step pulse, it now leaves most pulses to Timer0's interrupt
- * (~15 a line, 23 cycles each). */
+ * (a period of 320 cycles), entry and exit included: on the 328P 105
+ * cycles on average (76 body + 29 entry/exit: the response, the vector's
+ * jump, 4 pushes and pops, reti), 277 at worst on the tick that loads a
+ * block's first segment; on the 2560 107 and 279 (3-byte return
+ * addresses). The C tick took 179/269 and 187/277. Per 0.5 mm line of the
+ * bench's CPU-bound run (about 36 ticks) 3,605 cycles on the 328P (the C
+ * tick: 5,431); shorter than the 10 us step pulse, it leaves nearly every
+ * pulse to Timer0's interrupt (23 cycles, ~630 a line). */
 #include <avr/io.h>
 #include "step_tick.h"
 
@@ -49,10 +49,10 @@
 #error "PENDING's bits are set with sbi: it must be in the low I/O space"
 #endif
 
-/* One axis's Bresenham event. counter -= steps; below 0: counter += events,
- * the step bit goes into PENDING, the count moves by one (down when the
- * axis's DIR_NEGATIVE bit is set: sbiw 2 then adiw 1). 16 cycles without a
- * step, 36 or 37 with one. */
+/* One axis's Bresenham event: counter -= steps; below 0, counter +=
+ * events and the step bit goes into PENDING. No step is counted: the
+ * position follows from this state (stepper.c's motor_at). 16 cycles
+ * without a step, 23 with one. */
 .macro BRESENHAM axis, bit
     lds r24, tick_counter + 2 * \axis
     lds r25, tick_counter + 2 * \axis + 1
@@ -65,21 +65,38 @@
     add r24, r26
     lds r26, tick_events + 1
     adc r25, r26
-    sts tick_counter + 2 * \axis, r24
-    sts tick_counter + 2 * \axis + 1, r25
     sbi PENDING, \bit
-    lds r24, tick_done + 2 * \axis
-    lds r25, tick_done + 2 * \axis + 1
-    in r26, DIR_NEGATIVE
-    sbrc r26, \axis
-    sbiw r24, 2
-    adiw r24, 1
-    sts tick_done + 2 * \axis, r24
-    sts tick_done + 2 * \axis + 1, r25
-    rjmp 2f
 1:  sts tick_counter + 2 * \axis, r24
     sts tick_counter + 2 * \axis + 1, r25
-2:
+.endm
+
+/* A block's first segment: one axis's |steps| (Z: its step_block_t) into
+ * tick_steps, and signed (r23: the block's DIR_NEGATIVE) into the 32-bit
+ * position, which then holds where the block ends. */
+.macro BLOCK_AXIS axis
+    ldd r24, Z + BLK_STEPS_AT + 2 * \axis
+    ldd r25, Z + BLK_STEPS_AT + 2 * \axis + 1
+    sts tick_steps + 2 * \axis, r24
+    sts tick_steps + 2 * \axis + 1, r25
+    ldi r27, 0              /* the high bytes' addend: the sign */
+    sbrs r23, \axis
+    rjmp 1f
+    com r25                 /* negative: -steps */
+    neg r24
+    sbci r25, 0xFF
+    ldi r27, 0xFF
+1:  lds r26, tick_position + 4 * \axis
+    add r26, r24
+    sts tick_position + 4 * \axis, r26
+    lds r26, tick_position + 4 * \axis + 1
+    adc r26, r25
+    sts tick_position + 4 * \axis + 1, r26
+    lds r26, tick_position + 4 * \axis + 2
+    adc r26, r27
+    sts tick_position + 4 * \axis + 2, r26
+    lds r26, tick_position + 4 * \axis + 3
+    adc r26, r27
+    sts tick_position + 4 * \axis + 3, r26
 .endm
 
     .section .text.step_tick,"ax",@progbits
@@ -148,38 +165,95 @@ done:
     pop r0
     reti
 
-/* The slow path: a C call, so the registers it may clobber are saved here
- * (r0 holds SREG; r1 must be zero in C). Stopped (0 events): the pulse
- * just raised is still ended by Timer0's interrupt. */
+/* The slow path, once a segment: the next segment from the ring (its
+ * period, its events; a block's first also its Bresenham terms, directions
+ * and steps), or the stop when the ring is empty (the pulse just raised is
+ * still ended by Timer0's interrupt). stepper.c's C tick does the same in
+ * tick_load. r24:r25 come in as 0xFFFF (left 0, less 1). */
 load:
-    push r0
-    push r1
-    push r18
-    push r19
-    push r20
-    push r21
-    push r22
     push r23
     push r27
     push r30
     push r31
-    clr r1
-    call stepper_tick_load
+    lds r24, seg_head
+    lds r30, seg_tail
+    cp r24, r30
+    brne 1f
+    ldi r24, 1 << WGM12     /* Timer1's clock off; its interrupt off: stopped */
+    sts TCCR1B, r24
+    ldi r24, 0
+    sts TIMSK1, r24
     pop r31
     pop r30
     pop r27
     pop r23
-    pop r22
-    pop r21
-    pop r20
-    pop r19
-    pop r18
-    pop r1
-    pop r0
-    sbiw r24, 1
-    brcs 1f
+    rjmp done
+1:  andi r30, SEG_SIZE - 1  /* Z = &seg_ring[slot]: slot * 7 */
+    mov r24, r30
+    lsl r30
+    lsl r30
+    lsl r30
+    sub r30, r24
+    ldi r31, 0
+    subi r30, lo8(-(seg_ring))
+    sbci r31, hi8(-(seg_ring))
+    ldd r24, Z + SEG_PERIOD_AT
+    ldd r25, Z + SEG_PERIOD_AT + 1
+    sts OCR1AH, r25         /* the high byte first: the timer latches it */
+    sts OCR1AL, r24
+    ldd r26, Z + SEG_FLAGS_AT
+    ldd r24, Z + SEG_EVENTS_AT
+    ldd r25, Z + SEG_EVENTS_AT + 1
+    sbrc r26, SEG_FIRST_BIT
+    rjmp 2f
+    /* the block goes on: its events so far */
+    lds r26, tick_k
+    add r26, r24
+    sts tick_k, r26
+    lds r26, tick_k + 1
+    adc r26, r25
+    sts tick_k + 1, r26
+    rjmp 3f
+2:  /* a block's first segment */
+    sts tick_k, r24
+    sts tick_k + 1, r25
+    ldd r26, Z + SEG_BLOCK_AT
+    ldd r31, Z + SEG_BLOCK_AT + 1
+    mov r30, r26            /* Z = its step_block_t */
+    ldd r23, Z + BLK_DIR_AT
+    out DIR_NEGATIVE, r23
+    /* directions, a whole period before the block's first edge (as
+     * drive_set_dir: HIGH = negative at $3=0) */
+    lds r26, tick_dir_invert
+    eor r26, r23
+    sbrc r26, 0
+    sbi IO(IO_PORT(X_DIR)), IO_BIT(X_DIR)
+    sbrs r26, 0
+    cbi IO(IO_PORT(X_DIR)), IO_BIT(X_DIR)
+    sbrc r26, 1
+    sbi IO(IO_PORT(Y_DIR)), IO_BIT(Y_DIR)
+    sbrs r26, 1
+    cbi IO(IO_PORT(Y_DIR)), IO_BIT(Y_DIR)
+    ldd r24, Z + BLK_EVENTS_AT
+    ldd r25, Z + BLK_EVENTS_AT + 1
+    sts tick_events, r24
+    sts tick_events + 1, r25
+    asr r25                 /* both counters start at events / 2 */
+    ror r24
+    sts tick_counter, r24
+    sts tick_counter + 1, r25
+    sts tick_counter + 2, r24
+    sts tick_counter + 3, r25
+    BLOCK_AXIS 0
+    BLOCK_AXIS 1
+    lds r24, tick_k         /* the segment's events */
+    lds r25, tick_k + 1
+3:  pop r31
+    pop r30
+    pop r27
+    pop r23
+    sbiw r24, 1             /* (a segment has at least 1 event) */
     rjmp counted
-1:  rjmp done
     .size TIMER1_COMPA_vect, . - TIMER1_COMPA_vect
 
 #endif
