@@ -324,17 +324,17 @@ static uint8_t outside_work_area(const float *t)
     return 0;
 }
 
-/* plan_line_split's wait: realtime work goes on while the planner is full */
+/* plan_line_split's wait: realtime work goes on while the planner is full.
+ * No poll while there is room: on an idle machine the poll would take the
+ * jog being queued for finished (nothing moving yet) and report it as Run. */
 static uint8_t planner_room(void)
 {
-    for (;;) {
+    while (!mach.abort && !plan_free()) {
         machine_poll();
-        if (mach.abort)
-            return 0;
-        if (plan_free())
-            return 1;
-        machine_idle_wait();
+        if (!mach.abort && !plan_free())
+            machine_idle_wait();
     }
+    return !mach.abort;
 }
 
 /* Queue one straight move (in pieces if it is long), waiting for planner room. */

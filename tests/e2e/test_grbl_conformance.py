@@ -460,6 +460,21 @@ def test_sleep_lifts_the_pen_and_a_reset_wakes_it_locked(plotter, g: Grbl) -> No
     assert mpos(g.status()) == (10.0, 10.0)
 
 
+def test_a_jog_runs_as_jog_and_its_cancel_stops_it_short(plotter, g: Grbl) -> None:
+    """`$J=` runs in state Jog; another `$J=` is taken while it runs (a held jog button);
+    0x85 decelerates to a stop short of the target and drops the jogs queued behind."""
+    g.ok("$J=G91 X150 F600")
+    g.wait_state("Jog", 10)
+    g.ok("$J=G91 Y50 F600")
+    g.ser.write(b"\x85")
+    x, y = mpos(g.wait_state("Idle", 60))
+    assert 0 < x < 150 and y == 0, (x, y)
+    trace = plotter.trace()
+    assert (trace["position"]["x"], trace["position"]["y"]) == pytest.approx((x, y), abs=0.01)
+    g.ok("G90 G0 X0 Y0")  # G-code goes on from where the jog stopped
+    assert mpos(g.wait_state("Idle", 60)) == (0.0, 0.0)
+
+
 def test_restore_defaults(g: Grbl) -> None:
     g.ok("$110=5000")
     g.ok("$RST=$")
