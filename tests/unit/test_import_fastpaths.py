@@ -228,7 +228,7 @@ def test_preview_strokes_written_natively_as_json_dumps_writes_them(tmp_path):
                 for _ in range(50)]
     pb = PreviewBuilder()
     for s in strokes:
-        pb.draw_many(float(s[0, 0]), float(s[0, 1]), s[1:])
+        pb.draw_path(s)
         pb.end_stroke()
         pb.move(1.0, 2.0, 3.00049, 4.0)
     bounds = {"min_x": 0.0, "min_y": -0.0, "max_x": 1.5, "max_y": 2.0}

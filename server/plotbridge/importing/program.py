@@ -252,7 +252,7 @@ class ProgramWriter:
                           self.pen_down_mm, self.travel_mm, self.bounds)
             lines = runs.run(k, state, bool(self.layers) and self._outside is None)
             if lines.text:
-                self._took(lines)
+                self._took(state, lines)
             k = lines.stop
             if k < n:
                 line = None if first is None else first + k
@@ -264,8 +264,9 @@ class ProgramWriter:
                     self.move(line, float(xs[k]), float(ys[k]), None if f != f else f)
                 k += 1
 
-    def _took(self, lines) -> None:
-        """The program lines, estimate rows, preview calls and state movelines.c wrote."""
+    def _took(self, state: State, lines) -> None:
+        """The program lines, estimate rows, preview calls and state movelines.c wrote
+        from `state`."""
         self.planner.moves(lines.kind, lines.x32, lines.y32, lines.f32, lines.nbytes)
         text = lines.text
         self.last = text[text.rfind(b"\n", 0, -1) + 1:-1].decode("ascii")
@@ -277,13 +278,17 @@ class ProgramWriter:
         if self._buffered >= 4096:
             self.flush()
         preview = self.preview
-        xy = lines.xy.copy() if len(lines.xy) else lines.xy
-        for ev, a, b, x0, y0 in zip(*lines.events, strict=True):
+        xy = lines.xy
+        if len(xy):     # the points with the run's start before them (drawn from there)
+            xy = np.empty((len(xy) + 1, 2))
+            xy[0] = state.x, state.y
+            xy[1:] = lines.xy
+        for ev, a, b in zip(*lines.events, strict=True):
             if ev == EV_DRAW:
-                preview.draw_many(x0, y0, xy[a:b])
+                preview.draw_path(xy[a:b + 1])
             elif ev == EV_TRAVEL:
-                end = xy[b - 1].tolist()
-                preview.move(x0, y0, end[0], end[1])
+                x0, y0, x, y = xy[a:b + 1:b - a].ravel().tolist()
+                preview.move(x0, y0, x, y)
             elif ev == EV_DOWN:
                 preview.pen_down(a)
             else:

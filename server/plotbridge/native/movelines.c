@@ -65,7 +65,8 @@ static long feed_index(double f, const double *feed_val, long n_feeds)
 /* The kinds of a run's elements (gcodescan.c's): NONE does nothing. */
 enum { NONE = 0, RAPID = 1, LINE = 2, PEN_DOWN = 3, PEN_UP = 4 };
 /* The preview's calls (PreviewBuilder): pen_down(a), pen_up(a) with a program line;
- * draw_many / move from (ex, ey) through the kept points [a, b). */
+ * draw_path / move through the kept points [a, b) from the point before a (the run's
+ * start before the first). */
 enum { EV_DOWN = 0, EV_UP = 1, EV_DRAW = 2, EV_TRAVEL = 3 };
 
 /* A writer's buffers (room for as many elements as a run has), state and results. */
@@ -98,7 +99,6 @@ typedef struct {
     long n_xy;
     uint8_t *ev;                /* the preview's calls */
     int64_t *ev_a, *ev_b;
-    double *ev_x, *ev_y;
     long n_ev;
     /* The feed texts: feed_val[i] (n_feeds values, sorted) is written as
      * feed_text[feed_off[i] .. feed_off[i + 1]). */
@@ -145,7 +145,7 @@ static void row(movelines_t *m, uint8_t kind, float x, float y, float f, long by
 
 /* A call of the preview's: a draw or travel through the kept point n_xy extends the
  * one before it when that is the same and ends there. */
-static void event(movelines_t *m, uint8_t ev, int64_t a, double x, double y)
+static void event(movelines_t *m, uint8_t ev, int64_t a)
 {
     long e = m->n_ev;
     if ((ev == EV_DRAW || ev == EV_TRAVEL) && e && m->ev[e - 1] == ev && m->ev_b[e - 1] == a) {
@@ -155,8 +155,6 @@ static void event(movelines_t *m, uint8_t ev, int64_t a, double x, double y)
     m->ev[e] = ev;
     m->ev_a[e] = a;
     m->ev_b[e] = a + 1;
-    m->ev_x[e] = x;
-    m->ev_y[e] = y;
     m->n_ev++;
 }
 
@@ -206,7 +204,7 @@ long moves_lines(movelines_t *m, long from, long n)
             o += 3;
             m->line++;
             row(m, m->kind_dwell, (float)m->settle, 0.0f, 0.0f, 3);
-            event(m, down ? EV_DOWN : EV_UP, m->line, 0.0, 0.0);
+            event(m, down ? EV_DOWN : EV_UP, m->line);
             if (down)
                 grow(m->bounds, px, py);
             else
@@ -246,7 +244,7 @@ long moves_lines(movelines_t *m, long from, long n)
             rapid ? 0.0f : (float)feed[k], o - start);
         double dx = rx - px, dy = ry - py;
         double d = sqrt(dx * dx + dy * dy);
-        event(m, m->down ? EV_DRAW : EV_TRAVEL, m->n_xy, px, py);
+        event(m, m->down ? EV_DRAW : EV_TRAVEL, m->n_xy);
         if (m->down) {
             m->down_mm += d;
             grow(m->bounds, rx, ry);

@@ -50,8 +50,6 @@ class _Writer(ctypes.Structure):
         ("ev", ctypes.c_void_p),
         ("ev_a", ctypes.c_void_p),
         ("ev_b", ctypes.c_void_p),
-        ("ev_x", ctypes.c_void_p),
-        ("ev_y", ctypes.c_void_p),
         ("n_ev", ctypes.c_long),
         ("feed_val", ctypes.c_void_p),
         ("n_feeds", ctypes.c_long),
@@ -86,7 +84,7 @@ class Lines(NamedTuple):
     """What a run wrote (arrays valid until the MoveLines' next run): the element it
     stopped at (the run's length when done); the text (ASCII, one line each, with
     newlines); the estimate's inputs (Estimator.moves); the kept points, rounded (n x 2);
-    the preview's calls: kind (EV_*), a, b, x, y (movelines.c); the state after."""
+    the preview's calls: kind (EV_*), a, b (movelines.c); the state after."""
 
     stop: int
     text: bytes
@@ -96,7 +94,7 @@ class Lines(NamedTuple):
     f32: np.ndarray
     nbytes: np.ndarray
     xy: np.ndarray
-    events: tuple[list, list, list, list, list]
+    events: tuple[list, list, list]
     state: State
 
 
@@ -150,12 +148,11 @@ class MoveLines:
             self._unknown = np.empty(n)
             self._ev = np.empty(n, np.uint8)
             self._ev_a, self._ev_b = np.empty(n, np.int64), np.empty(n, np.int64)
-            self._ev_x, self._ev_y = np.empty(n), np.empty(n)
             # the run is copied in (a copy costs less than asking an array's address)
             self._x, self._y, self._feed = np.empty(n), np.empty(n), np.empty(n)
             self._op = np.empty(n, np.uint8)
             for name in ("x", "y", "feed", "xy", "kind", "x32", "y32", "f32", "nbytes",
-                         "unknown", "ev", "ev_a", "ev_b", "ev_x", "ev_y"):
+                         "unknown", "ev", "ev_a", "ev_b"):
                 setattr(w, name, getattr(self, f"_{name}").ctypes.data)
         if room > self._room:
             self._room = max(room, 2 * self._room)
@@ -198,8 +195,7 @@ class MoveLines:
             self._grow(n, n * (_LINE_ROOM + self._longest))
             k = self._fn(self._ref, start, n)
         r, m, e = w.rows, w.n_xy, w.n_ev
-        events = (self._ev[:e].tolist(), self._ev_a[:e].tolist(), self._ev_b[:e].tolist(),
-                  self._ev_x[:e].tolist(), self._ev_y[:e].tolist())
+        events = (self._ev[:e].tolist(), self._ev_a[:e].tolist(), self._ev_b[:e].tolist())
         return Lines(k, self._text[:w.text_len].tobytes(), self._kind[:r], self._x32[:r],
                      self._y32[:r], self._f32[:r], self._nbytes[:r], self._xy[:m], events,
                      State(w.px, w.py, bool(w.down), w.line, w.lifts, w.down_mm, w.travel_mm,
