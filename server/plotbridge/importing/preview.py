@@ -140,9 +140,9 @@ class PreviewBuilder:
         sizes = [p[1] for p in self._pending]
         pts = _joined([part for p in self._pending for part in p[0]])
         ends = np.cumsum(sizes)
-        fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
-        keep = simplify_mask(pts, self.tolerance, fixed)
-        pieces = kept_pieces(pts, keep, ends - np.array(sizes), ends)
+        starts = ends - np.array(sizes)
+        keep = simplify_mask(pts, self.tolerance, np.concatenate([starts, ends - 1]))
+        pieces = kept_pieces(pts, keep, starts, ends)
         for (_, _, continues, colour, lines), piece in zip(self._pending, pieces, strict=True):
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])
