@@ -64,7 +64,7 @@ def test_scan_reads_common_lines_and_leaves_the_rest():
     text = ("G1 X1.5 Y-2 F3000\ng0x.5y+7\n  G01\tX 1. Y 2 ; a note\nG1 X1 Y2 ;(no)\n"
             "G1 X1e3 Y2\nG1 Y2 X1\nN5 G1 X1 Y2\nG10 X1 Y2\nG1 X1 Y2 F\n\nG1 X1 Y2 ; é\n"
             f"G1 X1 Y2 ;{'x' * 300}\n")
-    lines = scan(text.encode(), 256)
+    lines = scan(text, 256)
     kind, x, y, f = lines.kind, lines.x, lines.y, lines.f
     assert kind.tolist() == [LINE, RAPID, LINE] + [OTHER] * 9
     assert x[:3].tolist() == [1.5, 0.5, 1.0] and y[:3].tolist() == [-2.0, 7.0, 2.0]
@@ -74,38 +74,17 @@ def test_scan_reads_common_lines_and_leaves_the_rest():
 
 
 def test_scan_leaves_feeds_that_are_not_positive_to_the_general_parser():
-    lines = scan(b"G1 X1 Y2 F100\nG1 X1 Y2 F0\nG1 X1 Y2 F-5\nG1 X1 Y2\nG1 X1 Y2 F.5\n", 256)
+    lines = scan("G1 X1 Y2 F100\nG1 X1 Y2 F0\nG1 X1 Y2 F-5\nG1 X1 Y2\nG1 X1 Y2 F.5\n", 256)
     assert lines.kind.tolist() == [LINE, OTHER, OTHER, LINE, LINE]
     assert np.isnan(lines.feed[3]) and lines.feed[4] == 0.5    # a run restarts after one
 
 
 def test_scan_reads_pen_lines_and_keeps_the_feed_across_them():
-    lines = scan(b"G1 X1 Y2 F100\nM3\nm05 ; up\nM 004\nM3 S1\nM30\nM3.0\nM3 (x)\nM5\n"
-                 b"G1 X2 Y2\n", 256)
+    lines = scan("G1 X1 Y2 F100\nM3\nm05 ; up\nM 004\nM3 S1\nM30\nM3.0\nM3 (x)\nM5\n"
+                 "G1 X2 Y2\n", 256)
     assert lines.kind.tolist() == [LINE, PEN_DOWN, PEN_UP, PEN_DOWN, OTHER, OTHER, OTHER,
                                    OTHER, PEN_UP, LINE]
     assert lines.feed[:4].tolist() == [100.0] * 4 and np.isnan(lines.feed[8])
-
-
-@pytest.mark.parametrize("encoding", ["utf-8", "latin-1"])
-def test_chunks_read_as_bytes_hold_the_lines_text_mode_reads(encoding, tmp_path):
-    rng = random.Random(3)
-    ends = ["\n", "\r\n", "\r"]
-    src = tmp_path / "nl.gcode"
-    kinds = ["G1 X1 Y2", "", "M3", "(caf\xe9)", "G0 X.5 Y7 ; \xb0"]
-    for _ in range(30):
-        lines = [rng.choice(kinds) * rng.randint(1, 3) for _ in range(rng.randint(1, 80))]
-        text = "".join(ln + rng.choice(ends) for ln in lines) + rng.choice(["", "G1 X9 Y9"])
-        src.write_bytes(text.encode(encoding))
-        with src.open(encoding=encoding, newline=None) as f:
-            want = f.read()
-        size = rng.choice([1, 2, 7, 64, 1 << 18])
-        chunks = list(line_chunks(src, encoding, size))
-        assert b"".join(c for _, c in chunks).decode() == want + ("" if want.endswith("\n")
-                                                                  else "\n")
-        assert all(c.endswith(b"\n") for _, c in chunks)
-        assert [n for n, _ in chunks] == [1 + sum(c.count(b"\n") for _, c in chunks[:k])
-                                          for k in range(len(chunks))]
 
 
 def test_strokes_are_read_as_path_ops_a_chunk_at_a_time(tmp_path):

@@ -14,7 +14,6 @@ SVG_EXT = {".svg"}
 COORD_EXT = {".txt", ".coords", ".xy", ".csv"}
 _CHUNK = 1 << 20
 _SNIFF = 1 << 16
-_LINE_END = 1 << 12   # bytes read at a time to finish a chunk's last line
 _GCODE_LINE = re.compile(r"^\s*(?:N\d+\s*)?[GM]\d", re.I | re.M)
 _NUMBER_LINE = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
 # Control characters that do not occur in text files (tab, LF, CR, FF, ^Z allowed).
@@ -91,27 +90,15 @@ def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
             yield n, line.rstrip("\n")
 
 
-def line_chunks(path: Path, encoding: str, size: int = 1 << 18) -> Iterator[tuple[int, bytes]]:
-    """(1-based number of the first line, whole lines as UTF-8 each ending with a
-    newline), about `size` bytes at a time, streamed; lines end where Python's text mode
-    ends them (CR LF and a lone CR are a newline too). A UTF-8 file is taken as it is:
-    the G-code scan reads bytes, and decoding and encoding again cost more than the scan."""
+def line_chunks(path: Path, encoding: str, size: int = 1 << 18) -> Iterator[tuple[int, str]]:
+    """(1-based number of the first line, text of whole lines each ending with a newline),
+    about `size` characters at a time, streamed."""
     first = 1
-    with path.open("rb") as f:
-        while data := f.read(size):
-            while not data.endswith((b"\n", b"\r")) and (more := f.read(_LINE_END)):
-                ends = [at for at in (more.find(b"\n"), more.find(b"\r")) if at >= 0]
-                if ends:        # the rest of the last line: the next chunk starts after it
-                    f.seek(min(ends) + 1 - len(more), 1)
-                    more = more[:min(ends) + 1]
-                data += more
-            if data.endswith(b"\r") and f.peek(1)[:1] == b"\n":
-                data += f.read(1)
-            if b"\r" in data:
-                data = data.replace(b"\r\n", b"\n").replace(b"\r", b"\n")
-            if not data.endswith(b"\n"):
-                data += b"\n"
-            if encoding != "utf-8":
-                data = data.decode(encoding).encode("utf-8")
-            yield first, data
-            first += data.count(b"\n")
+    with path.open("r", encoding=encoding, newline=None) as f:
+        while text := f.read(size):
+            if not text.endswith("\n"):
+                text += f.readline()
+                if not text.endswith("\n"):
+                    text += "\n"
+            yield first, text
+            first += text.count("\n")

@@ -161,9 +161,9 @@ class GcodeReader:
         # thousands of times), each read the same way every time.
         self._plain: dict[str, list[tuple[str, str]]] = {}
 
-    def ops(self, chunks: Iterable[tuple[int, bytes]]) -> Iterator[tuple]:
+    def ops(self, chunks: Iterable[tuple[int, str]]) -> Iterator[tuple]:
         """The ops of the source, given as chunks of whole lines: (number of the chunk's
-        first line, UTF-8 text ending with a newline). The common lines (G0/G1 X Y [F]
+        first line, text ending with a newline). The common lines (G0/G1 X Y [F]
         [; comment], read by the native fast path, native/gcodescan.c) become MOVES ops,
         a run at a time, and with the pen lines among them (M3, M4, M5, in the auto and
         m3 dialects) PATH ops; every other line goes through the general parser."""
@@ -619,7 +619,7 @@ def sniff_dialect(head: str) -> str:
     return "m3"
 
 
-def read_ops(chunks: Iterable[tuple[int, bytes]], options: ImportOptions, errors: ErrorLog,
+def read_ops(chunks: Iterable[tuple[int, str]], options: ImportOptions, errors: ErrorLog,
              fast: bool = True) -> Iterator[tuple]:
     """The ops of G-code given as chunks of whole lines (detect.line_chunks)."""
     return GcodeReader(options, errors, fast).ops(chunks)

@@ -41,15 +41,16 @@ class Scan(NamedTuple):
                                                                      "surrogateescape")
 
 
-def scan(data: bytes, max_line: int) -> Scan:
-    """The lines of `data` (UTF-8 ending with a newline); a common line is G0/G1 X Y [F]
+def scan(text: str, max_line: int) -> Scan:
+    """The lines of `text` (which ends with a newline); a common line is G0/G1 X Y [F]
     [; comment] of at most `max_line` characters whose F, when given, is positive; a pen
     line is M3, M4 or M5 [; comment]."""
+    data = text.encode("utf-8", "surrogateescape")
     # Room for a line per byte (no counting pass; only what the lines use is touched).
     room = len(data)
     kind = np.empty(room, np.uint8)
     x, y, f, feed = np.empty(room), np.empty(room), np.empty(room), np.empty(room)
     start = np.empty(room + 1, np.int_)
-    n = _scanner()(data, len(data), data.isascii(), room, max_line, kind, x, y, f, feed,
+    n = _scanner()(data, len(data), text.isascii(), room, max_line, kind, x, y, f, feed,
                    start)
     return Scan(kind[:n], x[:n], y[:n], f[:n], feed[:n], data, start[:n + 1])
