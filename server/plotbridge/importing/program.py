@@ -9,7 +9,7 @@ import numpy as np
 
 from ..motion import library as motion
 from ..motion.estimate import Estimator
-from ..native.gcodescan import PEN_DOWN, PEN_UP
+from ..native.gcodescan import OTHER, PEN_DOWN, PEN_UP, RAPID
 from ..native.movelines import EV_DOWN, EV_DRAW, EV_TRAVEL, MoveLines, State
 from .models import ErrorLog, MachineProfile
 from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PATH, PEN, arc_extent, arc_points
@@ -243,7 +243,18 @@ class ProgramWriter:
         native/movelines.c, with the estimate's rows, the preview's calls and the
         running totals; an element it leaves (a point outside the work area, a pen down
         starting the first layer or after travel outside the area) goes through `move`
-        or `pen`, and movelines.c goes on after it."""
+        or `pen`, and movelines.c goes on after it. Two such elements in a row (a
+        stretch outside the area): the rest goes element by element."""
+
+        def one(k: int) -> None:
+            line = None if first is None else first + k
+            c = RAPID if kinds is None else int(kinds[k])    # RAPID: a move (feed or not)
+            if c == PEN_DOWN or c == PEN_UP:
+                self.pen(line, c == PEN_DOWN)
+            elif c != OTHER:
+                f = float(feeds[k])
+                self.move(line, float(xs[k]), float(ys[k]), None if f != f else f)
+
         runs = self._runs
         runs.load(kinds, xs, ys, feeds)
         n, k = len(xs), 0
@@ -253,16 +264,14 @@ class ProgramWriter:
             lines = runs.run(k, state, bool(self.layers) and self._outside is None)
             if lines.text:
                 self._took(state, lines)
-            k = lines.stop
-            if k < n:
-                line = None if first is None else first + k
-                c = 0 if kinds is None else int(kinds[k])
-                if c == PEN_DOWN or c == PEN_UP:
-                    self.pen(line, c == PEN_DOWN)
-                else:
-                    f = float(feeds[k])
-                    self.move(line, float(xs[k]), float(ys[k]), None if f != f else f)
-                k += 1
+            if lines.stop == n:
+                return
+            one(lines.stop)
+            if lines.stop == k and k:
+                break
+            k = lines.stop + 1
+        for k in range(lines.stop + 1, n):
+            one(k)
 
     def _took(self, state: State, lines) -> None:
         """The program lines, estimate rows, preview calls and state movelines.c wrote

@@ -115,13 +115,13 @@ static int kind_of(const movelines_t *m, long k)
     return m->op ? m->op[k] : isnan(m->feed[k]) ? RAPID : LINE;
 }
 
-/* Gathers the feeds of elements [from, n) that have no text yet; returns how many
+/* Gathers the feeds of a run's n elements that have no text yet; returns how many
  * (repeats included). */
-static long unknown_feeds(movelines_t *m, long from, long n)
+static long unknown_feeds(movelines_t *m, long n)
 {
     double last = NAN;
     m->n_unknown = 0;
-    for (long k = from; k < n; k++) {
+    for (long k = 0; k < n; k++) {
         double f = m->feed[k];
         if (kind_of(m, k) != LINE || f == last)
             continue;
@@ -174,7 +174,9 @@ static void grow(double *b, double x, double y)
  * from m's state into m's buffers (text: room for n lines of 48 + the longest feed
  * text bytes; the others: n each). Returns the element it stopped at (n when done:
  * the caller writes that one itself, then goes on from the next), or -2 when feeds
- * have no text (m->unknown; nothing is written then). */
+ * have no text (m->unknown; nothing is written then). The run's feeds are checked
+ * on its first call, from 0, which comes first (once per run, not once per stop: a
+ * run far outside the area stops at every point). */
 long moves_lines(movelines_t *m, long from, long n)
 {
     const double *x = m->x, *y = m->y, *feed = m->feed;
@@ -185,7 +187,7 @@ long moves_lines(movelines_t *m, long from, long n)
     const char *feed_text = m->feed_text;
     const int64_t *feed_off = m->feed_off;
     m->rows = m->n_xy = m->n_ev = 0;
-    if (unknown_feeds(m, from, n))
+    if (!from && unknown_feeds(m, n))
         return -2;
     for (k = from; k < n; k++) {
         char xt[32], yt[32];

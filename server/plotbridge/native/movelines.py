@@ -180,7 +180,8 @@ class MoveLines:
         """The lines of the loaded run's elements from `start` on, written from `state`:
         points rounded to 0.001 mm, those equal to the one before dropped, pen changes
         that change nothing too; it stops at a point outside the area (or too large to
-        write) and at a pen down when not `pen_ok`."""
+        write) and at a pen down when not `pen_ok`. The first run after `load` starts
+        at 0 (it finds the feed texts the whole run needs)."""
         n = self._len
         w = self._w
         w.px, w.py, w.down, w.line, w.lifts = state[:5]
