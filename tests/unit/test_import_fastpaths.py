@@ -26,6 +26,7 @@ from plotbridge.importing.preview import PreviewBuilder
 from plotbridge.native import movelines
 from plotbridge.native.gcodescan import LINE, OTHER, PEN_DOWN, PEN_UP, RAPID, scan
 from plotbridge.native.previewjson import strokes_json
+from plotbridge.native.textcheck import first_control
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 PROFILE = MachineProfile(width=300, height=220)
@@ -85,6 +86,18 @@ def test_scan_reads_pen_lines_and_keeps_the_feed_across_them():
     assert lines.kind.tolist() == [LINE, PEN_DOWN, PEN_UP, PEN_DOWN, OTHER, OTHER, OTHER,
                                    OTHER, PEN_UP, LINE]
     assert lines.feed[:4].tolist() == [100.0] * 4 and np.isnan(lines.feed[8])
+
+
+def test_control_bytes_found_natively_are_those_text_files_do_not_hold():
+    text = {9, 10, 12, 13, 26}
+    for b in range(256):
+        for at in range(0, 23, 3):     # in the words read 8 bytes at a time and after
+            data = bytearray(b"G1 X1\nY2 \xe9\r\n;\tab\x1a\x0cc\xff\n"[:at] + b"x" * (23 - at))
+            data[at] = b
+            bad = b < 32 and b not in text
+            assert first_control(bytes(data)) == (at if bad else -1)
+            assert first_control(bytes(data) + b"\x00") == (at if bad else len(data))
+    assert first_control(b"") == -1
 
 
 def test_strokes_are_read_as_path_ops_a_chunk_at_a_time(tmp_path):
