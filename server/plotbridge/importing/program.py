@@ -10,7 +10,7 @@ import numpy as np
 from ..motion import library as motion
 from ..motion.estimate import Estimator
 from ..native.gcodescan import OTHER, PEN_DOWN, PEN_UP, RAPID
-from ..native.movelines import EV_DOWN, EV_DRAW, EV_TRAVEL, MoveLines, State
+from ..native.movelines import EV_DOWN, EV_DRAW, EV_TRAVEL, Lines, MoveLines, State
 from .models import ErrorLog, MachineProfile
 from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PATH, PEN, arc_extent, arc_points
 from .placement import Transform
@@ -273,7 +273,7 @@ class ProgramWriter:
         for k in range(lines.stop + 1, n):
             one(k)
 
-    def _took(self, state: State, lines) -> None:
+    def _took(self, state: State, lines: Lines) -> None:
         """The program lines, estimate rows, preview calls and state movelines.c wrote
         from `state`."""
         self.planner.moves(lines.kind, lines.x32, lines.y32, lines.f32, lines.nbytes)
