@@ -133,31 +133,6 @@ static long unknown_feeds(movelines_t *m, long n)
     return m->n_unknown;
 }
 
-static void row(movelines_t *m, uint8_t kind, float x, float y, float f, long bytes)
-{
-    long r = m->rows++;
-    m->kind[r] = kind;
-    m->x32[r] = x;
-    m->y32[r] = y;
-    m->f32[r] = f;
-    m->nbytes[r] = (uint16_t)bytes;
-}
-
-/* A call of the preview's: a draw or travel through the kept point n_xy extends the
- * one before it when that is the same and ends there. */
-static void event(movelines_t *m, uint8_t ev, int64_t a)
-{
-    long e = m->n_ev;
-    if ((ev == EV_DRAW || ev == EV_TRAVEL) && e && m->ev[e - 1] == ev && m->ev_b[e - 1] == a) {
-        m->ev_b[e - 1] = a + 1;
-        return;
-    }
-    m->ev[e] = ev;
-    m->ev_a[e] = a;
-    m->ev_b[e] = a + 1;
-    m->n_ev++;
-}
-
 static void grow(double *b, double x, double y)
 {
     if (x < b[0])
@@ -179,38 +154,59 @@ static void grow(double *b, double x, double y)
  * run far outside the area stops at every point). */
 long moves_lines(movelines_t *m, long from, long n)
 {
+    /* The state and the counts are kept in locals, written back at the end: the text
+     * is written through a char pointer, which may alias anything in *m. */
     const double *x = m->x, *y = m->y, *feed = m->feed;
     char *o = m->text;
-    long k, fi = 0;
+    long k, fi = 0, rows = 0, n_xy = 0, n_ev = 0, line = m->line, lifts = m->lifts;
     double px = m->px, py = m->py, last_feed = NAN;
-    const double *area = m->area;
+    double down_mm = m->down_mm, travel_mm = m->travel_mm;
+    double b[4] = {m->bounds[0], m->bounds[1], m->bounds[2], m->bounds[3]};
+    int pen = m->down;
+    const double area[4] = {m->area[0], m->area[1], m->area[2], m->area[3]};
     const char *feed_text = m->feed_text;
     const int64_t *feed_off = m->feed_off;
-    m->rows = m->n_xy = m->n_ev = 0;
+    const double *feed_val = m->feed_val;
+    const long n_feeds = m->n_feeds;
+    const uint8_t *op = m->op;
+    uint8_t *kind_out = m->kind, *ev = m->ev;
+    float *x32 = m->x32, *y32 = m->y32, *f32 = m->f32;
+    uint16_t *nbytes = m->nbytes;
+    double *xy = m->xy;
+    int64_t *ev_a = m->ev_a, *ev_b = m->ev_b;
+    const uint8_t kind_rapid = m->kind_rapid, kind_line = m->kind_line;
+    const uint8_t kind_dwell = m->kind_dwell;
+    const float settle = (float)m->settle;
+    const int pen_ok = m->pen_ok;
     if (!from && unknown_feeds(m, n))
         return -2;
     for (k = from; k < n; k++) {
         char xt[32], yt[32];
         double rx, ry;
-        int kind = kind_of(m, k);
+        int kind = op ? op[k] : isnan(feed[k]) ? RAPID : LINE;
         if (kind == NONE)
             continue;
         if (kind == PEN_DOWN || kind == PEN_UP) {
             int down = kind == PEN_DOWN;
-            if (down == m->down)
+            if (down == pen)
                 continue;
-            if (down && !m->pen_ok)
+            if (down && !pen_ok)
                 break;
-            m->down = down;
+            pen = down;
             memcpy(o, down ? "M3\n" : "M5\n", 3);
             o += 3;
-            m->line++;
-            row(m, m->kind_dwell, (float)m->settle, 0.0f, 0.0f, 3);
-            event(m, down ? EV_DOWN : EV_UP, m->line);
+            line++;
+            kind_out[rows] = kind_dwell;
+            x32[rows] = settle;
+            y32[rows] = f32[rows] = 0.0f;
+            nbytes[rows++] = 3;
+            ev[n_ev] = down ? EV_DOWN : EV_UP;
+            ev_a[n_ev] = line;
+            ev_b[n_ev++] = line + 1;
             if (down)
-                grow(m->bounds, px, py);
+                grow(b, px, py);
             else
-                m->lifts++;
+                lifts++;
             continue;
         }
         if (!(fabs(x[k]) <= MAX_ABS && fabs(y[k]) <= MAX_ABS))
@@ -233,7 +229,7 @@ long moves_lines(movelines_t *m, long from, long n)
         if (!rapid) {
             if (feed[k] != last_feed) {
                 last_feed = feed[k];
-                fi = feed_index(last_feed, m->feed_val, m->n_feeds);
+                fi = feed_index(last_feed, feed_val, n_feeds);
             }
             memcpy(o, " F", 2);
             o += 2;
@@ -241,26 +237,47 @@ long moves_lines(movelines_t *m, long from, long n)
             o += feed_off[fi + 1] - feed_off[fi];
         }
         *o++ = '\n';
-        m->line++;
-        row(m, rapid ? m->kind_rapid : m->kind_line, (float)rx, (float)ry,
-            rapid ? 0.0f : (float)feed[k], o - start);
+        line++;
+        kind_out[rows] = rapid ? kind_rapid : kind_line;
+        x32[rows] = (float)rx;
+        y32[rows] = (float)ry;
+        f32[rows] = rapid ? 0.0f : (float)feed[k];
+        nbytes[rows++] = (uint16_t)(o - start);
         double dx = rx - px, dy = ry - py;
         double d = sqrt(dx * dx + dy * dy);
-        event(m, m->down ? EV_DRAW : EV_TRAVEL, m->n_xy);
-        if (m->down) {
-            m->down_mm += d;
-            grow(m->bounds, rx, ry);
+        /* the preview's draw or travel: it extends the one before when that is the
+         * same and ends here */
+        uint8_t e = pen ? EV_DRAW : EV_TRAVEL;
+        if (n_ev && ev[n_ev - 1] == e && ev_b[n_ev - 1] == n_xy) {
+            ev_b[n_ev - 1] = n_xy + 1;
         } else {
-            m->travel_mm += d;
+            ev[n_ev] = e;
+            ev_a[n_ev] = n_xy;
+            ev_b[n_ev++] = n_xy + 1;
         }
-        m->xy[2 * m->n_xy] = rx;
-        m->xy[2 * m->n_xy + 1] = ry;
-        m->n_xy++;
+        if (pen) {
+            down_mm += d;
+            grow(b, rx, ry);
+        } else {
+            travel_mm += d;
+        }
+        xy[2 * n_xy] = rx;
+        xy[2 * n_xy + 1] = ry;
+        n_xy++;
         px = rx;
         py = ry;
     }
     m->px = px;
     m->py = py;
+    m->down = pen;
+    m->line = line;
+    m->lifts = lifts;
+    m->down_mm = down_mm;
+    m->travel_mm = travel_mm;
+    memcpy(m->bounds, b, sizeof b);
+    m->rows = rows;
+    m->n_xy = n_xy;
+    m->n_ev = n_ev;
     m->text_len = (long)(o - m->text);
     return k;
 }
