@@ -110,9 +110,10 @@ typedef struct {
     long n_unknown;
 } movelines_t;
 
-static int kind_of(const movelines_t *m, long k)
+/* The kind of element k of a run (op: the kinds, or NULL when all are moves). */
+static int kind_of(const uint8_t *op, const double *feed, long k)
 {
-    return m->op ? m->op[k] : isnan(m->feed[k]) ? RAPID : LINE;
+    return op ? op[k] : isnan(feed[k]) ? RAPID : LINE;
 }
 
 /* Gathers the feeds of a run's n elements that have no text yet; returns how many
@@ -123,7 +124,7 @@ static long unknown_feeds(movelines_t *m, long n)
     m->n_unknown = 0;
     for (long k = 0; k < n; k++) {
         double f = m->feed[k];
-        if (kind_of(m, k) != LINE || f == last)
+        if (kind_of(m->op, m->feed, k) != LINE || f == last)
             continue;
         last = f;
         long i = feed_index(f, m->feed_val, m->n_feeds);
@@ -183,7 +184,7 @@ long moves_lines(movelines_t *m, long from, long n)
     for (k = from; k < n; k++) {
         char xt[32], yt[32];
         double rx, ry;
-        int kind = op ? op[k] : isnan(feed[k]) ? RAPID : LINE;
+        int kind = kind_of(op, feed, k);
         if (kind == NONE)
             continue;
         if (kind == PEN_DOWN || kind == PEN_UP) {
