@@ -41,8 +41,8 @@ from plotbridge.importing import (  # noqa: E402
     import_file,
     import_pattern,
 )
-from plotbridge.importing.detect import check_text, detect_format, line_chunks  # noqa: E402
-from plotbridge.importing.gcode import read_ops, sniff_dialect  # noqa: E402
+from plotbridge.importing.detect import check_text, detect_format  # noqa: E402
+from plotbridge.importing.gcode import sniff_dialect  # noqa: E402
 from plotbridge.importing.models import ErrorLog  # noqa: E402
 from plotbridge.importing.optimize import optimize_strokes, time_budget  # noqa: E402
 from plotbridge.importing.pipeline import SNIFF_CHARS  # noqa: E402
@@ -74,7 +74,57 @@ def write_big_gcode(path: Path, lines: int) -> None:
             n += 1
 
 
+def _stage_timers() -> dict[str, float]:
+    """CPU seconds of the import's stages, each on the thread it runs on, summed while the
+    import runs: the estimate's thread (the motion library), the scan's thread (reading
+    the file and gcodescan.c), and on the importer's own thread movelines.c, the
+    preview's simplification and preview.json. (Wrappers around the functions, for the
+    bench only; each is called a few hundred times, so they cost nothing measurable.)"""
+    from plotbridge.importing import gcode, preview, program
+    from plotbridge.motion import estimate
+
+    spent = dict.fromkeys(("motion", "scan", "movelines", "simplify", "preview.json"), 0.0)
+
+    def timed(owner, name: str, stage: str) -> None:
+        fn = getattr(owner, name)
+
+        def wrapper(*args, **kwargs):
+            t = time.thread_time()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                spent[stage] += time.thread_time() - t
+        setattr(owner, name, wrapper)
+
+    def timed_items(items):
+        items = iter(items)
+        while True:
+            t = time.thread_time()
+            item = next(items, None)
+            spent["scan"] += time.thread_time() - t
+            if item is None:
+                return
+            yield item
+
+    ahead = gcode._ahead
+    gcode._ahead = lambda items, depth=2: ahead(timed_items(items), depth)
+    timed(estimate._Runner, "_work", "motion")
+    timed(program.MoveLines, "run", "movelines")
+    timed(preview.PreviewBuilder, "_simplify_pending", "simplify")
+    timed(preview, "strokes_json", "preview.json")
+    return spent
+
+
 def _import_in_child(src: str, dest: str, queue) -> None:
+    # The steps before the writer, each run on its own first (the file is then in the
+    # page cache for the import, as it is for wc -l).
+    start = time.process_time()
+    encoding = check_text(Path(src))
+    detect_format(Path(src), "big.gcode", encoding)
+    with Path(src).open(encoding=encoding) as f:
+        sniff_dialect(f.read(SNIFF_CHARS))
+    checked = time.process_time() - start
+    spent = _stage_timers()
     t = time.perf_counter()
     cpu = time.process_time()
     main = time.thread_time()
@@ -82,17 +132,7 @@ def _import_in_child(src: str, dest: str, queue) -> None:
     took, cpu = time.perf_counter() - t, time.process_time() - cpu
     main = time.thread_time() - main
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    # The shares of the steps before the writer, each run again on its own.
-    start = time.process_time()
-    encoding = check_text(Path(src))
-    detect_format(Path(src), "big.gcode", encoding)
-    checked = time.process_time() - start
-    start = time.process_time()
-    with Path(src).open(encoding=encoding) as f:
-        options = ImportOptions(pen_dialect=sniff_dialect(f.read(SNIFF_CHARS)))
-    for _ in read_ops(line_chunks(Path(src), encoding), options, ErrorLog()):
-        pass
-    queue.put((took, cpu, main, r.estimate_s, rss, checked, time.process_time() - start))
+    queue.put((took, cpu, main, r.estimate_s, rss, checked, spent))
 
 
 def bench_throughput(tmp: Path, lines: int) -> None:
@@ -114,7 +154,7 @@ def bench_throughput(tmp: Path, lines: int) -> None:
     child = multiprocessing.get_context("fork").Process(
         target=_import_in_child, args=(str(src), str(tmp / "big"), queue))
     child.start()
-    took, cpu, main, estimate, rss, checked, reading = queue.get()
+    took, cpu, main, estimate, rss, checked, spent = queue.get()
     child.join()
     print(f"(a) {count} lines, {size:.1f} MB: wc -l {floor:.3f} s "
           f"({count / floor:,.0f} lines/s; a Python line count {py_count:.2f} s); "
@@ -125,21 +165,23 @@ def bench_throughput(tmp: Path, lines: int) -> None:
     print(f"    ratio {ratio:.1f}x wc -l (target <= 10x): {'MET' if ratio <= 10 else 'NOT MET'}; "
           f"CPU ratio {cpu / floor:.1f}x; vs a Python line count {took / py_count:.1f}x")
     print(f"    peak RSS {rss:.0f} MB (target < 150 MB): {'MET' if rss < 150 else 'NOT MET'}")
-    print(f"    the importer's own thread: CPU {main:.2f} s, {main / floor:.1f}x wc -l (the "
-          f"motion library and the file's reading and scan run on two threads beside it: on "
-          f"a quiet machine the wall time is about this)")
-    motion = bench_motion_library(count)
-    print(f"    the import without the motion library: CPU {cpu - motion:.2f} s, "
-          f"{(cpu - motion) / floor:.1f}x wc -l (the library alone is {motion / floor:.1f}x)")
-    rest = cpu - motion - checked - reading
-    print(f"    where the CPU time goes: checking the text and its format {checked:.2f} s, "
-          f"reading the G-code (gcodescan, GcodeReader) {reading:.2f} s, the motion library "
-          f"{motion:.2f} s, the rest (ProgramWriter: program text, estimate input, preview; "
-          f"preview.json) {rest:.2f} s")
+    motion, scan = spent["motion"], spent["scan"]
+    own = main - spent["movelines"] - spent["simplify"] - spent["preview.json"] - checked
+    print(f"    CPU by thread (three threads share the cores; on a quiet 2-core machine the "
+          f"wall time is about the largest, or half the sum): the importer's own {main:.2f} s "
+          f"({main / floor:.1f}x wc -l), the estimate's (the motion library: the firmware's "
+          f"planner and segments, C) {motion:.2f} s, the file's reading and scan (gcodescan.c) "
+          f"{scan:.2f} s")
+    print(f"    the importer's own thread: checking the text, its format and pen dialect "
+          f"{checked:.2f} s, movelines.c (program text, estimate rows, preview calls) "
+          f"{spent['movelines']:.2f} s, the preview's simplification {spent['simplify']:.2f} s, "
+          f"preview.json {spent['preview.json']:.2f} s, the rest (the reader's and the "
+          f"writer's Python per chunk and per stroke, writing the program) {own:.2f} s")
+    bench_motion_library(count)
 
 
 def bench_motion_library(lines: int) -> None:
-    """The estimate's share: the same number of short moves through libmotion alone."""
+    """The motion library alone on the same number of short moves."""
     import numpy as np
     from plotbridge.motion.estimate import Estimator
     rng = np.random.default_rng(1)
@@ -154,9 +196,8 @@ def bench_motion_library(lines: int) -> None:
     e.moves(kind, xs, ys, feed, nbytes)
     e.flush()
     took = time.process_time() - t
-    print(f"    of which the motion library (firmware planner + segments, C): CPU {took:.2f} s "
-          f"for {lines:,} moves ({lines / took:,.0f} moves/s)")
-    return took
+    print(f"    the motion library alone on {lines:,} moves of one feed: CPU {took:.2f} s "
+          f"({lines / took:,.0f} moves/s, {took / lines * 1e9:.0f} ns a move)")
 
 
 # ---------------------------------------------------------------- (b) vs vpype

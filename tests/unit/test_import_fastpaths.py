@@ -8,6 +8,7 @@ svgelements."""
 from __future__ import annotations
 
 import json
+import math
 import random
 import re
 from pathlib import Path
@@ -18,13 +19,14 @@ from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile, cu
 from plotbridge.importing.detect import line_chunks
 from plotbridge.importing.gcode import read_ops
 from plotbridge.importing.models import ErrorLog
-from plotbridge.importing.ops import single_moves
+from plotbridge.importing.ops import PATH, single_moves
 from plotbridge.importing.pipeline import write_program
 from plotbridge.importing.placement import Transform
 from plotbridge.importing.preview import PreviewBuilder
 from plotbridge.native import movelines
-from plotbridge.native.gcodescan import LINE, OTHER, RAPID, scan
+from plotbridge.native.gcodescan import LINE, OTHER, PEN_DOWN, PEN_UP, RAPID, scan
 from plotbridge.native.previewjson import strokes_json
+from plotbridge.native.textcheck import first_control
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 PROFILE = MachineProfile(width=300, height=220)
@@ -76,6 +78,34 @@ def test_scan_leaves_feeds_that_are_not_positive_to_the_general_parser():
     lines = scan("G1 X1 Y2 F100\nG1 X1 Y2 F0\nG1 X1 Y2 F-5\nG1 X1 Y2\nG1 X1 Y2 F.5\n", 256)
     assert lines.kind.tolist() == [LINE, OTHER, OTHER, LINE, LINE]
     assert np.isnan(lines.feed[3]) and lines.feed[4] == 0.5    # a run restarts after one
+
+
+def test_scan_reads_pen_lines_and_keeps_the_feed_across_them():
+    lines = scan("G1 X1 Y2 F100\nM3\nm05 ; up\nM 004\nM3 S1\nM30\nM3.0\nM3 (x)\nM5\n"
+                 "G1 X2 Y2\n", 256)
+    assert lines.kind.tolist() == [LINE, PEN_DOWN, PEN_UP, PEN_DOWN, OTHER, OTHER, OTHER,
+                                   OTHER, PEN_UP, LINE]
+    assert lines.feed[:4].tolist() == [100.0] * 4 and np.isnan(lines.feed[8])
+
+
+def test_control_bytes_found_natively_are_those_text_files_do_not_hold():
+    text = {9, 10, 12, 13, 26}
+    for b in range(256):
+        for at in range(0, 23, 3):     # in the words read 8 bytes at a time and after
+            data = bytearray(b"G1 X1\nY2 \xe9\r\n;\tab\x1a\x0cc\xff\n"[:at] + b"x" * (23 - at))
+            data[at] = b
+            bad = b < 32 and b not in text
+            assert first_control(bytes(data)) == (at if bad else -1)
+            assert first_control(bytes(data) + b"\x00") == (at if bad else len(data))
+    assert first_control(b"") == -1
+
+
+def test_strokes_are_read_as_path_ops_a_chunk_at_a_time(tmp_path):
+    src = tmp_path / "s.gcode"
+    src.write_text("G21\n" + "G0 X1 Y1\nM3\nG1 X2 Y2 F600\nG1 X3 Y1\nM5\n" * 50)
+    ops = list(read_ops(line_chunks(src, "utf-8"), ImportOptions(), ErrorLog()))
+    assert [op[0] for op in ops] == [PATH]      # G21 is read alone and changes nothing
+    assert len(list(single_moves(ops))) == 250
 
 
 @pytest.mark.parametrize("name", sorted(p.name for p in (FIXTURES / "gcode").glob("*.gcode")))
@@ -211,7 +241,7 @@ def test_preview_strokes_written_natively_as_json_dumps_writes_them(tmp_path):
                 for _ in range(50)]
     pb = PreviewBuilder()
     for s in strokes:
-        pb.draw_many(float(s[0, 0]), float(s[0, 1]), s[1:])
+        pb.draw_path(s)
         pb.end_stroke()
         pb.move(1.0, 2.0, 3.00049, 4.0)
     bounds = {"min_x": 0.0, "min_y": -0.0, "max_x": 1.5, "max_y": 2.0}
@@ -234,6 +264,9 @@ def _python_lines(x, y, feeds, start, feed_text) -> str:
     return "".join(out)
 
 
+START = movelines.State(0.0, 0.0, False, 0, 0, 0.0, 0.0, [math.inf, math.inf, -math.inf, -math.inf])
+
+
 def test_move_lines_round_as_python_formats_and_keep_feed_texts(monkeypatch):
     monkeypatch.setattr(movelines, "FEEDS_MAX", 8)    # the texts start afresh often
     rng = np.random.default_rng(11)
@@ -254,10 +287,36 @@ def test_move_lines_round_as_python_formats_and_keep_feed_texts(monkeypatch):
         if trial % 3 == 0:
             x[1::2], y[1::2] = x[:-1:2], y[:-1:2]
         feeds = rng.choice(np.r_[rng.uniform(1, 9000, 20), [np.nan, 1500.0]], n)
-        lines = run.run(x, y, feeds, (0.0, 0.0), 0.0)
-        assert lines is not None
+        run.load(None, x, y, feeds)
+        lines = run.run(0, START, True)
+        assert lines.stop == n
         text = lines.text.decode("ascii")
         assert text == _python_lines(x, y, feeds, (0.0, 0.0), feed_text)
         assert [str(v) for v in lines.xy.ravel()] == [
             str(float(t)) for t in re.findall(r"[XY](\S+)", text)]
-    assert run.run(np.array([5.0, 2e6]), np.zeros(2), np.ones(2), (0.0, 0.0), 0.0) is None
+    run.load(None, np.array([5.0, 2e6, 6.0]), np.zeros(3), np.ones(3))
+    lines = run.run(0, START, True)      # it stops at the point outside the area
+    assert lines.stop == 1 and lines.text == b"G1 X5.000 Y0.000 F1\n"
+    assert lines.state.x == 5.0 and lines.state.line == 1
+    assert run.run(2, lines.state, True).text == b"G1 X6.000 Y0.000 F1\n"
+
+
+def test_move_lines_write_pen_changes_and_stop_at_a_pen_down_left_to_the_writer():
+    run = movelines.MoveLines((-1.0, -1.0, 300.0, 300.0), lambda f: f"{f:g}", 0, 1, 6, 0.25)
+    kinds = np.array([RAPID, PEN_DOWN, LINE, LINE, PEN_DOWN, OTHER, PEN_UP, RAPID, PEN_DOWN],
+                     np.uint8)
+    x = np.array([1.0, 0, 2, 2.0004, 0, 0, 0, 5, 0])
+    run.load(kinds, x, x, np.where(kinds == LINE, 600.0, np.nan))
+    lines = run.run(0, START, True)
+    assert lines.text == (b"G0 X1.000 Y1.000\nM3\nG1 X2.000 Y2.000 F600\nM5\n"
+                          b"G0 X5.000 Y5.000\nM3\n")
+    assert lines.stop == len(kinds)
+    assert lines.kind.tolist() == [0, 6, 1, 6, 0, 6]      # pen changes: dwells of 0.25 s
+    assert lines.x32[1] == np.float32(0.25) and lines.nbytes.tolist() == [17, 3, 22, 3, 17, 3]
+    assert lines.events[0] == [movelines.EV_TRAVEL, movelines.EV_DOWN, movelines.EV_DRAW,
+                               movelines.EV_UP, movelines.EV_TRAVEL, movelines.EV_DOWN]
+    s = lines.state
+    assert (s.x, s.down, s.line, s.lifts, s.bounds) == (5.0, True, 6, 1, [1.0, 1.0, 5.0, 5.0])
+    assert s.down_mm == math.sqrt(2) and s.travel_mm == math.sqrt(2) + math.sqrt(18)
+    lines = run.run(0, START, False)    # the writer starts its first layer itself
+    assert lines.stop == 1 and lines.text == b"G0 X1.000 Y1.000\n"

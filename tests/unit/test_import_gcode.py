@@ -251,7 +251,8 @@ def test_a_failing_read_is_raised_after_the_chunks_before_it():
     # The chunks are read and scanned on a thread of their own (gcode._ahead).
     got = []
     with pytest.raises(OSError, match="disk gone"):
-        for op in read_ops(_chunks_then(OSError("disk gone")), ImportOptions(), ErrorLog()):
+        for op in single_moves(read_ops(_chunks_then(OSError("disk gone")), ImportOptions(),
+                                        ErrorLog())):
             got.append(op[:2])
     assert got == [(MOVE, 1), (PEN, 2), (MOVE, 3)]
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 from plotbridge.importing import ImportFailed
+from plotbridge.importing.gcode import sniff_dialect
 
 from tests.fixtures.imports import program_lines, run_import
 
@@ -113,3 +114,11 @@ def test_m280_threshold_and_explicit_dialect(tmp_path):
     assert run_import(tmp_path, text, "s.gcode").stats["pen_down_mm"] == pytest.approx(10)
     r = run_import(tmp_path, text, "s.gcode", pen_dialect="none")
     assert r.stats["pen_down_mm"] == pytest.approx(10)     # G1 draws, G0 travels
+
+
+@pytest.mark.parametrize(("head", "dialect"), [
+    ("G0 X1\nm300 s30\n", "m300"), ("G0 X1\nM 300 S30\n", "m300"), ("m\t280 P0 S90\n", "m280"),
+    ("G1 X300 F3000\nM3\n", "m3"), ("M3000\nM2800\nG0 X1\n", "none"), ("(M300)\nG0 X1\n", "none"),
+])
+def test_servo_words_are_sniffed_in_either_case(head, dialect):
+    assert sniff_dialect(head) == dialect

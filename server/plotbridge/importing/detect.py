@@ -7,6 +7,7 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
+from ..native.textcheck import first_control
 from .models import ImportFailed
 
 GCODE_EXT = {".gcode", ".nc", ".gc", ".ngc", ".tap", ".g"}
@@ -16,8 +17,6 @@ _CHUNK = 1 << 20
 _SNIFF = 1 << 16
 _GCODE_LINE = re.compile(r"^\s*(?:N\d+\s*)?[GM]\d", re.I | re.M)
 _NUMBER_LINE = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
-# Control characters that do not occur in text files (tab, LF, CR, FF, ^Z allowed).
-_BINARY = bytes(c for c in range(32) if c not in (9, 10, 12, 13, 26))
 
 
 def check_text(path: Path) -> str:
@@ -26,15 +25,14 @@ def check_text(path: Path) -> str:
     decoder = codecs.getincrementaldecoder("utf-8")()
     utf8 = True
     blank = True
-    table = bytes.maketrans(b"", b"")
     with path.open("rb") as f:
         if f.read(4)[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
             raise ImportFailed.one(415, "UTF-16 text is not accepted: save the file as UTF-8")
         f.seek(0)
         offset = 0
         while chunk := f.read(_CHUNK):
-            if chunk.translate(table, _BINARY) != chunk:
-                bad = next(i for i, b in enumerate(chunk) if b in _BINARY)
+            bad = first_control(chunk)
+            if bad >= 0:
                 raise ImportFailed.one(415, f"not a text file: control byte "
                                             f"0x{chunk[bad]:02x} at offset {offset + bad}")
             if blank and chunk.strip():

@@ -16,10 +16,10 @@ from typing import TypeVar
 
 import numpy as np
 
-from ..native.gcodescan import LINE, OTHER, scan
+from ..native.gcodescan import LINE, OTHER, PEN_DOWN, PEN_UP, RAPID, scan
 from .fields import PEN_DIALECTS as UPLOAD_DIALECTS
 from .models import ErrorLog, ImportOptions
-from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PEN
+from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PATH, PEN
 
 MAX_LINE = 256          # characters of commands on a line (comments do not count)
 MAX_RAW_LINE = 1 << 16  # characters of a line with its comments
@@ -165,20 +165,23 @@ class GcodeReader:
         """The ops of the source, given as chunks of whole lines: (number of the chunk's
         first line, text ending with a newline). The common lines (G0/G1 X Y [F]
         [; comment], read by the native fast path, native/gcodescan.c) become MOVES ops,
-        a run at a time; every other line goes through the general parser."""
+        a run at a time, and with the pen lines among them (M3, M4, M5, in the auto and
+        m3 dialects) PATH ops; every other line goes through the general parser."""
         if self.dialect == "servo-z" and self.servo_down is None:
             self.errors.add(None, "pen dialect servo-z needs servo_down_angle")
             return
         out: list[tuple] = []
+        # the largest kind read in bulk: pen lines too where M3/M5 move the pen
+        bulk = (PEN_UP if self.dialect in ("auto", "m3") else LINE) if self.fast else OTHER
         for first, lines in _ahead((first, scan(text, MAX_LINE)) for first, text in chunks):
             kind = lines.kind
-            common = kind != OTHER if self.fast else np.zeros(len(kind), bool)
+            common = (kind != OTHER) & (kind <= bulk)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
             firsts = common[cuts[:-1]].tolist()     # is each stretch common lines?
             for a, b, is_common in zip(cuts[:-1], cuts[1:], firsts, strict=True):
                 if is_common and not self.relative and not self.inches:
-                    self._run(out, first + a, kind[a:b], lines.x[a:b], lines.y[a:b],
-                              lines.feed[a:b])
+                    self._path(out, first + a, kind[a:b], lines.x[a:b], lines.y[a:b],
+                               lines.feed[a:b])
                 else:
                     # any other line, or a common one in relative or inch mode (a run
                     # of common lines changes neither)
@@ -190,6 +193,67 @@ class GcodeReader:
                 if out:
                     yield from out
                     out.clear()
+
+    def _feeds(self, first: int, draw: np.ndarray, feed: np.ndarray) -> np.ndarray:
+        """The feed of each line of a run: the last F given at or before it, else the one
+        before the run; a G1 with no feed ever given warns once and takes the default.
+        (The feeds are NaN only before the run's first F.) Keeps the last as the feed in
+        effect."""
+        if feed[0] != feed[0]:
+            before = self.feed
+            if before is None:
+                unfed = np.flatnonzero(draw & np.isnan(feed))
+                if len(unfed):
+                    self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
+                    before = self.default_feed
+            if before is not None:
+                feed = np.where(np.isnan(feed), before, feed)
+        last = float(feed[-1])
+        if last == last:
+            self.feed = last
+        return feed
+
+    def _path(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
+              y: np.ndarray, feed: np.ndarray) -> None:
+        """Appends the ops of consecutive common and pen lines (absolute millimetres): one
+        PATH op (MOVES ops when there are no pen lines: `_run`). A pen line changing
+        nothing becomes OTHER (no PEN op); the first pen down after a pause or tool
+        change, which starts a layer, is taken alone (`_pen`)."""
+        at = np.flatnonzero(kind >= PEN_DOWN)
+        if not len(at):
+            self._run(out, first, kind, x, y, feed)
+            return
+        down = kind[at] == PEN_DOWN
+        if self.pending_layer is not None and down.any():
+            p = int(at[np.argmax(down)])
+            if p:
+                self._path(out, first, kind[:p], x[:p], y[:p], feed[:p])
+            self._pen(out, first + p, True)
+            if p + 1 < len(kind):
+                self._path(out, first + p + 1, kind[p + 1:], x[p + 1:], y[p + 1:],
+                           feed[p + 1:])
+            return
+        before = np.empty(len(down), bool)
+        before[1:] = down[:-1]
+        before[0] = bool(self.pen)
+        same = down == before
+        if self.pen is None:
+            same[0] = False
+        kind = kind.copy()
+        kind[at[same]] = OTHER
+        self.pen = bool(down[-1])
+        if down.any():
+            self.drawn = True
+        draw = kind == LINE
+        moving = np.flatnonzero((kind == RAPID) | draw)
+        feed = self._feeds(first, draw, feed)
+        x = x + self.off_x
+        y = y + self.off_y
+        if len(moving):
+            last = int(moving[-1])
+            self.motion = 1 if draw[last] else 0
+            self.x, self.y = float(x[last]), float(y[last])
+        out.append((PATH, first, kind, x, y, np.where(draw, feed, np.nan)))
 
     def _run(self, out: list[tuple], first: int, kind: np.ndarray, x: np.ndarray,
              y: np.ndarray, feed: np.ndarray) -> None:
@@ -203,21 +267,7 @@ class GcodeReader:
         draw = kind == LINE
         x = x + self.off_x
         y = y + self.off_y
-        # The feed of each line: the last F given at or before it, else the one before
-        # the run; a G1 with no feed ever given warns once and takes the default. (The
-        # feeds are NaN only before the run's first F.)
-        if feed[0] != feed[0]:
-            before = self.feed
-            if before is None:
-                unfed = np.flatnonzero(draw & np.isnan(feed))
-                if len(unfed):
-                    self.errors.warn(first + int(unfed[0]), _no_feed(1, self.default_feed))
-                    before = self.default_feed
-            if before is not None:
-                feed = np.where(np.isnan(feed), before, feed)
-        last = float(feed[-1])
-        if last == last:
-            self.feed = last
+        feed = self._feeds(first, draw, feed)
         feeds = np.where(draw, feed, np.nan)
         self.motion = 1 if draw[-1] else 0
         self.x, self.y = float(x[-1]), float(y[-1])
@@ -538,10 +588,10 @@ class GcodeReader:
 _LASER_SNIFF = 1 << 16
 _BLOCK_AFTER_PAUSE = re.compile(r"[GMXYZFST]\s*[-+.\d]", re.I)
 _Z_WORD = re.compile(r"Z\s*([-+]?(?:\d+\.?\d*|\.\d+))", re.I)
-_M300 = re.compile(r"M\s*300\b", re.I)
-
-
-_M280 = re.compile(r"M\s*280\b", re.I)
+# M300 and M280 are searched for in the text with m made M: a case-insensitive search
+# costs 10 times as much, and only m and M fold to m.
+_M300 = re.compile(r"M\s*300\b")
+_M280 = re.compile(r"M\s*280\b")
 _M3 = re.compile(r"^[^\n]*?\bM0*[34](?![0-9.])", re.I | re.M)
 _LASER_G0 = re.compile(r"\bM0*[34](?![0-9.])(?:(?!\bM0*5(?![0-9.]))[\s\S])*?^\s*G0*0(?![0-9.])"
                        r"[^\n]*[XY](?:(?!\bM0*5(?![0-9.]))[\s\S])*?^\s*G0*1(?![0-9.])",
@@ -556,9 +606,10 @@ def sniff_dialect(head: str) -> str:
     text = _COMMENT.sub("", head)
     # Each search only where its words' plain text occurs (a search is 100 times slower
     # than looking for a substring, and this is a megabyte).
-    if "300" in text and _M300.search(text):
+    folded = text.replace("m", "M") if "300" in text or "280" in text else text
+    if "300" in text and _M300.search(folded):
         return "m300"
-    if "280" in text and _M280.search(text):
+    if "280" in text and _M280.search(folded):
         return "m280"
     if ("Z" in text or "z" in text) and len({float(z) for z in _Z_WORD.findall(text)}) >= 2:
         return "z"

@@ -9,6 +9,11 @@ An op is a tuple whose first item is its kind and whose second is the source lin
   on (or of no line, None) as numpy arrays, feeds NaN for rapids: G-code's common
   lines and long strokes travel as these, so that the writer takes them in bulk
 - ``(ARC, line, x, y, i, j, feed, cw)``: centre offset (i, j) from the start point
+- ``(PATH, line, kinds, xs, ys, feeds)``: consecutive source lines from `line` on, each
+  a move or a pen change, as numpy arrays: kinds are gcodescan's (RAPID and LINE: a
+  MOVE, feeds NaN for rapids; PEN_DOWN and PEN_UP: a PEN op; OTHER: a line that does
+  nothing): a G-code drawing's strokes travel as these, so that the writer takes a
+  chunk of the file at once
 - ``(DWELL, line, seconds)``
 - ``(LAYER, line, name, colour)``: what follows is a new layer (a pen change before it)
 
@@ -23,7 +28,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-PEN, MOVE, ARC, DWELL, LAYER, MOVES = 0, 1, 2, 3, 4, 5
+from ..native.gcodescan import LINE, PEN_DOWN, PEN_UP, RAPID
+
+PEN, MOVE, ARC, DWELL, LAYER, MOVES, PATH = 0, 1, 2, 3, 4, 5, 6
 
 Stroke = list[tuple[float, float]]
 _BULK = 16      # points of a stroke from which it is written as one MOVES op
@@ -87,8 +94,18 @@ def arc_extent(sx: float, sy: float, x: float, y: float, i: float, j: float,
 
 
 def single_moves(ops: Iterable[tuple]) -> Iterator[tuple]:
-    """The ops with each MOVES op as its MOVE ops, for readers that take one at a time."""
+    """The ops with each MOVES op as its MOVE ops and each PATH op as its MOVE and PEN
+    ops, for readers that take one at a time."""
     for op in ops:
+        if op[0] == PATH:
+            line = op[1]
+            for k, (c, x, y, f) in enumerate(zip(op[2].tolist(), op[3].tolist(),
+                                                 op[4].tolist(), op[5].tolist(), strict=True)):
+                if c == RAPID or c == LINE:
+                    yield (MOVE, line + k, x, y, None if f != f else f)
+                elif c == PEN_DOWN or c == PEN_UP:
+                    yield (PEN, line + k, c == PEN_DOWN)
+            continue
         if op[0] != MOVES:
             yield op
             continue

@@ -76,13 +76,13 @@ class PreviewBuilder:
         if self._raw_n >= _BATCH:
             self._restart_raw((x, y))
 
-    def draw_many(self, x0: float, y0: float, pts: np.ndarray) -> None:
-        """`draw` along a polyline from (x0, y0) through `pts` (n x 2)."""
+    def draw_path(self, pts: np.ndarray) -> None:
+        """`draw` along the polyline `pts` (n x 2) from its first point, where the pen
+        is."""
         if self._travel_from is not None:
             self._flush_travel()
-        if not self._raw_n:
-            self._raw.append([(x0, y0)])
-            self._raw_n = 1
+        if self._raw_n:
+            pts = pts[1:]
         while len(pts):
             room = _BATCH - self._raw_n
             self._raw.append(pts[:room])
@@ -140,9 +140,9 @@ class PreviewBuilder:
         sizes = [p[1] for p in self._pending]
         pts = _joined([part for p in self._pending for part in p[0]])
         ends = np.cumsum(sizes)
-        fixed = np.unique(np.concatenate([ends - np.array(sizes), ends - 1]))
-        keep = simplify_mask(pts, self.tolerance, fixed)
-        pieces = kept_pieces(pts, keep, ends - np.array(sizes), ends)
+        starts = ends - np.array(sizes)
+        keep = simplify_mask(pts, self.tolerance, np.concatenate([starts, ends - 1]))
+        pieces = kept_pieces(pts, keep, starts, ends)
         for (_, _, continues, colour, lines), piece in zip(self._pending, pieces, strict=True):
             if self._open is not None:
                 piece = np.concatenate([self._open, piece[1:]])

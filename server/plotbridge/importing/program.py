@@ -7,11 +7,12 @@ from collections.abc import Iterable
 
 import numpy as np
 
+from ..motion import library as motion
 from ..motion.estimate import Estimator
-from ..motion.library import LINE, RAPID
-from ..native.movelines import MoveLines
+from ..native.gcodescan import OTHER, PEN_DOWN, PEN_UP, RAPID
+from ..native.movelines import EV_DOWN, EV_DRAW, EV_TRAVEL, Lines, MoveLines, State
 from .models import ErrorLog, MachineProfile
-from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PEN, arc_extent, arc_points
+from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PATH, PEN, arc_extent, arc_points
 from .placement import Transform
 from .preview import PreviewBuilder
 
@@ -50,7 +51,8 @@ class ProgramWriter:
         self._buffered = 0           # lines in _buf
         self.last = ""
         self._feed_texts: dict[float, str] = {}
-        self._runs = MoveLines(self._area, self._feed_text, RAPID, LINE)
+        self._runs = MoveLines(self._area, self._feed_text, motion.RAPID, motion.LINE,
+                               motion.DWELL, profile.pen_settle_s)
         self.layers: list[dict] = []
         # Pen-up travel that left the work area (source line, x, y): clamped to the
         # area when no stroke follows it (a trailing move home), an error otherwise.
@@ -116,6 +118,9 @@ class ProgramWriter:
             elif kind == MOVES:
                 xs, ys = (op[2], op[3]) if ident else t.apply(op[2], op[3])
                 self.moves(op[1], xs, ys, op[4])
+            elif kind == PATH:
+                xs, ys = (op[3], op[4]) if ident else t.apply(op[3], op[4])
+                self.path(op[1], op[2], xs, ys, op[5])
             elif kind == PEN:
                 self.pen(op[1], op[2])
             elif kind == ARC:
@@ -218,41 +223,85 @@ class ProgramWriter:
     def moves(self, first: int | None, xs: np.ndarray, ys: np.ndarray,
               feeds: np.ndarray) -> None:
         """`move` for each point in turn (feeds NaN for rapids; source lines from `first`
-        on), done for all at once (native/movelines.c writes the lines); a short run, or
-        one that leaves the work area, goes point by point."""
-        lines = None
+        on), done for all at once (`_bulk`); a short run goes point by point."""
         if len(xs) >= SHORT_RUN:
-            lines = self._runs.run(xs, ys, feeds, (self.x, self.y),
-                                   self.pen_down_mm if self.down else self.travel_mm)
-        if lines is None:
-            for k, (px, py, f) in enumerate(zip(xs.tolist(), ys.tolist(), feeds.tolist(),
-                                                strict=True)):
-                self.move(None if first is None else first + k, px, py,
-                          None if f != f else f)
+            self._bulk(first, None, xs, ys, feeds)
             return
-        n = len(lines.xy)
-        if not n:
-            return
+        for k, (px, py, f) in enumerate(zip(xs.tolist(), ys.tolist(), feeds.tolist(),
+                                            strict=True)):
+            self.move(None if first is None else first + k, px, py, None if f != f else f)
+
+    def path(self, first: int, kinds: np.ndarray, xs: np.ndarray, ys: np.ndarray,
+             feeds: np.ndarray) -> None:
+        """A PATH op (ops.py): `move` and `pen` for each of its elements in turn, done
+        for all at once (`_bulk`)."""
+        self._bulk(first, kinds, xs, ys, feeds)
+
+    def _bulk(self, first: int | None, kinds: np.ndarray | None, xs: np.ndarray,
+              ys: np.ndarray, feeds: np.ndarray) -> None:
+        """Moves and pen changes (kinds as in a PATH op; None: all moves) written by
+        native/movelines.c, with the estimate's rows, the preview's calls and the
+        running totals; an element it leaves (a point outside the work area, a pen down
+        starting the first layer or after travel outside the area) goes through `move`
+        or `pen`, and movelines.c goes on after it. Two such elements in a row (a
+        stretch outside the area): the rest goes element by element."""
+
+        def one(k: int) -> None:
+            line = None if first is None else first + k
+            c = RAPID if kinds is None else int(kinds[k])    # RAPID: a move (feed or not)
+            if c == PEN_DOWN or c == PEN_UP:
+                self.pen(line, c == PEN_DOWN)
+            elif c != OTHER:
+                f = float(feeds[k])
+                self.move(line, float(xs[k]), float(ys[k]), None if f != f else f)
+
+        runs = self._runs
+        runs.load(kinds, xs, ys, feeds)
+        n, k = len(xs), 0
+        while k < n:
+            state = State(self.x, self.y, self.down, self.line, self.pen_lifts,
+                          self.pen_down_mm, self.travel_mm, self.bounds)
+            lines = runs.run(k, state, bool(self.layers) and self._outside is None)
+            if lines.text:
+                self._took(state, lines)
+            if lines.stop == n:
+                return
+            one(lines.stop)
+            if lines.stop == k and k:
+                break
+            k = lines.stop + 1
+        for k in range(lines.stop + 1, n):
+            one(k)
+
+    def _took(self, state: State, lines: Lines) -> None:
+        """The program lines, estimate rows, preview calls and state movelines.c wrote
+        from `state`."""
         self.planner.moves(lines.kind, lines.x32, lines.y32, lines.f32, lines.nbytes)
-        self.line += n
         text = lines.text
         self.last = text[text.rfind(b"\n", 0, -1) + 1:-1].decode("ascii")
         self._buf.append(text)
-        self._buffered += n
+        s = lines.state
+        self._buffered += s.line - self.line
+        (self.x, self.y, self.down, self.line, self.pen_lifts, self.pen_down_mm,
+         self.travel_mm, self.bounds) = s
         if self._buffered >= 4096:
             self.flush()
-        end = lines.xy[-1].tolist()
-        if self.down:
-            self.pen_down_mm = lines.length
-            self.preview.draw_many(self.x, self.y, lines.xy.copy())
-            b = self.bounds    # the stroke's first point was added at pen down
-            lo_x, lo_y, hi_x, hi_y = lines.bounds
-            b[0], b[1] = min(b[0], lo_x), min(b[1], lo_y)
-            b[2], b[3] = max(b[2], hi_x), max(b[3], hi_y)
-        else:
-            self.travel_mm = lines.length
-            self.preview.move(self.x, self.y, *end)
-        self.x, self.y = end
+        preview = self.preview
+        xy = lines.xy
+        if len(xy):     # the points with the run's start before them (drawn from there)
+            xy = np.empty((len(xy) + 1, 2))
+            xy[0] = state.x, state.y
+            xy[1:] = lines.xy
+        for ev, a, b in zip(*lines.events, strict=True):
+            if ev == EV_DRAW:
+                preview.draw_path(xy[a:b + 1])
+            elif ev == EV_TRAVEL:
+                x0, y0, x, y = xy[a:b + 1:b - a].ravel().tolist()
+                preview.move(x0, y0, x, y)
+            elif ev == EV_DOWN:
+                preview.pen_down(a)
+            else:
+                preview.pen_up(a)
 
     def arc(self, src_line: int | None, x: float, y: float, i: float, j: float,
             feed: float, cw: bool) -> None:

@@ -28,7 +28,7 @@ def simplify_all(polylines: list[np.ndarray], tolerance: float) -> list[np.ndarr
     ends = np.cumsum(sizes)
     starts = ends - sizes
     pts = np.concatenate(polylines)
-    keep = simplify_mask(pts, tolerance, np.unique(np.concatenate([starts, ends - 1])))
+    keep = simplify_mask(pts, tolerance, np.concatenate([starts, ends - 1]))
     return kept_pieces(pts, keep, starts, ends)
 
 
@@ -37,26 +37,25 @@ def kept_pieces(points: np.ndarray, keep: np.ndarray, starts: np.ndarray,
     """points[a:b][keep[a:b]] for each piece [a, b) of starts and ends, taken at once (a
     file of short strokes has thousands of pieces): views of one array of the kept
     points."""
-    kept = points[keep]
+    kept = np.compress(keep, points, axis=0)    # 10 times what points[keep] costs
     at = np.concatenate([[0], np.cumsum(keep, dtype=np.intp)])
     return [kept[a:b] for a, b in zip(at[starts].tolist(), at[ends].tolist(), strict=True)]
 
 
 def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np.ndarray:
-    """Which points to keep; `fixed` are indices always kept, which must include the
-    first and the last (several polylines laid end to end are simplified at once by
-    fixing the ends of each)."""
+    """Which points (n x 2) to keep; `fixed` are indices always kept (repeats allowed),
+    which must include the first and the last (several polylines laid end to end are
+    simplified at once by fixing the ends of each)."""
     keep = np.zeros(len(points), dtype=np.uint8)
     keep[fixed] = 1
-    xs = np.ascontiguousarray(points[:, 0], dtype=np.float64)
-    ys = np.ascontiguousarray(points[:, 1], dtype=np.float64)
-    if _native()(len(points), xs, ys, tolerance * tolerance, keep):
+    xy = np.ascontiguousarray(points, dtype=np.float64)
+    if _native()(len(points), xy, tolerance * tolerance, keep):
         raise MemoryError("simplify: out of memory")
     return keep.view(bool)
 
 
 def _native():
-    f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
     return function("simplify", "simplify_mask",
-                    [ctypes.c_long, f64, f64, ctypes.c_double,
-                     np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")], ctypes.c_int)
+                    [ctypes.c_long, np.ctypeslib.ndpointer(np.float64, 2, flags="C_CONTIGUOUS"),
+                     ctypes.c_double, np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")],
+                    ctypes.c_int)

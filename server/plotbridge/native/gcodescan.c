@@ -1,8 +1,9 @@
 /* gcodescan: the G-code importer's fast path (server/plotbridge/importing/gcode.py).
  *
  * Classifies each line of a chunk of text as a common line, G0/G1 X Y [F] [; comment]
- * in any case with spaces and tabs between words, at most max_line characters, or
- * any other line, and reads the numbers of the common ones. Every other line is read
+ * in any case with spaces and tabs between words, at most max_line characters, a pen
+ * line, M3/M4 (PEN_DOWN) or M5 (PEN_UP) alone [; comment], or any other line, and
+ * reads the numbers of the common ones. Every other line is read
  * by the importer's general parser, which accepts the common lines too and gives the
  * same result for them (the unit tests compare the two).
  *
@@ -15,7 +16,7 @@
 #include <string.h>
 #include <math.h>
 
-enum { OTHER = 0, RAPID = 1, LINE = 2 };
+enum { OTHER = 0, RAPID = 1, LINE = 2, PEN_DOWN = 3, PEN_UP = 4 };
 #define NUM_MAX 255
 
 static const char *blanks(const char *p, const char *end)
@@ -80,11 +81,42 @@ static const char *letter(const char *p, const char *end, char upper)
     return p < end && (*p == upper || *p == upper + 32) ? p + 1 : NULL;
 }
 
+/* The end of a line after its last word: p at the end, or at blanks and a `;` comment
+ * the general parser reads the same way (no parentheses, no checksum); else NULL. */
+static const char *line_end(const char *p, const char *end)
+{
+    p = blanks(p, end);
+    if (p < end && *p == ';') {
+        for (p++; p < end; p++)
+            if (*p == '(' || *p == ')' || *p == '*')
+                return NULL;
+    }
+    return p == end ? p : NULL;
+}
+
+/* A pen line [p, end): M, zeros, 3, 4 or 5 (the general parser's M3, M4, M5). */
+static uint8_t pen_line(const char *p, const char *end)
+{
+    uint8_t kind;
+    p = blanks(p, end);
+    while (p + 1 < end && *p == '0' && p[1] >= '0' && p[1] <= '9')
+        p++;
+    if (p >= end || *p < '3' || *p > '5')
+        return OTHER;
+    kind = *p == '5' ? PEN_UP : PEN_DOWN;
+    p++;
+    if (p < end && (*p == '.' || (*p >= '0' && *p <= '9')))
+        return OTHER;
+    return line_end(p, end) ? kind : OTHER;
+}
+
 /* One line [p, end) (no newline): its kind, and its numbers when common. */
 static uint8_t scan_line(const char *p, const char *end, double *x, double *y, double *f)
 {
     uint8_t kind;
     const char *q;
+    if ((q = letter(p, end, 'M')))
+        return pen_line(q, end);
     if (!(p = letter(p, end, 'G')))
         return OTHER;
     if (p + 1 < end && p[0] == '0' && (p[1] == '0' || p[1] == '1'))
@@ -101,18 +133,13 @@ static uint8_t scan_line(const char *p, const char *end, double *x, double *y, d
     q = letter(p, end, 'F');
     if (q && (!(p = number(blanks(q, end), end, f)) || !(*f > 0)))
         return OTHER;   /* a feed that is not positive: the general parser reports it */
-    p = blanks(p, end);
-    if (p < end && *p == ';') {
-        for (p++; p < end; p++)
-            if (*p == '(' || *p == ')' || *p == '*')
-                return OTHER;
-    }
-    return p == end ? kind : OTHER;
+    return line_end(p, end) ? kind : OTHER;
 }
 
-/* The lines of text[0, len), which ends with a newline: kind[k] (OTHER, RAPID or LINE)
- * and for common lines x[k], y[k], f[k] (NaN without F) and feed[k], the last F given
- * at or before line k in its run of consecutive common lines (NaN when none is);
+/* The lines of text[0, len), which ends with a newline: kind[k] (OTHER, RAPID, LINE,
+ * PEN_DOWN or PEN_UP) and for common lines x[k], y[k], f[k] (NaN without F; pen lines:
+ * 0, 0, NaN) and feed[k], the last F given at or before line k in its run of
+ * consecutive common and pen lines (NaN when none is);
  * start[k]: where line k begins, start[n]: len. Lines holding bytes outside ASCII are
  * OTHER (max_line counts characters); ascii: the caller knows there are none. Returns
  * the number of lines n, at most max_lines. */
@@ -134,6 +161,10 @@ long gcode_scan(const char *text, long len, int ascii, long max_lines, long max_
                 ;
             if (c == eol)
                 kind[n] = scan_line(p, eol, &x[n], &y[n], &f[n]);
+        }
+        if (kind[n] >= PEN_DOWN) {
+            x[n] = y[n] = 0.0;
+            f[n] = NAN;
         }
         if (kind[n] == OTHER)
             run_feed = NAN;

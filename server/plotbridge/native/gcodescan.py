@@ -12,7 +12,7 @@ from . import function
 _f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
 _u8 = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")
 _long = np.ctypeslib.ndpointer(np.int_, flags="C_CONTIGUOUS")
-OTHER, RAPID, LINE = 0, 1, 2
+OTHER, RAPID, LINE, PEN_DOWN, PEN_UP = 0, 1, 2, 3, 4
 
 
 def _scanner():
@@ -22,9 +22,10 @@ def _scanner():
 
 
 class Scan(NamedTuple):
-    """A chunk's lines: kind (OTHER, RAPID (G0) or LINE (G1)) and, for the common ones,
-    X, Y, F (NaN when absent) and the feed in effect: the last F given at or before the
-    line in its run of consecutive common lines (NaN when none is)."""
+    """A chunk's lines: kind (OTHER, RAPID (G0), LINE (G1), PEN_DOWN (M3, M4) or PEN_UP
+    (M5)) and, for the common ones, X, Y, F (NaN when absent; pen lines: 0, 0, NaN) and
+    the feed in effect: the last F given at or before the line in its run of consecutive
+    common and pen lines (NaN when none is)."""
 
     kind: np.ndarray
     x: np.ndarray
@@ -42,7 +43,8 @@ class Scan(NamedTuple):
 
 def scan(text: str, max_line: int) -> Scan:
     """The lines of `text` (which ends with a newline); a common line is G0/G1 X Y [F]
-    [; comment] of at most `max_line` characters whose F, when given, is positive."""
+    [; comment] of at most `max_line` characters whose F, when given, is positive; a pen
+    line is M3, M4 or M5 [; comment]."""
     data = text.encode("utf-8", "surrogateescape")
     # Room for a line per byte (no counting pass; only what the lines use is touched).
     room = len(data)

@@ -7,10 +7,11 @@
 #include <stdint.h>
 #include <stdlib.h>
 
-/* keep[k] (0/1) on entry: points always kept, which include the first and the last.
+/* n points, x and y interleaved at xy.
+ * keep[k] (0/1) on entry: points always kept, which include the first and the last.
  * On return: every point to keep for a simplification within sqrt(tol2). Returns 0,
  * or -1 when out of memory (keep is then unchanged). */
-int simplify_mask(long n, const double *xs, const double *ys, double tol2, uint8_t *keep)
+int simplify_mask(long n, const double *xy, double tol2, uint8_t *keep)
 {
     long *stack = malloc(sizeof(long) * 2 * (size_t)(n > 0 ? n : 1));
     long top = 0, prev = -1;
@@ -27,15 +28,15 @@ int simplify_mask(long n, const double *xs, const double *ys, double tol2, uint8
     }
     while (top) {
         long b = stack[--top], a = stack[--top];
-        double ax = xs[a], ay = ys[a];
-        double dx = xs[b] - ax, dy = ys[b] - ay;
+        double ax = xy[2 * a], ay = xy[2 * a + 1];
+        double dx = xy[2 * b] - ax, dy = xy[2 * b + 1] - ay;
         double dd = dx * dx + dy * dy;
         double div = dd > 0 ? dd : 1.0;
         double best = -1.0;
         long at = -1;
         int nan = 0;
         for (long i = a + 1; i < b; i++) {
-            double rx = xs[i] - ax, ry = ys[i] - ay;
+            double rx = xy[2 * i] - ax, ry = xy[2 * i + 1] - ay;
             double t = (rx * dx + ry * dy) / div;
             t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
             double ox = rx - t * dx, oy = ry - t * dy;
