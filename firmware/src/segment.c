@@ -10,9 +10,8 @@ volatile uint8_t seg_head, seg_tail;
 static struct prep_state {
     uint8_t active;      /* preparing plan_current() */
     uint8_t block;       /* its step_blocks index */
-    uint8_t first;       /* next segment is the block's first */
     uint8_t hold, stopped;
-    uint16_t done;       /* events prepared */
+    uint16_t done;       /* events prepared (0: the next segment is the block's first) */
     uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
@@ -205,7 +204,6 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
             sb->dir_negative |= (uint8_t)(1 << a);
     }
     p->active = 1;
-    p->first = 1;
     p->s = 0.0f;
     p->done = 0;
     plan_block_motion(b, &p->m);
@@ -279,8 +277,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             seg->events = (uint16_t)n;
             seg->period = (uint16_t)(event_period(time, (uint16_t)n) - 1); /* CTC: OCR1A + 1 ticks */
             seg->block = &step_blocks[p->block];
-            seg->flags = p->first ? SEG_FIRST : 0;
-            p->first = 0;
+            seg->flags = p->done ? 0 : SEG_FIRST;
             p->done = (uint16_t)target;
             seg_head++; /* publish after the segment is complete */
             added = 1;
