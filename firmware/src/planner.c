@@ -21,9 +21,11 @@ static float prev_unit[N_AXIS];
 static plan_f16_t prev_nominal;   /* the last block's cruise speed^2 as stored */
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
-static float last_feed;        /* the last block's feed, as stored in blocks, and in mm/s */
+static float last_feed;        /* the last block's feed as given, and as stored in blocks */
 static uint16_t last_feed_u16;
-static float last_feed_mm_s;
+/* last_feed's cruise speed squared as set_nominal stores it, when no limit
+ * can bind in any direction (0: one may): see plain_nominal */
+static plan_f16_t feed_nominal;
 /* an override change's recompute under way (plan_override_step) */
 #define OV_SLICE 4
 static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
@@ -55,6 +57,7 @@ static void refresh_axis(void)
     if (!memcmp(axis.seen, now, sizeof(axis.seen)))
         return;
     memcpy(axis.seen, now, sizeof(axis.seen));
+    memset(&last_feed, 0xFF, sizeof(last_feed)); /* a NaN no F word gives: feed_nominal again */
     for (uint8_t a = 0; a < N_AXIS; a++) {
         axis.mm_per_step[a] = 1.0f / settings.steps_per_mm[a];
         axis.s_per_mm[a] = 60.0f / settings.max_rate[a];
@@ -353,13 +356,36 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 /* A block's feed as stored (mm/min, rounded) in mm/s. */
 static float feed_mm_s(uint16_t feed) { return (float)feed * (1.0f / 60.0f); }
 
-/* The block's cruise speed squared as stored (16 bits, never above the
- * float one), from its feed (feed_mm_s of b->feed), flags and direction
- * with the overrides. */
-static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit, float feed)
+/* The cruise speed squared, as set_nominal stores it, of every G1 block at
+ * this speed (mm/s) without a feed override, when neither limit of
+ * cruise_speed can bind whatever the direction (0 otherwise): at most 0.999
+ * of every axis's max rate (an axis's share |u| <= 1, with room for the
+ * float rounding of u) and at least 1.01 times the slowest step rate at
+ * every axis's steps/mm over sqrt(2) (events per mm >= min steps/mm / sqrt 2
+ * in any direction: the largest of two axes' steps, or CoreXY's |X| + |Y|,
+ * is at least 1/sqrt(2) of the length in steps). The feed is modal: this
+ * runs once per F change instead of five multiplies per line. */
+static __attribute__((noinline)) plan_f16_t plain_nominal(float speed)
 {
-    float speed = cruise_speed(feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
-    b->nominal_sqr = plan_f16_from_float(speed * speed);
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        __asm__("" : "+r"(a)); /* (a loop: unrolled it was 100 B more) */
+        if (!plan_lt(speed * axis.s_per_mm[a], 0.999f) ||
+            plan_lt(speed * settings.steps_per_mm[a], MIN_STEP_RATE * 1.01f * 1.4143f))
+            return 0;
+    }
+    return plan_f16_from_float(speed * speed);
+}
+
+/* The block's cruise speed squared as stored (16 bits, never above the
+ * float one), from its feed, flags and direction with the overrides. */
+static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+{
+    if (feed_nominal && b->feed == last_feed_u16 && !(b->flags & PB_RAPID) && feed_pct == 100) {
+        b->nominal_sqr = feed_nominal;
+    } else {
+        float speed = cruise_speed(feed_mm_s(b->feed), b->flags, axis_s_per_mm(unit), m->events_per_mm);
+        b->nominal_sqr = plan_f16_from_float(speed * speed);
+    }
     return plan_f16_to_float(b->nominal_sqr);
 }
 
@@ -380,7 +406,7 @@ uint8_t plan_override_step(void)
         plan_motion_t m;
         float unit[N_AXIS];
         geometry(b, &m, unit);
-        float nominal = set_nominal(b, &m, unit, feed_mm_s(b->feed));
+        float nominal = set_nominal(b, &m, unit);
         /* a junction is never faster than the cruise speeds on either side */
         if (ov_at != tail) {
             float before = plan_f16_to_float(ov_prev_nominal);
@@ -440,14 +466,14 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     if (!same_bits(feed, last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
-        last_feed_mm_s = feed_mm_s(last_feed_u16);
+        feed_nominal = plain_nominal(feed_mm_s(last_feed_u16));
     }
     b->feed = last_feed_u16;
     plan_motion_t m;
     float unit[N_AXIS];
     float inv_mm = geometry(b, &m, unit);
     float accel = 1.0f / m.inv_accel;
-    float nominal = set_nominal(b, &m, unit, last_feed_mm_s);
+    float nominal = set_nominal(b, &m, unit);
     b->accel_dist2 = plan_sqr_from_float(2.0f * accel * m.mm);
 #if PLAN_CACHE_MOTION
     run_accel(b, &m, inv_mm);
