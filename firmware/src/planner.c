@@ -16,6 +16,7 @@ static plan_block_t ring[RING_SLOTS];
 static plan_motion_t motion[RING_SLOTS]; /* ring[i]'s geometry, as geometry() gave it */
 #endif
 static uint8_t head, tail, count;
+static uint16_t split_pieces;      /* for the last move refused as too long (plan_pieces) */
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
 static plan_f16_t prev_nominal;   /* the last block's cruise speed^2 as stored */
@@ -177,20 +178,7 @@ void plan_discard_current(void)
     exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0;
 }
 
-uint16_t plan_pieces(const float *target)
-{
-    float span = 0.0f;
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        float st = fabsf(target[a] * settings.steps_per_mm[a] - (float)position[a]);
-        if (st > span)
-            span = st;
-    }
-    if (settings.corexy)
-        span *= 2.0f;
-    /* with a margin for rounding: no piece may come out above the limit */
-    float pieces = span * (1.0f / (PLAN_MAX_EVENTS * 0.9f)) + 1.0f;
-    return pieces < 65535.0f ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
-}
+uint16_t plan_pieces(void) { return split_pieces; }
 
 void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = plan_sqr_from_float(v_sqr); }
 
@@ -453,8 +441,12 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         if (m > events)
             events = m;
     }
-    if (events > PLAN_MAX_EVENTS)
+    if (events > PLAN_MAX_EVENTS) {
+        /* with a margin for rounding: no piece may come out above the limit */
+        uint32_t pieces = events / (PLAN_MAX_EVENTS / 10 * 9) + 1;
+        split_pieces = pieces < 65535u ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
         return PLAN_TOO_LONG;
+    }
     if (events == 0)
         return 0;
 

@@ -105,8 +105,10 @@ plan_block_t *plan_current(void);    /* oldest block, or 0 */
 uint16_t plan_events(const plan_block_t *b); /* step events of a block */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
-/* Into how many equal pieces a move to target must be cut (see plan_line). */
-uint16_t plan_pieces(const float *target);
+/* Into how many equal pieces the move plan_line last refused as
+ * PLAN_TOO_LONG must be cut: from its motor step events, so that none comes
+ * out above the limit (the steps of the pieces round each on its own). */
+uint16_t plan_pieces(void);
 /* Highest exit speed^2 the executing block can still reach (segment preparer). */
 void plan_set_exec_exit_limit(float v_sqr);
 /* GRBL's realtime overrides, percent (feed 10..200, rapid 25/50/100; 100 =

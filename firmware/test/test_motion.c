@@ -113,10 +113,16 @@ void test_planner_junctions(void)
     /* moves beyond the 16-bit step counters are refused, and cut by plan_pieces */
     fresh_planner();
     float far[2] = {300, 220};
-    CHECK(plan_pieces(far) == 1);
     settings.steps_per_mm[0] = 400;
-    CHECK(plan_pieces(far) == 5);
     CHECK(plan_line(far, 3000, 0) == PLAN_TOO_LONG && plan_count() == 0);
+    CHECK(plan_pieces() == 5); /* 120,000 events, at most 27,000 a piece */
+    settings.corexy = 1;       /* motor A: 120,000 + 17,600 */
+    CHECK(plan_line(far, 3000, 0) == PLAN_TOO_LONG && plan_pieces() == 6);
+    settings.corexy = 0;
+    settings.steps_per_mm[0] = 80;
+    CHECK(plan_line(far, 3000, 0) == 1); /* 24,000: fits */
+    fresh_planner();
+    settings.steps_per_mm[0] = 400;
     float fifth[2] = {60, 44};
     CHECK(plan_line(fifth, 3000, 0) == 1);
     settings_defaults(&settings);
