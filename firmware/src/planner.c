@@ -292,8 +292,20 @@ static float axis_s_per_mm(const float *unit)
     return s_per_mm;
 }
 
+/* The rest of a block's motion once m->mm is known and m->inv_accel holds
+ * the largest |d_mm| / accel (geometry): returns 1 / length. */
+static float motion_finish(const plan_block_t *b, plan_motion_t *m)
+{
+    float inv_mm = 1.0f / m->mm;
+    m->events_per_mm = (float)plan_events(b) * inv_mm;
+    m->inv_accel *= inv_mm; /* some axis moves: x > 0 */
+    return inv_mm;
+}
+
 /* Length, events per mm, 1 / acceleration along the move and (when unit
- * is given) the direction; returns 1 / length. The axis limits along the
+ * is given) the direction; returns 1 / length. Without unit (the segment
+ * preparer's call on the 328P) only the length, and the rest when the
+ * preparer needs it (plan_motion_complete): returns 0. The axis limits along the
  * move: accel <= accel / |u| for every moving axis; the tightest has the
  * largest |u| / limit, i.e. the largest |d_mm| / limit. */
 static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
@@ -310,12 +322,14 @@ static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
             x = r;
     }
     m->mm = sqrtf(mm2);
-    float inv_mm = 1.0f / m->mm;
-    m->events_per_mm = (float)plan_events(b) * inv_mm;
-    m->inv_accel = x * inv_mm; /* some axis moves: x > 0 */
-    if (unit)
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            unit[a] = d_mm[a] * inv_mm;
+    m->inv_accel = x;
+    if (!unit) {
+        m->events_per_mm = 0.0f; /* not yet */
+        return 0.0f;
+    }
+    float inv_mm = motion_finish(b, m);
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        unit[a] = d_mm[a] * inv_mm;
     return inv_mm;
 }
 
@@ -337,9 +351,17 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #if PLAN_CACHE_MOTION
     *m = motion[b - ring]; /* the axis settings cannot change while blocks are queued */
 #else
-    run_accel(b, m, geometry(b, m, 0));
+    geometry(b, m, 0);
 #endif
 }
+
+#if !PLAN_CACHE_MOTION
+void plan_motion_complete(const plan_block_t *b, plan_motion_t *m)
+{
+    if (!plan_lt(0.0f, m->events_per_mm))
+        run_accel(b, m, motion_finish(b, m));
+}
+#endif
 
 /* A block's feed as stored (mm/min, rounded) in mm/s. */
 static float feed_mm_s(uint16_t feed) { return (float)feed * (1.0f / 60.0f); }

@@ -86,6 +86,20 @@ typedef struct {
     float inv_accel;          /* 1 / the exact one, so the segment preparer multiplies */
 } plan_motion_t;
 void plan_block_motion(const plan_block_t *b, plan_motion_t *m);
+/* The 328P derives a block's motion in two steps: plan_block_motion gives
+ * the length, and this the rest (events per mm, acceleration) when the
+ * segment preparer first needs it; a block cruised through to its end needs
+ * only the length (a division and ~5 multiplies a block less). A no-op
+ * where plan_block_motion gives the cached whole. */
+#if PLAN_CACHE_MOTION
+static inline void plan_motion_complete(const plan_block_t *b, plan_motion_t *m)
+{
+    (void)b;
+    (void)m;
+}
+#else
+void plan_motion_complete(const plan_block_t *b, plan_motion_t *m);
+#endif
 
 void plan_reset(void);
 /* Planner position in cartesian steps, e.g. after homing or an abort. */

@@ -71,10 +71,13 @@ void seg_drop_block(void)
 static float advance(struct prep_state *p, const plan_block_t *b, float dt)
 {
     float remaining = p->m.mm - p->s;
-    float a = p->m.accel;
     float v = p->v;
     float t = 0.0f;
+    /* a block cruised through needs only its length: the rest of its motion
+     * (plan_motion_complete) where the paths below need it */
     if (p->hold) {
+        plan_motion_complete(b, &p->m);
+        float a = p->m.accel;
         float t_stop = v * p->m.inv_accel;
         float d_stop = 0.5f * v * t_stop;
         float tt = dt < t_stop ? dt : t_stop;
@@ -101,6 +104,8 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         /* above the cruise speed (a feed override lowered it): slow down to
          * it first, where the block leaves room; otherwise the profile below
          * decelerates to the exit */
+        plan_motion_complete(b, &p->m);
+        float a = p->m.accel;
         float tn = (v - sqrtf(vn2)) * p->m.inv_accel;
         float tt = plan_lt(dt, tn) ? dt : tn;
         float ds = v * tt - 0.5f * a * tt * tt;
@@ -121,6 +126,8 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         p->s = p->m.mm;
         return tc;
     }
+    plan_motion_complete(b, &p->m);
+    float a = p->m.accel;
     float peak2 = 0.5f * (v2 + ve2) + a * remaining;
     if (plan_lt(vn2, peak2))
         peak2 = vn2;
@@ -250,6 +257,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             ended = !plan_lt(p->s, p->m.mm);
             target = p->events;
             if (!ended) { /* a step is due half way */
+                plan_motion_complete(b, &p->m);
                 uint32_t e = (uint32_t)(p->s * p->m.events_per_mm + 0.5f);
                 if (e < target)
                     target = e;
@@ -286,6 +294,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             plan_discard_current();
             p->active = 0;
         } else {
+            plan_motion_complete(b, &p->m);
             plan_set_exec_exit_limit(p->v * p->v + 2.0f * p->m.accel * (p->m.mm - p->s));
         }
     }
