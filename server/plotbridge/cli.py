@@ -30,6 +30,8 @@ from plotbridge.jobs.model import AFTER_JOB
 log = logging.getLogger("plotbridge")
 
 WS_MAX_BYTES = 65536  # a larger WebSocket message closes the connection (1009)
+SHUTDOWN_GRACE_S = 5  # s a stopping server lets requests in flight finish (an upload waiting
+#   for an import would otherwise hold the stop off for as long as the import takes)
 
 
 def _env(name: str, default: Any = None) -> Any:
@@ -305,6 +307,7 @@ async def serve(config: Config) -> int:
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
             http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
             timeout_keep_alive=5, backlog=connections.BACKLOG,
+            timeout_graceful_shutdown=SHUTDOWN_GRACE_S,
         )  # fmt: skip
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()

@@ -78,6 +78,7 @@ def test_layers_show_progress_and_background_notices(browser, server, plotter, v
 
         page.evaluate("window.__hidden = true")  # the user switches to another tab
         job_row(page, NAME).locator("button[data-verb=start]").click()
+        wait_job_state(page, NAME, ("running", "pen_change"))  # the click's request is async
         job = server.client.get("/api/jobs").json()[-1]
         server.wait_pen_change(job["id"], 2)
         changing = wait_layers(page, [1, 0, 0])

@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from plotbridge.jobs.imports import Importer
 from plotbridge.plotter.runner import MARK_FILE
-from plotbridge.resume import Mark
+from plotbridge.resume import Mark, ResumePoint
 from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
@@ -309,6 +309,33 @@ async def test_the_stop_point_is_the_first_report_after_the_resets_banner(api, t
     api.link.set_state("Alarm", x=4.0, y=0.0)  # later ones are not the stop point
     mark = tmp_path / "jobs" / job["id"] / MARK_FILE
     await settle(lambda: (m := Mark.load(mark)) is not None and m.x == 3.0)
+
+
+async def test_a_resume_starts_from_the_stop_point_while_its_write_is_slow(api, monkeypatch):
+    import plotbridge.plotter.runner as runner
+
+    job = (await upload(api.client)).json()
+    await api.client.post(f"/api/jobs/{job['id']}/start")
+    api.link.step()
+    await settle(lambda: api.queue.jobs[job["id"]].lines_done == 1)
+    api.link.set_state("Run", x=1.0, y=0.0)
+    await api.client.post("/api/machine/estop")
+    await settle(lambda: api.queue.jobs[job["id"]].state == "stopped")
+    save, located = Mark.save, []
+
+    def busy_disk(mark: Mark, path) -> None:
+        time.sleep(0.5)  # the write of the stop point lands after the resume asked
+        save(mark, path)
+
+    monkeypatch.setattr(Mark, "save", busy_disk)
+    monkeypatch.setattr(runner, "locate", lambda program, mark: located.append(mark)
+                        or ResumePoint(1))  # fmt: skip
+    api.link.set_state("Alarm", x=3.0, y=0.0)  # the stop point, told at once
+    api.link.set_state("Idle")  # unlocked
+    api.link.auto_ack = True
+    assert (await api.client.post(f"/api/jobs/{job['id']}/resume")).status_code == 200
+    await settle(lambda: located)
+    assert located[0] is not None and located[0].x == 3.0, located
 
 
 async def test_estop_does_not_wait_for_a_stuck_disk(api, monkeypatch):

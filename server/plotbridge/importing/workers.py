@@ -28,6 +28,7 @@ import multiprocessing
 import os
 import resource
 import signal
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
@@ -118,6 +119,7 @@ class Worker:
                 else:
                     os.environ[key] = value
         child.close()
+        self.spawned = time.monotonic()
         self.busy = False
         self.started = False
 
@@ -138,6 +140,8 @@ class Worker:
             if answer[0] != "ready":
                 return answer
             self.started = True
+            log.info("import worker %d ready in %.1f s", self.process.pid,
+                     time.monotonic() - self.spawned)
         try:
             self.conn.send((function, args))
         except OSError:

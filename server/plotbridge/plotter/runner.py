@@ -253,6 +253,14 @@ class Runner:
             path = self.jobs_dir / job.id / MARK_FILE
             self._mark_writer = asyncio.get_running_loop().create_task(self._write_marks(path))
 
+    async def _marks_written(self) -> None:
+        """Wait for the mark writes under way: the preamble reads the mark from the job
+        folder, and the stop point told just before a resume may still be on its way."""
+        for writer in (self._mark_writer, self._orphan_writer):
+            if writer is not None and not writer.done():
+                with contextlib.suppress(Exception):
+                    await asyncio.shield(writer)
+
     async def _write_marks(self, path: Path) -> None:
         while self._unsaved_mark is not None:
             mark, self._unsaved_mark = self._unsaved_mark, None
@@ -278,6 +286,7 @@ class Runner:
     async def _run(self, job: Job, line: int, resumed: bool, point: ResumePoint | None) -> None:
         program = self.jobs_dir / job.id / "program.gcode"
         try:
+            await self._marks_written()
             floor, line, preamble = await asyncio.to_thread(self._preamble, job, program, line,
                                                             resumed, point)  # fmt: skip
             runs = layer_runs(job.layers, job.plot_layers, line)
