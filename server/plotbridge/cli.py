@@ -303,7 +303,7 @@ async def serve(config: Config) -> int:
             boards.append(Board(plotter.name, Link(device, plotter.baud), virtual, area))
         app = create_app(config, boards, token)
         settings = uvicorn.Config(
-            app, host=config.host, port=config.port, log_level="warning",
+            app, host=config.host, port=config.port, log_level="warning", log_config=None,
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
             http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
             timeout_keep_alive=5, backlog=connections.BACKLOG,

@@ -53,6 +53,9 @@ class RateLimit(logging.Filter):
         return True
 
 
-def install(handler: logging.Handler, fmt: str, datefmt: str) -> None:
+def format_escaped(handler: logging.Handler, fmt: str, datefmt: str) -> None:
     handler.setFormatter(EscapingFormatter(fmt, datefmt))
+
+
+def rate_limit(handler: logging.Handler) -> None:
     handler.addFilter(RateLimit())
