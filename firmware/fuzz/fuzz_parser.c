@@ -10,6 +10,7 @@
 #include "gcode.h"
 #include "linebuf.h"
 #include "numparse.h"
+#include "plan_split.h"
 #include "planner.h"
 #include "segment.h"
 #include "settings.h"
@@ -33,25 +34,24 @@ static void drain_segments(void)
     }
 }
 
+/* plan_line_split's wait for room, as the firmware's: the step interrupt
+ * would free blocks; a move of more than 64 pieces is given up there (as
+ * an abort would), which keeps a huge one fast */
+static uint8_t pieces_left;
+static uint8_t room(void)
+{
+    drain_segments();
+    while (!plan_free())
+        drain_segments();
+    return pieces_left-- != 0;
+}
+
 /* as the firmware's line_to: long moves in pieces the step counters can hold */
 static void queue_line(const float *target, float feed, uint8_t flags)
 {
-    uint16_t pieces = plan_pieces(target);
-    if (pieces > 64)
-        pieces = 64; /* longer ones are refused by plan_line: also worth exercising */
-    int32_t from_steps[N_AXIS];
-    plan_get_position(from_steps);
-    for (uint16_t k = 1; k <= pieces; k++) {
-        float p[N_AXIS];
-        for (uint8_t a = 0; a < N_AXIS; a++) {
-            float from = (float)from_steps[a] / settings.steps_per_mm[a];
-            p[a] = k == pieces ? target[a] : from + (target[a] - from) * (float)k / (float)pieces;
-        }
-        while (!plan_free())
-            drain_segments();
-        plan_line(p, feed, flags);
-        drain_segments();
-    }
+    pieces_left = 65; /* the first room() is before plan_line finds out whether it fits */
+    plan_line_split(target, feed, flags, room);
+    drain_segments();
 }
 
 static void run_block(const gc_block_t *b)

@@ -16,14 +16,17 @@ static plan_block_t ring[RING_SLOTS];
 static plan_motion_t motion[RING_SLOTS]; /* ring[i]'s geometry, as geometry() gave it */
 #endif
 static uint8_t head, tail, count;
+static uint16_t split_pieces;      /* for the last move refused as too long (plan_pieces) */
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
 static float prev_unit[N_AXIS];
 static plan_f16_t prev_nominal;   /* the last block's cruise speed^2 as stored */
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
-static float last_feed;        /* the last block's feed, as stored in blocks, and in mm/s */
+static float last_feed;        /* the last block's feed as given, and as stored in blocks */
 static uint16_t last_feed_u16;
-static float last_feed_mm_s;
+/* last_feed's cruise speed squared as set_nominal stores it, when no limit
+ * can bind in any direction (0: one may): see plain_nominal */
+static plan_f16_t feed_nominal;
 /* an override change's recompute under way (plan_override_step) */
 #define OV_SLICE 4
 static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
@@ -55,6 +58,7 @@ static void refresh_axis(void)
     if (!memcmp(axis.seen, now, sizeof(axis.seen)))
         return;
     memcpy(axis.seen, now, sizeof(axis.seen));
+    memset(&last_feed, 0xFF, sizeof(last_feed)); /* a NaN no F word gives: feed_nominal again */
     for (uint8_t a = 0; a < N_AXIS; a++) {
         axis.mm_per_step[a] = 1.0f / settings.steps_per_mm[a];
         axis.s_per_mm[a] = 60.0f / settings.max_rate[a];
@@ -174,20 +178,7 @@ void plan_discard_current(void)
     exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0;
 }
 
-uint16_t plan_pieces(const float *target)
-{
-    float span = 0.0f;
-    for (uint8_t a = 0; a < N_AXIS; a++) {
-        float st = fabsf(target[a] * settings.steps_per_mm[a] - (float)position[a]);
-        if (st > span)
-            span = st;
-    }
-    if (settings.corexy)
-        span *= 2.0f;
-    /* with a margin for rounding: no piece may come out above the limit */
-    float pieces = span * (1.0f / (PLAN_MAX_EVENTS * 0.9f)) + 1.0f;
-    return pieces < 65535.0f ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
-}
+uint16_t plan_pieces(void) { return split_pieces; }
 
 void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = plan_sqr_from_float(v_sqr); }
 
@@ -221,7 +212,13 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
  * one before can accelerate to. Both on squared speeds: v^2 = u^2 + 2as.
  * The backward pass stops at a block that stays at its junction limit: the
  * blocks before it would get the values they already have, and the forward
- * pass resumes from there. */
+ * pass resumes from there. A block the forward pass leaves as the backward
+ * pass made it, below its junction limit, enters at the next one's entry
+ * plus its own accel_dist2, so the next one is within its reach too: when
+ * the backward pass left no block at its limit, the forward pass ends at
+ * the first such block instead of walking the queue (a queue planned down
+ * to a stop at its end, i.e. every look-ahead-bound one, has none: ~20
+ * cycles a block). */
 static void recalculate(uint8_t full)
 {
     /* pointers rather than ring indices: no index multiply per block */
@@ -230,13 +227,16 @@ static void recalculate(uint8_t full)
     plan_block_t *b = &ring[prev_index(head)];
     plan_block_t *first = oldest;
     plan_sqr_t next_entry = 0;
+    uint8_t limited = 0; /* a block at its junction limit after first */
     for (uint8_t n = count; n > 1; n--) {
         plan_sqr_t e = next_entry + b->accel_dist2;
-        if (e > b->max_entry_sqr)
+        if (e >= b->max_entry_sqr) {
             e = b->max_entry_sqr;
-        if (e == b->entry_sqr && e == b->max_entry_sqr && !full) {
-            first = b;
-            break;
+            if (e == b->entry_sqr && !full) {
+                first = b;
+                break;
+            }
+            limited = 1;
         }
         b->entry_sqr = e;
         next_entry = e;
@@ -247,6 +247,8 @@ static void recalculate(uint8_t full)
     for (b = first == last ? ring : first + 1; b != end; b = b == last ? ring : b + 1) {
         if (b->entry_sqr > reach)
             b->entry_sqr = reach;
+        else if (!limited)
+            break;
         reach = b->entry_sqr + b->accel_dist2; /* both <= PLAN_SQR_MAX: no overflow */
     }
 }
@@ -290,8 +292,20 @@ static float axis_s_per_mm(const float *unit)
     return s_per_mm;
 }
 
+/* The rest of a block's motion once m->mm is known and m->inv_accel holds
+ * the largest |d_mm| / accel (geometry): returns 1 / length. */
+static float motion_finish(const plan_block_t *b, plan_motion_t *m)
+{
+    float inv_mm = 1.0f / m->mm;
+    m->events_per_mm = (float)plan_events(b) * inv_mm;
+    m->inv_accel *= inv_mm; /* some axis moves: x > 0 */
+    return inv_mm;
+}
+
 /* Length, events per mm, 1 / acceleration along the move and (when unit
- * is given) the direction; returns 1 / length. The axis limits along the
+ * is given) the direction; returns 1 / length. Without unit (the segment
+ * preparer's call on the 328P) only the length, and the rest when the
+ * preparer needs it (plan_motion_complete): returns 0. The axis limits along the
  * move: accel <= accel / |u| for every moving axis; the tightest has the
  * largest |u| / limit, i.e. the largest |d_mm| / limit. */
 static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
@@ -308,12 +322,14 @@ static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
             x = r;
     }
     m->mm = sqrtf(mm2);
-    float inv_mm = 1.0f / m->mm;
-    m->events_per_mm = (float)plan_events(b) * inv_mm;
-    m->inv_accel = x * inv_mm; /* some axis moves: x > 0 */
-    if (unit)
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            unit[a] = d_mm[a] * inv_mm;
+    m->inv_accel = x;
+    if (!unit) {
+        m->events_per_mm = 0.0f; /* not yet */
+        return 0.0f;
+    }
+    float inv_mm = motion_finish(b, m);
+    for (uint8_t a = 0; a < N_AXIS; a++)
+        unit[a] = d_mm[a] * inv_mm;
     return inv_mm;
 }
 
@@ -335,20 +351,51 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #if PLAN_CACHE_MOTION
     *m = motion[b - ring]; /* the axis settings cannot change while blocks are queued */
 #else
-    run_accel(b, m, geometry(b, m, 0));
+    geometry(b, m, 0);
 #endif
 }
+
+#if !PLAN_CACHE_MOTION
+void plan_motion_complete(const plan_block_t *b, plan_motion_t *m)
+{
+    if (!plan_lt(0.0f, m->events_per_mm))
+        run_accel(b, m, motion_finish(b, m));
+}
+#endif
 
 /* A block's feed as stored (mm/min, rounded) in mm/s. */
 static float feed_mm_s(uint16_t feed) { return (float)feed * (1.0f / 60.0f); }
 
-/* The block's cruise speed squared as stored (16 bits, never above the
- * float one), from its feed (feed_mm_s of b->feed), flags and direction
- * with the overrides. */
-static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit, float feed)
+/* The cruise speed squared, as set_nominal stores it, of every G1 block at
+ * this speed (mm/s) without a feed override, when neither limit of
+ * cruise_speed can bind whatever the direction (0 otherwise): at most 0.999
+ * of every axis's max rate (an axis's share |u| <= 1, with room for the
+ * float rounding of u) and at least 1.01 times the slowest step rate at
+ * every axis's steps/mm over sqrt(2) (events per mm >= min steps/mm / sqrt 2
+ * in any direction: the largest of two axes' steps, or CoreXY's |X| + |Y|,
+ * is at least 1/sqrt(2) of the length in steps). The feed is modal: this
+ * runs once per F change instead of five multiplies per line. */
+static __attribute__((noinline)) plan_f16_t plain_nominal(float speed)
 {
-    float speed = cruise_speed(feed, b->flags, axis_s_per_mm(unit), m->events_per_mm);
-    b->nominal_sqr = plan_f16_from_float(speed * speed);
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        __asm__("" : "+r"(a)); /* (a loop: unrolled it was 100 B more) */
+        if (!plan_lt(speed * axis.s_per_mm[a], 0.999f) ||
+            plan_lt(speed * settings.steps_per_mm[a], MIN_STEP_RATE * 1.01f * 1.4143f))
+            return 0;
+    }
+    return plan_f16_from_float(speed * speed);
+}
+
+/* The block's cruise speed squared as stored (16 bits, never above the
+ * float one), from its feed, flags and direction with the overrides. */
+static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+{
+    if (feed_nominal && b->feed == last_feed_u16 && !(b->flags & PB_RAPID) && feed_pct == 100) {
+        b->nominal_sqr = feed_nominal;
+    } else {
+        float speed = cruise_speed(feed_mm_s(b->feed), b->flags, axis_s_per_mm(unit), m->events_per_mm);
+        b->nominal_sqr = plan_f16_from_float(speed * speed);
+    }
     return plan_f16_to_float(b->nominal_sqr);
 }
 
@@ -369,7 +416,7 @@ uint8_t plan_override_step(void)
         plan_motion_t m;
         float unit[N_AXIS];
         geometry(b, &m, unit);
-        float nominal = set_nominal(b, &m, unit, feed_mm_s(b->feed));
+        float nominal = set_nominal(b, &m, unit);
         /* a junction is never faster than the cruise speeds on either side */
         if (ov_at != tail) {
             float before = plan_f16_to_float(ov_prev_nominal);
@@ -416,8 +463,12 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         if (m > events)
             events = m;
     }
-    if (events > PLAN_MAX_EVENTS)
+    if (events > PLAN_MAX_EVENTS) {
+        /* with a margin for rounding: no piece may come out above the limit */
+        uint32_t pieces = events / (PLAN_MAX_EVENTS / 10 * 9) + 1;
+        split_pieces = pieces < 65535u ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
         return PLAN_TOO_LONG;
+    }
     if (events == 0)
         return 0;
 
@@ -429,14 +480,14 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     if (!same_bits(feed, last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
-        last_feed_mm_s = feed_mm_s(last_feed_u16);
+        feed_nominal = plain_nominal(feed_mm_s(last_feed_u16));
     }
     b->feed = last_feed_u16;
     plan_motion_t m;
     float unit[N_AXIS];
     float inv_mm = geometry(b, &m, unit);
     float accel = 1.0f / m.inv_accel;
-    float nominal = set_nominal(b, &m, unit, last_feed_mm_s);
+    float nominal = set_nominal(b, &m, unit);
     b->accel_dist2 = plan_sqr_from_float(2.0f * accel * m.mm);
 #if PLAN_CACHE_MOTION
     run_accel(b, &m, inv_mm);

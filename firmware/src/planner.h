@@ -86,6 +86,20 @@ typedef struct {
     float inv_accel;          /* 1 / the exact one, so the segment preparer multiplies */
 } plan_motion_t;
 void plan_block_motion(const plan_block_t *b, plan_motion_t *m);
+/* The 328P derives a block's motion in two steps: plan_block_motion gives
+ * the length, and this the rest (events per mm, acceleration) when the
+ * segment preparer first needs it; a block cruised through to its end needs
+ * only the length (a division and ~5 multiplies a block less). A no-op
+ * where plan_block_motion gives the cached whole. */
+#if PLAN_CACHE_MOTION
+static inline void plan_motion_complete(const plan_block_t *b, plan_motion_t *m)
+{
+    (void)b;
+    (void)m;
+}
+#else
+void plan_motion_complete(const plan_block_t *b, plan_motion_t *m);
+#endif
 
 void plan_reset(void);
 /* Planner position in cartesian steps, e.g. after homing or an abort. */
@@ -105,8 +119,10 @@ plan_block_t *plan_current(void);    /* oldest block, or 0 */
 uint16_t plan_events(const plan_block_t *b); /* step events of a block */
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
-/* Into how many equal pieces a move to target must be cut (see plan_line). */
-uint16_t plan_pieces(const float *target);
+/* Into how many equal pieces the move plan_line last refused as
+ * PLAN_TOO_LONG must be cut: from its motor step events, so that none comes
+ * out above the limit (the steps of the pieces round each on its own). */
+uint16_t plan_pieces(void);
 /* Highest exit speed^2 the executing block can still reach (segment preparer). */
 void plan_set_exec_exit_limit(float v_sqr);
 /* GRBL's realtime overrides, percent (feed 10..200, rapid 25/50/100; 100 =

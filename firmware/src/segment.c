@@ -10,9 +10,8 @@ volatile uint8_t seg_head, seg_tail;
 static struct prep_state {
     uint8_t active;      /* preparing plan_current() */
     uint8_t block;       /* its step_blocks index */
-    uint8_t first;       /* next segment is the block's first */
     uint8_t hold, stopped;
-    uint16_t done;       /* events prepared */
+    uint16_t done;       /* events prepared (0: the next segment is the block's first) */
     uint16_t events;     /* the block's step events */
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
@@ -72,10 +71,13 @@ void seg_drop_block(void)
 static float advance(struct prep_state *p, const plan_block_t *b, float dt)
 {
     float remaining = p->m.mm - p->s;
-    float a = p->m.accel;
     float v = p->v;
     float t = 0.0f;
+    /* a block cruised through needs only its length: the rest of its motion
+     * (plan_motion_complete) where the paths below need it */
     if (p->hold) {
+        plan_motion_complete(b, &p->m);
+        float a = p->m.accel;
         float t_stop = v * p->m.inv_accel;
         float d_stop = 0.5f * v * t_stop;
         float tt = dt < t_stop ? dt : t_stop;
@@ -102,6 +104,8 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         /* above the cruise speed (a feed override lowered it): slow down to
          * it first, where the block leaves room; otherwise the profile below
          * decelerates to the exit */
+        plan_motion_complete(b, &p->m);
+        float a = p->m.accel;
         float tn = (v - sqrtf(vn2)) * p->m.inv_accel;
         float tt = plan_lt(dt, tn) ? dt : tn;
         float ds = v * tt - 0.5f * a * tt * tt;
@@ -122,6 +126,8 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         p->s = p->m.mm;
         return tc;
     }
+    plan_motion_complete(b, &p->m);
+    float a = p->m.accel;
     float peak2 = 0.5f * (v2 + ve2) + a * remaining;
     if (plan_lt(vn2, peak2))
         peak2 = vn2;
@@ -205,7 +211,6 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
             sb->dir_negative |= (uint8_t)(1 << a);
     }
     p->active = 1;
-    p->first = 1;
     p->s = 0.0f;
     p->done = 0;
     plan_block_motion(b, &p->m);
@@ -252,6 +257,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             ended = !plan_lt(p->s, p->m.mm);
             target = p->events;
             if (!ended) { /* a step is due half way */
+                plan_motion_complete(b, &p->m);
                 uint32_t e = (uint32_t)(p->s * p->m.events_per_mm + 0.5f);
                 if (e < target)
                     target = e;
@@ -279,8 +285,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             seg->events = (uint16_t)n;
             seg->period = (uint16_t)(event_period(time, (uint16_t)n) - 1); /* CTC: OCR1A + 1 ticks */
             seg->block = &step_blocks[p->block];
-            seg->flags = p->first ? SEG_FIRST : 0;
-            p->first = 0;
+            seg->flags = p->done ? 0 : SEG_FIRST;
             p->done = (uint16_t)target;
             seg_head++; /* publish after the segment is complete */
             added = 1;
@@ -289,6 +294,7 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             plan_discard_current();
             p->active = 0;
         } else {
+            plan_motion_complete(b, &p->m);
             plan_set_exec_exit_limit(p->v * p->v + 2.0f * p->m.accel * (p->m.mm - p->s));
         }
     }

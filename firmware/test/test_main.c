@@ -25,6 +25,7 @@ static const test_case cases[] = {
     {"arc_full_circle", test_arc_full_circle},
     {"planner_junctions", test_planner_junctions},
     {"planner_block_math", test_planner_block_math},
+    {"planner_cruise_limits", test_planner_cruise_limits},
     {"planner_exact_steps", test_planner_exact_steps},
     {"segments_profile", test_segments_profile},
     {"segments_hold", test_segments_hold},

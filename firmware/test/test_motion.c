@@ -113,10 +113,16 @@ void test_planner_junctions(void)
     /* moves beyond the 16-bit step counters are refused, and cut by plan_pieces */
     fresh_planner();
     float far[2] = {300, 220};
-    CHECK(plan_pieces(far) == 1);
     settings.steps_per_mm[0] = 400;
-    CHECK(plan_pieces(far) == 5);
     CHECK(plan_line(far, 3000, 0) == PLAN_TOO_LONG && plan_count() == 0);
+    CHECK(plan_pieces() == 5); /* 120,000 events, at most 27,000 a piece */
+    settings.corexy = 1;       /* motor A: 120,000 + 17,600 */
+    CHECK(plan_line(far, 3000, 0) == PLAN_TOO_LONG && plan_pieces() == 6);
+    settings.corexy = 0;
+    settings.steps_per_mm[0] = 80;
+    CHECK(plan_line(far, 3000, 0) == 1); /* 24,000: fits */
+    fresh_planner();
+    settings.steps_per_mm[0] = 400;
     float fifth[2] = {60, 44};
     CHECK(plan_line(fifth, 3000, 0) == 1);
     settings_defaults(&settings);
@@ -253,6 +259,55 @@ void test_planner_block_math(void)
         CHECK(got <= entry[k] * (1 + 1e-4) + 1e-3);
         CHECK(got >= entry[k] * (1 - 1.0 / 64) - 0.1); /* the 16-bit cruise cap, the 1/64 floors */
     }
+}
+
+/* The cruise speed of every block is min(F, each moving axis's max rate /
+ * |u_axis|), raised to the slowest step rate, whatever the feed's history:
+ * a feed no limit can bind is converted once per F change and reused in
+ * every direction (plain_nominal), so the feeds here sit on both sides of
+ * each limit and each one runs in many directions, unequal axes included. */
+void test_planner_cruise_limits(void)
+{
+    static const float feeds[] = {100, 300, 383, 384, 385, 600, 2990, 2996, 2997, 2998,
+                                  3000, 3003, 5990, 6000, 6010, 9000};
+    for (uint8_t pass = 0; pass < 2; pass++) {
+        fresh_planner();
+        settings.max_rate[0] = 3000;
+        settings.max_rate[1] = 6000;
+        if (pass) {
+            settings.steps_per_mm[1] = 5; /* 32 steps/s is 6.4 mm/s along Y */
+            settings.max_rate[1] = 600;
+        }
+        for (uint8_t f = 0; f < sizeof(feeds) / sizeof(feeds[0]); f++) {
+            plan_reset();
+            int32_t zero[2] = {0, 0};
+            plan_set_position(zero);
+            float at[2] = {0, 0};
+            for (uint8_t k = 0; k < 24; k++) {
+                double ang = k * (2 * M_PI / 24) + 0.01;
+                float to[2] = {at[0] + (float)(7 * cos(ang)), at[1] + (float)(7 * sin(ang))};
+                CHECK(plan_line(to, feeds[f], 0) == 1);
+                memcpy(at, to, sizeof(at));
+                const plan_block_t *b = &plan_current()[k];
+                double d[2], mm = 0, events = 0;
+                for (uint8_t a = 0; a < 2; a++) {
+                    d[a] = b->steps[a] / (double)settings.steps_per_mm[a];
+                    mm += d[a] * d[a];
+                    if (fabs((double)b->steps[a]) > events)
+                        events = fabs((double)b->steps[a]);
+                }
+                mm = sqrt(mm);
+                double v = feeds[f] / 60.0;
+                for (uint8_t a = 0; a < 2; a++)
+                    if (b->steps[a] && settings.max_rate[a] / 60.0 * mm / fabs(d[a]) < v)
+                        v = settings.max_rate[a] / 60.0 * mm / fabs(d[a]);
+                if (v * events / mm < 32)
+                    v = 32 / (events / mm);
+                CHECK_SPEED(b, v);
+            }
+        }
+    }
+    settings_defaults(&settings);
 }
 
 void test_planner_exact_steps(void)

@@ -16,6 +16,7 @@ void test_arc_segments(void);
 void test_arc_full_circle(void);
 void test_planner_junctions(void);
 void test_planner_block_math(void);
+void test_planner_cruise_limits(void);
 void test_planner_exact_steps(void);
 void test_segments_profile(void);
 void test_segments_hold(void);
