@@ -42,9 +42,6 @@
 #define DIR_NEGATIVE IO(GPIOR1)         /* stepper.c's DIR_NEGATIVE */
 #define PULSING IO(GPIOR2)              /* drive_stepdir.h's drive_pulsing */
 
-#if OCF0A != OCIE0A
-#error "one value is written to TIFR0 and TIMSK0: their compare A bits must match"
-#endif
 #if PENDING >= 0x20
 #error "PENDING's bits are set with sbi: it must be in the low I/O space"
 #endif
@@ -122,10 +119,12 @@ TIMER1_COMPA_vect:
     out PULSING, r24
     ldi r24, 0
     out PENDING, r24        /* the event below sets its bits afresh */
-    out IO(TCNT0), r24      /* compare A (OCR0A = $0) ends the pulse; no wrap */
+    out IO(TCNT0), r24      /* compare A (OCR0A = $0) ends the pulse */
+    /* Timer0's interrupt is on for the whole run (stepper.c): only a
+     * compare that came (at its 128 us wrap) before the count's reset is
+     * dropped, or it would end the pulse just raised */
     ldi r24, 1 << OCF0A
     out IO(TIFR0), r24
-    sts TIMSK0, r24
     /* the segment: none left -> the slow path loads the next one */
     lds r24, tick_left
     lds r25, tick_left + 1
@@ -153,7 +152,8 @@ load_near:
     out STEP_PIN, r24
     ldi r24, 0
     out PULSING, r24
-    sts TIMSK0, r24
+    ldi r24, 1 << OCF0A     /* (its interrupt has nothing left to end) */
+    out IO(TIFR0), r24
 done:
 #ifdef BENCH_ISR_PIN
     cbi IO(IO_PORT(BENCH_ISR)), IO_BIT(BENCH_ISR)

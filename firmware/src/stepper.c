@@ -124,8 +124,17 @@ static void forget_block(void)
 
 void stepper_start(void)
 {
-    if (RUNNING() || seg_head == seg_tail)
+    if (RUNNING())
         return;
+    if (seg_head == seg_tail) {
+#if DRIVE_PULSED
+        /* stopped and the last pulse ended: Timer0's interrupt off (it
+         * would come at every 128 us wrap of the count) */
+        if (!drive_pulsing)
+            TIMSK0 = 0;
+#endif
+        return;
+    }
     if (!enabled)
         stepper_enable(1);
     /* a block stopped part way (a hold, a halt) that the ring does not go
@@ -149,6 +158,14 @@ void stepper_start(void)
         TIFR1 = 1 << OCF1A;
         TIMSK1 = 1 << OCIE1A;
         TCCR1B = (1 << WGM12) | (1 << CS11);
+#if DRIVE_PULSED
+        /* the pulse-end interrupt stays on for the whole run rather than
+         * being switched on by each tick and off by itself (~150 cycles a
+         * 0.5 mm line); a compare with no pulse up (at the count's wrap,
+         * on ticks slower than 128 us) ends nothing */
+        TIFR0 = 1 << OCF0A;
+        TIMSK0 = 1 << OCIE0A;
+#endif
     }
 }
 
@@ -286,9 +303,8 @@ ISR(TIMER1_COMPA_vect)
     if (DRIVE_ONE_PORT || drive_pulsing)
         drive_step_end();
     drive_step(PENDING_STEPS);
-    TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse; no wrap to handle */
-    TIFR0 = 1 << OCF0A;
-    TIMSK0 = 1 << OCIE0A;
+    TCNT0 = 0; /* compare A (OCR0A = $0) ends the pulse */
+    TIFR0 = 1 << OCF0A; /* (one that came before the reset: not this pulse's end) */
 #else
     drive_step(PENDING_STEPS);
 #endif
@@ -328,7 +344,7 @@ ISR(TIMER1_COMPA_vect)
         /* a long tick (a block starts) outlasted the pulse: end it now rather
          * than after the next tick's interrupt, which outranks Timer0's */
         drive_step_end();
-        TIMSK0 = 0;
+        TIFR0 = 1 << OCF0A;
     }
 #endif
 #ifdef BENCH_ISR_PIN
@@ -360,15 +376,13 @@ ISR(TIMER0_COMPA_vect, ISR_NAKED)
         "out %[pin], r24\n\t"
         "ldi r24, 0\n\t"
         "out %[pulsing], r24\n\t"
-        "sts %[timsk], r24\n\t"
 #if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
         "cbi %[bench_port], %[bench_bit]\n\t"
 #endif
         "pop r24\n\t"
         "reti\n\t"
         :
-        : [pulsing] "I"(_SFR_IO_ADDR(drive_pulsing)), [pin] "I"(_SFR_IO_ADDR(IO_PINREG(X_STEP))),
-          [timsk] "n"(_SFR_MEM_ADDR(TIMSK0))
+        : [pulsing] "I"(_SFR_IO_ADDR(drive_pulsing)), [pin] "I"(_SFR_IO_ADDR(IO_PINREG(X_STEP)))
 #if defined(BENCH_ISR_PIN) && defined(BENCH_ISR_END)
           , [bench_port] "I"(_SFR_IO_ADDR(IO_PORT(BENCH_ISR_END))), [bench_bit] "I"(IO_BIT(BENCH_ISR_END))
 #endif
@@ -380,7 +394,6 @@ ISR(TIMER0_COMPA_vect, ISR_NAKED)
 ISR(TIMER0_COMPA_vect)
 {
     drive_step_end();
-    TIMSK0 = 0;
 }
 #endif
 #endif
