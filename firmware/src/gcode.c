@@ -113,7 +113,8 @@ static uint8_t arc_center_from_radius(const float *s, const float *t, float r, u
 
 uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_block_t *blk, uint8_t jog)
 {
-    *st = *from; /* the one copy: changed in place, the caller commits it */
+    if (st != from) /* (in place, the caller holds the copy: protocol.c) */
+        *st = *from;
     float val[W_COUNT];
     uint16_t seen = 0;
     int8_t motion = -1;

@@ -24,16 +24,20 @@ uint8_t protocol_gcode(const char *line)
         return ERR_LOCKED;
     if (mach.jog && machine_moving())
         return ERR_NOT_IDLE;
-    gc_state_t next;
+    /* parsed in place: the one copy of the state a line costs is this one,
+     * put back when the line is bad or refused (gcode.h) */
+    gc_state_t was = gc;
     gc_block_t blk;
-    uint8_t e = gc_parse(line, &gc, &next, &blk, 0);
-    if (e)
+    uint8_t e = gc_parse(line, &gc, &gc, &blk, 0);
+    uint8_t refused = !e && machine_check_limits(&blk);
+    if (e || refused) {
+        gc = was;
+        if (refused) { /* (soft limits) */
+            machine_resync();
+            e = ERR_LOCKED;
+        }
         return e;
-    if (machine_check_limits(&blk)) { /* the line is refused: gc stays as it was */
-        machine_resync();
-        return ERR_LOCKED;
     }
-    gc = next;
     return machine_execute(&blk);
 }
 

@@ -10,13 +10,14 @@
 static gc_state_t st;
 static gc_block_t blk;
 
-/* parse a line and commit its modal state as protocol.c does */
+/* parse a line and commit its modal state as protocol.c does: in place,
+ * the copy put back on an error (jogs parse into a second state: below) */
 static uint8_t parse(const char *line)
 {
-    gc_state_t next;
-    uint8_t e = gc_parse(line, &st, &next, &blk, 0);
-    if (!e)
-        st = next;
+    gc_state_t was = st;
+    uint8_t e = gc_parse(line, &st, &st, &blk, 0);
+    if (e)
+        st = was;
     return e;
 }
 

@@ -29,6 +29,13 @@ void test_numbers(void)
     CHECK_NEAR(num("5.", &ok, &end), 5, 0);
     CHECK_NEAR(num("300.000", &ok, &end), 300, 0);
     CHECK_NEAR(num("123.456", &ok, &end), 123.456, 1e-4);
+    /* across the digit sum's step from 16 to 32 bits (at 6553) */
+    CHECK_NEAR(num("6552.9", &ok, &end), 6552.9, 1e-3);
+    CHECK_NEAR(num("6553.9", &ok, &end), 6553.9, 1e-3);
+    CHECK_NEAR(num("65535", &ok, &end), 65535, 0);
+    CHECK_NEAR(num("65536.5", &ok, &end), 65536.5, 0);
+    CHECK_NEAR(num("0065539", &ok, &end), 65539, 0);
+    CHECK(ok && end == 7);
     /* 40 digits after the point: fine, rounds */
     CHECK_NEAR(num("1.234567890123456789012345678901234567890", &ok, &end), 1.2345679, 1e-6);
     CHECK(ok && end == strlen("1.234567890123456789012345678901234567890"));
