@@ -123,7 +123,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     uint8_t g_units = 0, g_dist = 0, g_plane = 0, g_coord = 0, g_feed_mode = 0; /* groups seen on this line */
     uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pause = 0, m_stop_groups = 0, m_pen_groups = 0;
 
-    memset(blk, 0, offsetof(gc_block_t, store));
+    memset(blk, 0, offsetof(gc_block_t, feed));
     for (uint8_t i = 0; line[i];) {
         char letter = line[i++];
         if (letter == '/') /* block delete: GRBL ignores the character */

@@ -47,13 +47,13 @@ typedef struct {
     uint8_t has_via;      /* G28 with axis words */
     uint8_t store_slot;   /* G10, G28.1, G30.1: GC_SLOT_* + 1 to write `store` to, 0 none */
     uint8_t inverse_time; /* G93: feed is 1/min, machine scales it by the move's length */
-    float feed;           /* mm/min */
-    float dwell_s;
     uint32_t line;        /* N word (its whole part), 0 without one */
     /* gc_parse zeroes the fields above and fills these where its action
-     * reads them (a 40-byte clear a line saved): start always, target for
-     * every motion and G28, via for G28, center for arcs, store when
-     * store_slot is set */
+     * reads them (a 48-byte clear a line saved): feed for a line, an arc
+     * or a jog, dwell_s for a dwell, start always, target for every motion
+     * and G28, via for G28, center for arcs, store when store_slot is set */
+    float feed;           /* mm/min */
+    float dwell_s;
     float store[GC_AXES]; /* machine mm (G28.1/G30.1) or offset (G10) to store */
     float start[N_AXIS];  /* machine mm */
     float target[N_AXIS];

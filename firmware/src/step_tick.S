@@ -21,14 +21,15 @@
  * uses. r1 is not assumed zero (the interrupt may land mid-multiply).
  *
  * Cycle budget, measured by bench/firmware_bench.py at 50 kHz on both axes
- * (a period of 320 cycles), entry and exit included: on the 328P 105
- * cycles on average (76 body + 29 entry/exit: the response, the vector's
- * jump, 4 pushes and pops, reti), 277 at worst on the tick that loads a
- * block's first segment; on the 2560 107 and 279 (3-byte return
+ * (a period of 320 cycles), entry and exit included: on the 328P 103
+ * cycles on average (74 body + 29 entry/exit: the response, the vector's
+ * jump, 4 pushes and pops, reti), 275 at worst on the tick that loads a
+ * block's first segment; on the 2560 105 and 277 (3-byte return
  * addresses). The C tick took 179/269 and 187/277. Per 0.5 mm line of the
- * bench's CPU-bound run (about 36 ticks) 3,605 cycles on the 328P (the C
+ * bench's CPU-bound run (about 36 ticks) ~3,540 cycles on the 328P (the C
  * tick: 5,431); shorter than the 10 us step pulse, it leaves nearly every
- * pulse to Timer0's interrupt (23 cycles, ~630 a line). */
+ * pulse to Timer0's interrupt (21 cycles, ~545 a line), which is on for
+ * the whole run: the tick no longer switches it on (2 cycles a tick). */
 #include <avr/io.h>
 #include "step_tick.h"
 

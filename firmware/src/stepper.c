@@ -283,7 +283,7 @@ static inline __attribute__((always_inline)) uint16_t tick_load(void)
  * tick that loads a segment starting a block; on the 2560 187 and 277 (its
  * 3-byte return address: 70 entry/exit). Was 213/290 and 215/294. The
  * busiest period holds a worst tick alone: a tick that outlasts the pulse
- * ends it itself, so the pulse-end interrupt below (23 cycles worst) runs
+ * ends it itself, so the pulse-end interrupt below (21 cycles worst) runs
  * only after short ticks. Per 0.5 mm line of the bench's CPU-bound run
  * (about 36 ticks) 5,431 cycles (was 6,941), then with a count per step
  * (since dropped: a block's steps go into the position when it starts, a
@@ -362,8 +362,10 @@ ISR(TIMER1_COMPA_vect)
  * comes), so it saves only that one; the compiler's version also saved r0,
  * r1 and SREG. It runs after a tick shorter than the pulse (one or no axis
  * stepping); a longer tick ends the pulse itself. Cycle budget, measured by
- * bench/firmware_bench.py: 23 cycles worst, entry and exit included (was 39
- * to 50; 25 on the 2560).
+ * bench/firmware_bench.py: 21 cycles worst, entry and exit included (was 39
+ * to 50, then 23 while it switched itself off; 23 on the 2560). On for the
+ * whole run (stepper_start): on ticks slower than Timer0's 128 us wrap it
+ * also comes once a wrap with no pulse up, and writes 0 (no toggle).
  * The step port must be in I/O space (ports A-G), as both boards' are. */
 ISR(TIMER0_COMPA_vect, ISR_NAKED)
 {
