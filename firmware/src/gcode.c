@@ -309,25 +309,27 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     if (g53 && !jog && (motion >= 0 ? motion : st->motion) > MOTION_G1)
         return ERR_G53_MOTION;
 
-    /* where the axis words point, in machine mm */
-    float target[N_AXIS];
+    /* where the axis words point, in machine mm: made in the block's
+     * target itself (no copy; unread by the actions that have none) */
+    float *target = blk->target;
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        target[a] = st->pos[a];
-        if (!(axes & (1u << a)))
-            continue;
-        float v = val[a];
-        if (g53)
-            target[a] = v;
-        else if (st->incremental)
-            target[a] = st->pos[a] + v;
-        else {
-            float off = gc_wco(st, a);
-            /* no offset, the usual case: the word itself, no float add (the
-             * add would turn -0 into +0, so -0 takes it) */
-            target[a] = float_bits(off) == 0 && float_bits(v) != 0x80000000u ? v : v + off;
+        float t = st->pos[a];
+        if (axes & (1u << a)) {
+            float v = val[a];
+            if (g53)
+                t = v;
+            else if (st->incremental)
+                t += v;
+            else {
+                float off = gc_wco(st, a);
+                /* no offset, the usual case: the word itself, no float add
+                 * (the add would turn -0 into +0, so -0 takes it) */
+                t = float_bits(off) == 0 && float_bits(v) != 0x80000000u ? v : v + off;
+            }
+            if (magnitude_above(t, GC_MAX_COORD))
+                return ERR_INVALID_TARGET;
         }
-        if (magnitude_above(target[a], GC_MAX_COORD))
-            return ERR_INVALID_TARGET;
+        target[a] = t;
     }
 
     uint16_t used = (uint16_t)(WB(W_X) | WB(W_Y) | WB(W_Z) | WB(W_F) | WB(W_N) | WB(W_S) | WB(W_T));
@@ -401,7 +403,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             return ERR_AXIS_COMMAND_CONFLICT;
         blk->action = ACT_G28;
         blk->has_via = axes != 0;
-        memcpy(blk->via, target, sizeof(target));
+        memcpy(blk->via, target, sizeof(blk->via));
         /* then to the stored position (machine 0 without GRBL_WCS); with
          * axis words only those axes go there, as GRBL 1.1 does */
         float home[GC_AXES] = {0};
@@ -465,8 +467,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                     used |= (1u << W_I) | (1u << W_J);
                 }
             }
-            memcpy(blk->target, target, sizeof(target));
-            memcpy(st->pos, target, sizeof(target));
+            memcpy(st->pos, target, sizeof(st->pos));
         }
     }
     if (seen & ~used)
