@@ -310,10 +310,12 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         return ERR_G53_MOTION;
 
     /* where the axis words point, in machine mm: made in the block's
-     * target itself (no copy; unread by the actions that have none) */
+     * target itself (no copy; unread by the actions that have none), and
+     * where the line starts */
     float *target = blk->target;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = st->pos[a];
+        blk->start[a] = t;
         if (axes & (1u << a)) {
             float v = val[a];
             if (g53)
@@ -337,7 +339,6 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     blk->motors = m_motors;
     blk->program_end = m_end;
     blk->pause = m_pause;
-    memcpy(blk->start, st->pos, sizeof(st->pos));
 
     if (non_modal == NM_DWELL) {
         if (axes || motion >= 0)

@@ -51,7 +51,8 @@ typedef struct {
     /* gc_parse zeroes the fields above and fills these where its action
      * reads them (a 48-byte clear a line saved): feed for a line, an arc
      * or a jog, dwell_s for a dwell, start always, target for every motion
-     * and G28, via for G28, center for arcs, store when store_slot is set */
+     * and G28 (and most other lines), via for G28, center for arcs, store
+     * when store_slot is set */
     float feed;           /* mm/min */
     float dwell_s;
     float store[GC_AXES]; /* machine mm (G28.1/G30.1) or offset (G10) to store */
