@@ -270,14 +270,16 @@ void motion_plan(int n, const uint8_t *kind, const float *x, const float *y, con
     }
 }
 
-/* Copies the queued blocks, oldest first, into out (room for max); returns
- * how many. */
+/* Copies the queued blocks, oldest first, into out (room for max), with
+ * their planned entries written out (the lazy backward pass keeps some
+ * relative); returns how many. */
 int motion_blocks(plan_block_t *out, int max)
 {
     plan_block_t *b = plan_current();
     int n = 0;
     for (; b && ring_base && n < plan_count() && n < max; n++) {
         out[n] = *b;
+        out[n].entry_sqr = plan_entry_sqr(b);
         b = b + 1 == ring_base + (PLAN_SIZE - 1) ? ring_base : b + 1;
     }
     return n;

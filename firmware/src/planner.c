@@ -32,6 +32,16 @@ static plan_f16_t feed_nominal;
 static uint8_t ov_at, ov_left;     /* next block to recompute, and how many to go */
 static plan_f16_t ov_prev_nominal; /* the cruise speed^2 of the block before ov_at */
 static plan_line_t line_number; /* for the blocks queued next */
+/* The lazy backward pass (lazy_append): the newest lazy_n blocks (never the
+ * oldest) hold in entry_sqr their entry minus lazy_add. Their entries are
+ * the backward pass's sums (each the next one's plus its own accel_dist2,
+ * the newest's its own), below their junction limits, with room to the
+ * limit not growing toward the newest; a new block adds its accel_dist2 to
+ * every one of them, i.e. to lazy_add. */
+#if PLAN_LAZY
+static uint8_t lazy_n;
+static plan_sqr_t lazy_add;
+#endif
 void plan_set_line_number(plan_line_t n) { line_number = n; }
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
@@ -80,6 +90,9 @@ static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 
 void plan_reset(void)
 {
     head = tail = count = ov_left = 0;
+#if PLAN_LAZY
+    lazy_n = 0;
+#endif
     prev_nominal = 0;
     exec_exit_limit = 0;
     memset(prev_unit, 0, sizeof(prev_unit));
@@ -160,9 +173,19 @@ float plan_f16_to_float(plan_f16_t h)
     return v;
 }
 
+#if PLAN_LAZY
+plan_sqr_t plan_entry_sqr(const plan_block_t *b)
+{
+    int8_t back = (int8_t)(head - (uint8_t)(b - ring)); /* 1 for the newest */
+    if (back <= 0)
+        back += RING_SLOTS;
+    return b->entry_sqr + ((uint8_t)back <= lazy_n ? lazy_add : 0);
+}
+#endif
+
 float plan_next_entry_sqr(void)
 {
-    return count > 1 ? plan_sqr_to_float(ring[next_index(tail)].entry_sqr) : 0.0f;
+    return count > 1 ? plan_sqr_to_float(plan_entry_sqr(&ring[next_index(tail)])) : 0.0f;
 }
 
 void plan_discard_current(void)
@@ -175,6 +198,12 @@ void plan_discard_current(void)
     }
     tail = next_index(tail);
     count--;
+#if PLAN_LAZY
+    if (lazy_n && lazy_n == count) { /* the new oldest was lazy: it is planned no more */
+        ring[tail].entry_sqr += lazy_add;
+        lazy_n--;
+    }
+#endif
     exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0;
 }
 
@@ -219,6 +248,93 @@ void plan_cart_from_motor(const int32_t *motor, int32_t *cart)
  * the first such block instead of walking the queue (a queue planned down
  * to a stop at its end, i.e. every look-ahead-bound one, has none: ~20
  * cycles a block). */
+#if PLAN_LAZY
+static plan_block_t *ring_prev(plan_block_t *b) { return b == ring ? &ring[RING_SLOTS - 1] : b - 1; }
+
+/* Every lazy entry written out (before a full pass) */
+static void materialize(void)
+{
+    plan_block_t *b = &ring[head];
+    for (uint8_t n = lazy_n; n; n--) {
+        b = ring_prev(b);
+        b->entry_sqr += lazy_add;
+    }
+    lazy_n = 0;
+}
+
+/* The passes below with the new block b (at head, not yet counted) queued
+ * behind the lazy blocks, where they would write no block but b and the
+ * oldest lazy ones that reach their junction limits: 1 when done so (a few
+ * compares, where the passes walk every lazy block), 0 to run them. The
+ * block before the oldest lazy one is the executing one, or one at its
+ * limit where the backward pass stops; the forward pass must not cap the
+ * oldest lazy one (then it stops there too). */
+static uint8_t lazy_append(plan_block_t *nb)
+{
+    plan_sqr_t add = nb->accel_dist2, sum = lazy_add + add;
+    if (add >= nb->max_entry_sqr)
+        return 0;
+    plan_block_t *p = ring_prev(nb);
+    if (lazy_n && (int32_t)(nb->max_entry_sqr - add) < (int32_t)(p->max_entry_sqr - (p->entry_sqr + sum)))
+        return 0; /* the room to the limit would grow toward the oldest */
+    int8_t i = (int8_t)(head - lazy_n);
+    plan_block_t *b = &ring[i < 0 ? i + RING_SLOTS : i];
+    p = ring_prev(b);
+    for (;;) {
+        plan_sqr_t e = b == nb ? add : b->entry_sqr + sum, v = b->max_entry_sqr, reach;
+        uint8_t below = e < v;
+        if (below)
+            v = e;
+        if (p == &ring[tail])
+            reach = exec_exit_limit;
+        else if (p->entry_sqr == p->max_entry_sqr && v + p->accel_dist2 >= p->max_entry_sqr)
+            reach = p->entry_sqr + p->accel_dist2;
+        else
+            return 0;
+        if (v > reach)
+            return 0;
+        if (below)
+            break;
+        b->entry_sqr = v; /* at its limit: planned for good */
+        lazy_n--;
+        p = b;
+        b = b == &ring[RING_SLOTS - 1] ? ring : b + 1;
+    }
+    lazy_add = sum;
+    nb->entry_sqr = add - sum;
+    lazy_n++;
+    return 1;
+}
+
+/* The newest blocks that qualify as lazy after the passes, from the newest
+ * back: each entry the backward sum, below its limit, the room to the
+ * limit not growing toward the oldest. */
+static void lazy_rebuild(void)
+{
+    lazy_add = 0;
+    plan_sqr_t sum = 0;
+    int32_t room = INT32_MAX;
+    plan_block_t *b = ring_prev(&ring[head]);
+    for (uint8_t n = count; n > 1; n--) {
+        sum += b->accel_dist2; /* below 2^31: the last sum was below a limit */
+        int32_t r = (int32_t)(b->max_entry_sqr - sum);
+        if (b->entry_sqr != sum || r <= 0 || r > room)
+            break;
+        room = r;
+        lazy_n++;
+        b = ring_prev(b);
+    }
+}
+#else
+static inline void materialize(void) {}
+static inline uint8_t lazy_append(plan_block_t *nb)
+{
+    (void)nb;
+    return 0;
+}
+static inline void lazy_rebuild(void) {}
+#endif
+
 static void recalculate(uint8_t full)
 {
     /* pointers rather than ring indices: no index multiply per block */
@@ -251,6 +367,7 @@ static void recalculate(uint8_t full)
             break;
         reach = b->entry_sqr + b->accel_dist2; /* both <= PLAN_SQR_MAX: no overflow */
     }
+    lazy_rebuild();
 }
 
 /* Cruise speed of a block: the programmed feed (in mm/s) or, for a rapid,
@@ -429,6 +546,7 @@ uint8_t plan_override_step(void)
     }
     if (!ov_left)
         prev_nominal = ov_prev_nominal; /* the newest block's: plan_line's next junction */
+    materialize();
     recalculate(1);
     return ov_left != 0;
 }
@@ -528,11 +646,15 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     memcpy(prev_unit, unit, sizeof(prev_unit));
     prev_nominal = b->nominal_sqr;
     memcpy(position, cart, sizeof(cart));
-    head = next_index(head);
     if (ov_left)
         ov_left++; /* the walk also caps its junction by the block before's new speed */
+    uint8_t lazy = count && lazy_append(b);
+    if (!lazy)
+        materialize();
+    head = next_index(head);
     if (count++ == 0)
         exec_exit_limit = b->accel_dist2; /* starts from rest */
-    recalculate(0);
+    if (!lazy)
+        recalculate(0);
     return 1;
 }

@@ -117,6 +117,19 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags);
 void plan_set_line_number(plan_line_t n);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
 uint16_t plan_events(const plan_block_t *b); /* step events of a block */
+/* The lazy backward pass (planner.c, lazy_append): a new block behind a
+ * queue planned down to a stop adds its accel_dist2 to one sum instead of
+ * every queued entry. ~1.1 kB of flash, which the 328P has not got; the
+ * entries are the same either way (tests/e2e/test_motion_model.py holds the
+ * Uno's eager ones to the host library's lazy ones). */
+#define PLAN_LAZY PLAN_CACHE_MOTION
+/* A queued block's planned entry speed squared (with PLAN_LAZY, entry_sqr
+ * of the newest blocks is kept relative to a sum the newer blocks add). */
+#if PLAN_LAZY
+plan_sqr_t plan_entry_sqr(const plan_block_t *b);
+#else
+static inline plan_sqr_t plan_entry_sqr(const plan_block_t *b) { return b->entry_sqr; }
+#endif
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
 /* Into how many equal pieces the move plan_line last refused as

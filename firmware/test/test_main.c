@@ -31,6 +31,7 @@ static const test_case cases[] = {
     {"segments_hold", test_segments_hold},
     {"planner_overrides", test_planner_overrides},
     {"planner_override_slices", test_planner_override_slices},
+    {"planner_lazy_passes", test_planner_lazy_passes},
     {"settings", test_settings},
     {"fuzz_replay", test_fuzz_replay},
 };

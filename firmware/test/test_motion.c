@@ -107,7 +107,7 @@ void test_planner_junctions(void)
     plan_line(tiny1, 6000, 0);
     plan_line(tiny2, 6000, 0);
     plan_block_t *t = plan_current();
-    CHECK(plan_sqr_to_float(t[1].entry_sqr) <= 2 * 1000 * 0.5);
+    CHECK(plan_sqr_to_float(plan_entry_sqr(&t[1])) <= 2 * 1000 * 0.5);
     /* zero-length moves queue nothing */
     CHECK(plan_line(tiny2, 6000, 0) == 0);
     /* moves beyond the 16-bit step counters are refused, and cut by plan_pieces */
@@ -255,7 +255,7 @@ void test_planner_block_math(void)
         entry[k] = fmin(entry[k], entry[k - 1] + gain[k - 1]);
     const plan_block_t *q = plan_current();
     for (int k = 1; k < N; k++) {
-        double got = plan_sqr_to_float(q[k].entry_sqr);
+        double got = plan_sqr_to_float(plan_entry_sqr(&q[k]));
         CHECK(got <= entry[k] * (1 + 1e-4) + 1e-3);
         CHECK(got >= entry[k] * (1 - 1.0 / 64) - 0.1); /* the 16-bit cruise cap, the 1/64 floors */
     }
@@ -427,7 +427,7 @@ void test_planner_overrides(void)
     CHECK(plan_sqr_to_float(q[1].max_entry_sqr) <= 625 + 1e-3);
     CHECK(plan_sqr_to_float(q[4].max_entry_sqr) <= 400 + 1e-3);
     for (int i = 1; i < 5; i++)
-        CHECK(q[i].entry_sqr <= q[i].max_entry_sqr);
+        CHECK(plan_entry_sqr(&q[i]) <= q[i].max_entry_sqr);
     /* later blocks are planned with the overrides too */
     float p6[2] = {60, 0};
     CHECK(plan_line(p6, 3000, 0));
@@ -491,7 +491,7 @@ void test_planner_override_slices(void)
         slices++;
     CHECK(slices == (N - DONE) / 4 - 1);
     for (int i = 1; i < N - DONE; i++)
-        CHECK(plan_current()[i].entry_sqr <= plan_current()[i].max_entry_sqr);
+        CHECK(plan_entry_sqr(&plan_current()[i]) <= plan_current()[i].max_entry_sqr);
     /* the same lines planned with the override already set */
     plan_block_t walked[N];
     memcpy(walked, plan_current(), sizeof(plan_block_t) * (N - DONE));
@@ -538,3 +538,97 @@ void test_settings(void)
     CHECK(settings_checksum(data, 4) != settings_checksum(swapped, 4));
     CHECK(settings_checksum(data, 4) != settings_checksum(changed, 4));
 }
+
+/* The planned entries of every queued block against the two passes run in
+ * full over the queue (integers, the same fixed point): equal, whatever the
+ * lazy backward pass kept relative, after every block queued, executed or
+ * replanned by an override. The exit limit of the executing block is the
+ * planner's own (from rest, then its planned entry plus its gain). */
+static void check_full_passes(plan_sqr_t exec_limit)
+{
+    const plan_block_t *q = plan_current();
+    uint8_t n = plan_count();
+    plan_sqr_t e[64], next = 0;
+    for (int k = n - 1; k >= 1; k--) {
+        const plan_block_t *b = &q[k];
+        e[k] = next + b->accel_dist2 < b->max_entry_sqr ? next + b->accel_dist2 : b->max_entry_sqr;
+        next = e[k];
+    }
+    plan_sqr_t reach = exec_limit;
+    for (int k = 1; k < n; k++) {
+        if (e[k] > reach)
+            e[k] = reach;
+        reach = e[k] + q[k].accel_dist2;
+        CHECK(plan_entry_sqr(&q[k]) == e[k]);
+    }
+}
+
+void test_planner_lazy_passes(void)
+{
+    fresh_planner();
+    settings.accel[0] = settings.accel[1] = 3000;
+    settings.max_rate[0] = settings.max_rate[1] = 30000;
+    uint32_t seed = 12345;
+    float x = 0, y = 0, heading = 0;
+    plan_sqr_t exec_limit = 0;
+    /* the host ring is not rotated between checks: q[k] below walks it from
+     * its first slot, so the queue is drained whole before it wraps */
+    static const float lengths[8] = {0.3f, 0.5f, 0.5f, 0.5f, 0.5f, 1.0f, 4.0f, 12.0f};
+    for (int round = 0; round < 40; round++) {
+        int blocks = 3 + round * 7 % (PLAN_SIZE - 4);
+        for (int k = 0; k < blocks; k++) {
+            seed = seed * 1103515245u + 12345u;
+            uint32_t r = seed >> 8;
+            /* corners of every sharpness now and then: junction limits vary */
+            heading += (r & 3) == 0 ? (float)(r % 97) * ((r & 12) ? 0.002f : 0.016f)
+                                    : (float)((int)(r % 21) - 10) * 0.004f;
+            float len = k == 0 && round % 4 ? 80.0f : lengths[(r >> 5) & 7]; /* a long lead: no cap */
+            x += len * cosf(heading);
+            y += len * sinf(heading);
+            if (x < 5 || x > 290 || y < 5 || y > 200) {
+                x -= len * cosf(heading);
+                y -= len * sinf(heading);
+                heading += 3.0f;
+                x += len * cosf(heading);
+                y += len * sinf(heading);
+            }
+            float p[2] = {x, y};
+            uint8_t was = plan_count();
+            CHECK(plan_line(p, (float)(3000 + (r >> 12) % 4 * 5000), 0) == 1);
+            if (!was)
+                exec_limit = plan_current()->accel_dist2;
+            check_full_passes(exec_limit);
+            if (k == blocks / 2 && round % 3 == 1) { /* an override mid-queue */
+                planner_set_overrides(round % 2 ? 60 : 100, 100);
+                while (plan_override_step())
+                    ;
+                check_full_passes(exec_limit);
+            }
+        }
+        /* executed, oldest first: the next block's planned entry becomes fixed */
+        while (plan_count() > 1) {
+            plan_discard_current();
+            exec_limit = plan_entry_sqr(plan_current()) + plan_current()->accel_dist2;
+            check_full_passes(exec_limit);
+        }
+        plan_discard_current();
+        plan_reset();
+    }
+    /* a corner among lazy blocks with less room to its limit than the older
+     * ones have: it reaches its limit first */
+    fresh_planner();
+    settings.accel[0] = settings.accel[1] = 3000;
+    settings.max_rate[0] = settings.max_rate[1] = 30000;
+    float lead[2] = {80, 10};
+    CHECK(plan_line(lead, 18000, 0) == 1);
+    exec_limit = plan_current()->accel_dist2;
+    for (int k = 1; k <= 24; k++) {
+        float h = k <= 10 ? 0.0f : 0.12f, p[2] = {80 + (k <= 10 ? k * 0.5f : 5 + (k - 10) * 0.5f * cosf(h)),
+                                                   10 + (k <= 10 ? 0 : (k - 10) * 0.5f * sinf(h))};
+        CHECK(plan_line(p, 18000, 0) == 1);
+        check_full_passes(exec_limit);
+    }
+    planner_set_overrides(100, 100);
+    fresh_planner();
+}
+

@@ -22,6 +22,7 @@ void test_segments_profile(void);
 void test_segments_hold(void);
 void test_planner_overrides(void);
 void test_planner_override_slices(void);
+void test_planner_lazy_passes(void);
 void test_settings(void);
 void test_fuzz_replay(void);
 extern const char *fuzz_corpus_dir;
