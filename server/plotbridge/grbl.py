@@ -226,7 +226,7 @@ def buffers_from_feedback(text: str) -> tuple[int, int] | None:
     if not text.startswith("OPT:"):
         return None
     parts = text[4:].split(",")
-    if len(parts) < 3 or not (parts[1].isdigit() and parts[2].isdigit()):
+    if len(parts) < 3 or not (parts[1].isdecimal() and parts[2].isdecimal()):
         return None
     return int(parts[1]), int(parts[2])
 

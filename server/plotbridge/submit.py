@@ -55,7 +55,7 @@ def layer_pen(text: str) -> tuple[str, str]:
 def send(pb: Plotbridge, args: argparse.Namespace) -> dict[str, Any]:
     placement = {key: getattr(args, key) for key in PLACEMENT_FIELDS}
     layers = [p.strip() for p in args.layers.split(",") if p.strip()] if args.layers else None
-    numbers = [int(p) for p in layers] if layers and all(p.isdigit() for p in layers) else None
+    numbers = [int(p) for p in layers] if layers and all(p.isdecimal() for p in layers) else None
     pens: dict[str, str | int | None] = dict(args.pen)
     job = pb.upload(args.file, name=args.name, layers=None if numbers else layers,
                     plotter=args.plotter, pens=pens or None, **placement)  # fmt: skip
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.file.is_file():
         print(f"plotbridge submit: no such file: {args.file}", file=sys.stderr)
         return 2
-    if args.layers and all(p.strip().isdigit() for p in args.layers.split(",") if p.strip()) \
+    if args.layers and all(p.strip().isdecimal() for p in args.layers.split(",") if p.strip()) \
             and not args.start:
         print("plotbridge submit: --layers with numbers picks the layers a start plots: "
               "add --start", file=sys.stderr)  # fmt: skip

@@ -44,7 +44,7 @@ async def _limited(request: Request, limit: int) -> AsyncIterator[bytes]:
 
 def _check_length(request: Request, limit: int) -> None:
     length = request.headers.get("content-length")
-    if length and length.isdigit() and int(length) > limit + 64 * 1024:
+    if length and length.isdecimal() and int(length) > limit + 64 * 1024:
         raise UploadRefused(413, f"upload larger than the limit of {limit // (1024 * 1024)} MB")
 
 

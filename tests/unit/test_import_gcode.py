@@ -48,6 +48,12 @@ def test_bad_checksum_is_reported_with_its_line(tmp_path):
     assert "checksum" in e.value.errors[0]["message"]
 
 
+def test_a_checksum_of_digits_int_refuses_is_malformed(tmp_path):
+    with pytest.raises(ImportFailed) as e:  # "²".isdigit() is true, int("²") fails
+        run_import(tmp_path, "M3\nG1 X5 Y5 F600*\u00b2\n")
+    assert e.value.errors[0] == {"line": 2, "message": "malformed checksum '*\u00b2'"}
+
+
 @pytest.mark.parametrize(("text", "options"), [
     ("G0 Z5\nG0 X10 Y10\nG1 Z-1 F300\nG1 X20 F600\nG0 Z5\n", {}),
     ("G0 Z5\nG0 X10 Y10\nG1 Z0.5 F300\nG1 X20 F600\nG0 Z5\n", {"pen_dialect": "z",

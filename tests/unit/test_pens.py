@@ -142,6 +142,10 @@ async def test_library_refuses_duplicates_and_unknown_pens(tmp_path):
     with pytest.raises(Refused) as missing:
         library.get("blue")
     assert missing.value.status == 404 and "'black'" in str(missing.value.detail)
+    for digits_int_refuses in ("²", "①"):  # str.isdigit() says yes, int() says no
+        with pytest.raises(Refused) as odd:
+            library.get(digits_int_refuses)
+        assert odd.value.status == 404
     library.close()
 
 

@@ -65,7 +65,7 @@ def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
         return ""
     if "*" in text:
         body, _, check = text.rpartition("*")
-        if not check.strip().isdigit():
+        if not check.strip().isdecimal():
             errors.add(line_no, f"malformed checksum '*{check.strip()}'")
             return None
         computed = 0
@@ -86,7 +86,7 @@ def strip_line(raw: str, line_no: int, errors: ErrorLog) -> str | None:
         return ""
     if text.startswith("N"):
         k = 1
-        while k < len(text) and text[k].isdigit():
+        while k < len(text) and text[k].isdecimal():
             k += 1
         text = text[k:]
     return text

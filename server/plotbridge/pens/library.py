@@ -68,7 +68,7 @@ class PenLibrary:
             text = ref.strip()
             pen = next((p for p in self.pens.values() if p.name.casefold() == text.casefold()),
                        None)  # fmt: skip
-            if pen is None and text.isdigit():
+            if pen is None and text.isdecimal():
                 pen = self.pens.get(int(text))
         else:
             pen = None
@@ -219,7 +219,7 @@ class PenLibrary:
     @staticmethod
     def _layer_index(layers: list[Layer], key: str) -> int:
         key = str(key).strip()
-        if key.isdigit() and 1 <= int(key) <= len(layers):
+        if key.isdecimal() and 1 <= int(key) <= len(layers):
             return int(key) - 1
         for index, layer in enumerate(layers):
             if layer.name.casefold() == key.casefold():
