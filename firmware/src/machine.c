@@ -191,12 +191,19 @@ void machine_poll(void)
 {
     wdt_reset();
     uint8_t f = realtime_take();
+    uint8_t code = 0;
     if (f & RT_ALARM) {
-        uint8_t code;
         cli();
         code = rt_alarm;
         rt_alarm = 0;
         sei();
+    }
+    /* GRBL's rule is by state, not by steps: a reset with moves queued (a
+     * pen settle between them, a hold that has stopped) is ALARM:3 too. The
+     * receive interrupt already raised it if the steppers were running. */
+    if ((f & RT_RESET) && !code && !mach.alarm && (plan_count() || seg_head != seg_tail))
+        code = ALARM_ABORT_CYCLE;
+    if (code) {
         machine_alarm(code);
         if (code == ALARM_ABORT_CYCLE)
             mach.homed = 0;

@@ -475,6 +475,19 @@ def test_a_jog_runs_as_jog_and_its_cancel_stops_it_short(plotter, g: Grbl) -> No
     assert mpos(g.wait_state("Idle", 60)) == (0.0, 0.0)
 
 
+def test_a_reset_in_a_stopped_hold_is_alarm_3_at_the_held_position(g: Grbl) -> None:
+    """GRBL's rule is by state: a reset with moves queued is ALARM:3 even when no step
+    is being made at that moment (a hold that has stopped, a pen settle between moves)."""
+    g.ok("G1 X100 F600")
+    g.wait_state("Run", 10)
+    g.ser.write(b"!")
+    held = mpos(g.wait_state("Hold:0", 30))
+    lines = g.reset()
+    assert lines[-2:-1] == ["ALARM:3"], lines  # before the banner, as GRBL sends it
+    status = g.status()
+    assert status.startswith("<Alarm") and mpos(status) == held, (held, status)
+
+
 def test_restore_defaults(g: Grbl) -> None:
     g.ok("$110=5000")
     g.ok("$RST=$")
