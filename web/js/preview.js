@@ -146,8 +146,10 @@ export class PreviewCanvas {
     this.travelBoxes = geom ? chunkBoxes(geom.travel) : [];
     this.geomVersion = (this.geomVersion || 0) + 1;
     this.done = 0;
-    this.userView = false;
-    this.view = null; // fit the new drawing on the next render
+    if (!this.pointers.size) { // never yank the view from under a drag or pinch
+      this.userView = false;
+      this.view = null; // fit the new drawing on the next render
+    }
     this.invalidate();
   }
 
