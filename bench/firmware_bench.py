@@ -29,6 +29,9 @@ Run: .venv/bin/python bench/firmware_bench.py [--board NAME ...]
      (where the cycles of the CPU-bound throughput run, of the check-mode run,
      or with --accel of the F18000 run at A mm/s^2, go, per function, from
      program-counter samples)
+     .venv/bin/python bench/firmware_bench.py --calls [--check | --accel A]
+     (the same runs: every call counted, a line's calls and cycles from entry
+     to return per called function and calling function, exact)
 """
 
 from __future__ import annotations
@@ -109,11 +112,15 @@ def _has_pc(name: str) -> bool:
 
 def simulate(harness: Path, elf: Path, lines: list[str], tmp: Path, max_s: float = 120,
              profile: Path | None = None, profile_from: int = 0,
-             board: Board = BOARDS["uno-cnc-shield"]) -> dict:
+             board: Board = BOARDS["uno-cnc-shield"], calls: Path | None = None,
+             watch: list[int] | None = None) -> dict:
     gcode = tmp / "in.gcode"
     gcode.write_text("\n".join(lines) + "\n")
     env = {"HARNESS_PROFILE": str(profile),
            "HARNESS_PROFILE_FROM": str(profile_from)} if profile else {}
+    if calls:
+        env.update(HARNESS_CALLS=str(calls), HARNESS_PROFILE_FROM=str(profile_from),
+                   HARNESS_CALLS_WATCH=",".join(str(a) for a in watch or []))
     env["HARNESS_SPAN_FROM"] = str(profile_from)
     env.update(board.pins, HARNESS_MCU=board.mcu)
     out = run([str(harness), str(elf), str(gcode), str(max_s)], env=env)
@@ -215,6 +222,61 @@ def lookahead_cap(accel: float, depth: int) -> float:
     return math.sqrt(2 * accel * (depth - 1) * 0.5) / 0.5
 
 
+def functions(elf: Path) -> list[tuple[int, int, str]]:
+    """(byte address, size, name) of the image's functions, by address. A
+    size runs at most to the next symbol: the float library's assembly
+    entries often have none or a wrong one (one entry's size spans the next)."""
+    syms = []
+    for line in run(["avr-nm", "-n", "-S", "-C", str(elf)]).splitlines():
+        parts = line.split()
+        if len(parts) in (3, 4) and parts[-2] in "tTW":
+            size = int(parts[1], 16) if len(parts) == 4 else 1 << 20
+            if not syms or syms[-1][0] != int(parts[0], 16):  # an alias: the first name
+                syms.append((int(parts[0], 16), size, parts[-1]))
+    return [(a, min(size, nxt[0] - a if nxt else size), name)
+            for (a, size, name), nxt in zip(syms, [*syms[1:], None], strict=True)]
+
+
+def function_at(funcs: list[tuple[int, int, str]], addr: int) -> str:
+    return next((f for a, size, f in funcs if a <= addr < a + size), f"0x{addr:x}")
+
+
+# jumped to, not called: no return address to count them by
+NOT_CALLED = re.compile(r"__vector_\d+|__(prologue_saves|epilogue_restores|bad_interrupt)__|"
+                        r"__(ctors|dtors)_\w+|__init|main|exit|_exit")
+
+
+def call_profile(harness: Path, elf: Path, tmp: Path, feed: float = 24000,
+                 accel: float = CPU_ACCEL, board: Board = BOARDS["uno-cnc-shield"],
+                 check: bool = False) -> None:
+    """Every call of every function in the profile's run, between the first
+    and last ack: calls and cycles (entry to return, interrupts included) a
+    line per called function, then per calling function under it."""
+    pre, body = circle_program(feed, check, accel)
+    out = tmp / "calls.txt"
+    funcs = functions(elf)
+    watch = [a for a, _, name in funcs if not NOT_CALLED.fullmatch(name)]
+    res = simulate(harness, elf, pre + body, tmp, profile_from=len(pre), board=board,
+                   calls=out, watch=watch)
+    lines = len(res["ack_cycles"]) - len(pre) - 1
+    per: dict[str, dict[str, list[int]]] = {}
+    for row in out.read_text().split("\n"):
+        if not row:
+            continue
+        callee, ret, n, cycles = (int(x) for x in row.split())
+        caller = function_at(funcs, ret - 1)
+        site = per.setdefault(function_at(funcs, callee), {}).setdefault(caller, [0, 0])
+        site[0] += n
+        site[1] += cycles
+    print(f"{lines} lines: calls and cycles a line, from entry to return")
+    total = {name: [sum(v[0] for v in c.values()), sum(v[1] for v in c.values())]
+             for name, c in per.items()}
+    for name, (n, cycles) in sorted(total.items(), key=lambda kv: -kv[1][1]):
+        print(f"{cycles / lines:9.0f} {n / lines:7.2f}  {name}")
+        for caller, (cn, cc) in sorted(per[name].items(), key=lambda kv: -kv[1][1]):
+            print(f"{cc / lines:19.0f} {cn / lines:7.2f}    from {caller}")
+
+
 def profile(harness: Path, elf: Path, tmp: Path, feed: float = 24000, accel: float = CPU_ACCEL,
             top: int = 25, board: Board = BOARDS["uno-cnc-shield"], check: bool = False) -> None:
     """Cycles per streamed line by function, between the first and last ack
@@ -224,19 +286,14 @@ def profile(harness: Path, elf: Path, tmp: Path, feed: float = 24000, accel: flo
     res = simulate(harness, elf, pre + body, tmp, profile=samples, profile_from=len(pre),
                    board=board)
     acks = res["ack_cycles"][len(pre):]
-    nm = run(["avr-nm", "-n", "-S", "-C", str(elf)])
-    funcs = []
-    for line in nm.splitlines():
-        parts = line.split()
-        if len(parts) == 4 and parts[2] in "tTW":
-            funcs.append((int(parts[0], 16), int(parts[1], 16), parts[3]))
+    funcs = functions(elf)
     counts: dict[str, int] = {}
     total = 0
     for line in samples.read_text().split("\n"):
         if not line:
             continue
         addr, n = (int(x) for x in line.split())
-        name = next((f for a, size, f in funcs if a <= addr < a + size), f"0x{addr:x}")
+        name = function_at(funcs, addr)
         counts[name] = counts.get(name, 0) + n
         total += n
     # samples from the first streamed line's ack to the last one's
@@ -333,13 +390,13 @@ def main() -> int:
         raise SystemExit(f"unknown board {unknown[0]!r}: one of {', '.join(BOARDS)}")
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
-        if "--profile" in args:
+        if "--profile" in args or "--calls" in args:
             board = BOARDS[names[0]]
             elf, harness = build(board, tmp)
             accel = float(args[args.index("--accel") + 1]) if "--accel" in args else CPU_ACCEL
             feed = 18000 if "--accel" in args else 24000
-            profile(harness, elf, tmp, feed=feed, accel=accel, board=board,
-                    check="--check" in args)
+            (profile if "--profile" in args else call_profile)(
+                harness, elf, tmp, feed=feed, accel=accel, board=board, check="--check" in args)
             return 0
         met = [measure(BOARDS[n], tmp) for n in names]
     print("all targets met" if all(met) else "SHORTFALL: see the figures above")

@@ -50,6 +50,73 @@ static uint64_t worst_alone, worst_pair_isr, worst_pair_mark;
 static uint32_t *profile;
 static size_t profile_from; /* HARNESS_PROFILE_FROM: first line acknowledged */
 
+/* HARNESS_CALLS=FILE with HARNESS_CALLS_WATCH="byte_address,...": count the
+ * calls of those functions by return address, with their cycles from entry
+ * to return less the interrupts that came in between, and write "callee
+ * return_byte_address calls cycles" lines; bench/firmware_bench.py --calls
+ * maps them to the calling functions. */
+#define CALL_SITES 4096
+#define CALL_DEPTH 32
+#define VECTORS 57 /* the 2560's; a call never goes below the last vector on the 328P either */
+static uint8_t *watched; /* per flash word */
+static struct call_site { uint32_t callee, ret; uint64_t calls, cycles; } sites[CALL_SITES];
+static struct {
+    uint32_t ret;
+    uint16_t sp;
+    uint8_t isr;
+    uint64_t at, isr_at; /* the cycle, and isr_cycles, at entry */
+    size_t site;
+} calls[CALL_DEPTH];
+static size_t call_depth, isr_depth;
+static uint16_t last_sp;
+static uint64_t isr_cycles, isr_from;
+
+static uint16_t stack_pointer(void) { return (uint16_t)(avr->data[R_SPL] | avr->data[R_SPH] << 8); }
+
+static void track_calls(void)
+{
+    uint32_t pc = avr->pc / 2;
+    uint16_t sp = stack_pointer(), sp_before = last_sp;
+    last_sp = sp;
+    /* returned: at the return address with the stack back above it (SP
+     * alone would not do: an epilogue writes SPH before SPL) */
+    if (call_depth && pc == calls[call_depth - 1].ret && sp > calls[call_depth - 1].sp) {
+        call_depth--;
+        if (calls[call_depth].isr) {
+            if (--isr_depth == 0)
+                isr_cycles += avr->cycle - isr_from;
+        } else {
+            sites[calls[call_depth].site].cycles +=
+                avr->cycle - calls[call_depth].at - (isr_cycles - calls[call_depth].isr_at);
+        }
+    }
+    /* a call or an interrupt: the last instruction pushed just a return
+     * address (a jump or a branch to a watched label is no call) */
+    if (sp_before - sp != avr->address_size || call_depth == CALL_DEPTH)
+        return;
+    int wide = avr->address_size == 3;
+    uint32_t ret = wide ? (uint32_t)avr->data[sp + 1] << 16 | avr->data[sp + 2] << 8 | avr->data[sp + 3]
+                        : (uint32_t)avr->data[sp + 1] << 8 | avr->data[sp + 2];
+    if (pc * 2 < VECTORS * avr->vector_size) {
+        if (isr_depth++ == 0)
+            isr_from = avr->cycle;
+        calls[call_depth++] = (typeof(calls[0])){ret, sp, 1, 0, 0, 0};
+        return;
+    }
+    if (!watched[pc] || acked < profile_from || acked >= line_count)
+        return;
+    size_t i = (pc * 31u + ret) % CALL_SITES, probes = 0;
+    while (sites[i].calls && !(sites[i].callee == pc && sites[i].ret == ret)) {
+        i = (i + 1) % CALL_SITES;
+        if (++probes == CALL_SITES)
+            return;
+    }
+    if (!sites[i].calls)
+        sites[i] = (struct call_site){pc, ret, 0, 0};
+    sites[i].calls++;
+    calls[call_depth++] = (typeof(calls[0])){ret, sp, 0, avr->cycle, isr_cycles, i};
+}
+
 static avr_cycle_count_t sample_pc(avr_t *a, avr_cycle_count_t when, void *param)
 {
     (void)param;
@@ -270,11 +337,29 @@ int main(int argc, char **argv)
         avr_cycle_timer_register(avr, PROFILE_EVERY, sample_pc, 0);
     }
 
+    const char *calls_path = getenv("HARNESS_CALLS");
+    if (calls_path) {
+        watched = calloc(FLASH_WORDS, 1);
+        const char *from = getenv("HARNESS_PROFILE_FROM");
+        profile_from = from ? (size_t)atol(from) : 0;
+        for (const char *w = getenv("HARNESS_CALLS_WATCH"); w && *w;) {
+            char *end;
+            unsigned long addr = strtoul(w, &end, 0);
+            if (end == w)
+                break;
+            if (addr / 2 < FLASH_WORDS)
+                watched[addr / 2] = 1;
+            w = *end ? end + 1 : end;
+        }
+    }
+
     uint64_t limit = (uint64_t)(max_s * F_CPU);
     const char *span_env = getenv("HARNESS_SPAN_FROM");
     span_from = span_env ? (size_t)atol(span_env) : (size_t)-1;
     avr->sleep = count_sleep;
     for (;;) {
+        if (watched)
+            track_calls();
         int st = avr_run(avr);
         if (st == cpu_Done || st == cpu_Crashed)
             break;
@@ -291,6 +376,15 @@ int main(int argc, char **argv)
                 fprintf(pf, "%u %u\n", w * 2, profile[w]);
         if (pf)
             fclose(pf);
+    }
+    if (calls_path) {
+        FILE *cf = fopen(calls_path, "w");
+        for (size_t i = 0; cf && i < CALL_SITES; i++)
+            if (sites[i].calls)
+                fprintf(cf, "%u %u %llu %llu\n", sites[i].callee * 2, sites[i].ret * 2,
+                    (unsigned long long)sites[i].calls, (unsigned long long)sites[i].cycles);
+        if (cf)
+            fclose(cf);
     }
     printf("{\"sleep_cycles\": %llu, \"span_sleep_cycles\": %llu, ", (unsigned long long)sleep_cycles,
            (unsigned long long)span_sleep_cycles);
