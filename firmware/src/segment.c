@@ -72,7 +72,6 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
 {
     float remaining = p->m.mm - p->s;
     float v = p->v;
-    float t = 0.0f;
     /* a block cruised through needs only its length: the rest of its motion
      * (plan_motion_complete) where the paths below need it */
     if (p->hold) {
@@ -127,73 +126,56 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
         return tc;
     }
     plan_motion_complete(b, &p->m);
-    float a = p->m.accel;
-    float peak2 = 0.5f * (v2 + ve2) + a * remaining;
-    if (plan_lt(vn2, peak2))
-        peak2 = vn2;
-    /* no acceleration phase (cruising on from the last block): no sqrt */
-    float vp = v;
-    if (plan_lt(v2, peak2))
+    float a = p->m.accel, inv_a = p->m.inv_accel;
+    if (plan_lt(vn2, v2))
+        vn2 = v2; /* still above it where the block ends: on at v, down to the exit at the end */
+    if (plan_lt(vn2, ve2))
+        ve2 = vn2;
+    /* the rest of the block gains or loses at most 2 r in speed^2: an exit
+     * out of reach becomes the nearest one it can reach */
+    float r = a * remaining, lo = v2 - (r + r), hi = v2 + (r + r);
+    if (plan_lt(ve2, lo))
+        ve2 = lo;
+    else if (plan_lt(hi, ve2))
+        ve2 = hi;
+    /* the profile in closed form: accelerate to vp, cruise there (a * its
+     * time: the speed^2 beyond vn^2 the peak would have reached, over vp),
+     * decelerate to ve */
+    float peak2 = 0.5f * (v2 + ve2) + r, cruise = 0.0f, vp = v;
+    if (plan_lt(vn2, peak2)) {
+        vp = sqrtf(vn2);
+        cruise = (peak2 - vn2) / vp;
+    } else if (plan_lt(v2, peak2)) {
         vp = sqrtf(peak2);
-    else
-        peak2 = v2;
-    float half_inv_a = 0.5f * p->m.inv_accel;
-    float d_acc = (peak2 - v2) * half_inv_a;
-    float d_dec = (peak2 - ve2) * half_inv_a;
-    if (plan_lt(d_dec, 0.0f))
-        d_dec = 0.0f;
-    float d_cru = remaining - d_acc - d_dec;
-    if (plan_lt(d_cru, 0.0f))
-        d_cru = 0.0f;
-    float s = 0.0f;
-    /* acceleration */
-    if (plan_lt(0.0f, d_acc)) {
-        float ta = (vp - v) * p->m.inv_accel;
-        if (!plan_lt(ta, dt)) {
-            p->s += v * dt + 0.5f * a * dt * dt;
-            p->v = v + a * dt;
-            return dt;
-        }
-        t += ta;
-        s += d_acc;
-        v = vp;
     }
-    /* cruise */
-    if (plan_lt(0.0f, d_cru) && plan_lt(0.0f, v)) {
-        float tc = d_cru / v;
-        if (!plan_lt(t + tc, dt)) {
-            p->s += s + v * (dt - t);
-            p->v = v;
-            return dt;
-        }
-        t += tc;
-        s += d_cru;
+    float ve = sqrtf(ve2);
+    float ta = (vp - v) * inv_a, tc = cruise * inv_a;
+    float t = ta + tc + (vp - ve) * inv_a;
+    if (!plan_lt(dt, t)) {
+        /* the block ends within dt (the short lines of a fast stream: their
+         * whole block in one step, no phase walked) */
+        p->s = p->m.mm;
+        p->v = ve;
+        return t;
     }
-    /* deceleration to the exit speed (or as close as the distance allows) */
-    /* v is now sqrt(peak2): peak2 stands for its square (two multiplies less) */
-    float left = remaining - s;
-    float vend2 = peak2 - (a + a) * left;
-    if (plan_lt(vend2, ve2))
-        vend2 = ve2;
-    float vend = plan_lt(vend2, peak2) ? sqrtf(vend2) : v; /* ends at the speed it cruises: no sqrt */
-    float td = (v - vend) * p->m.inv_accel;
-    if (plan_lt(0.0f, td) && plan_lt(dt, t + td)) {
-        float tt = dt - t;
-        p->s += s + v * tt - 0.5f * a * tt * tt;
-        p->v = v - a * tt;
+    /* it goes on past dt: where dt ends the acceleration, the cruise or the
+     * deceleration */
+    if (plan_lt(dt, ta)) {
+        p->s += v * dt + 0.5f * a * dt * dt;
+        p->v = v + a * dt;
         return dt;
     }
-    if (!plan_lt(0.0f, td) && plan_lt(0.0f, left) && plan_lt(0.0f, v)) {  /* rounding left a sliver at constant speed */
-        float tc = left / v;
-        if (plan_lt(dt, t + tc)) {
-            p->s += s + v * (dt - t);
-            return dt;
-        }
-        td = tc;
+    float s = 0.5f * (v + vp) * ta;
+    dt -= ta;
+    if (plan_lt(dt, tc)) {
+        p->s += s + vp * dt;
+        p->v = vp;
+        return dt + ta;
     }
-    p->s = p->m.mm;
-    p->v = vend;
-    return t + (plan_lt(0.0f, td) ? td : 0.0f);
+    float td = dt - tc;
+    p->s += s + vp * dt - 0.5f * a * td * td;
+    p->v = vp - a * td;
+    return dt + ta;
 }
 
 static void start_block(struct prep_state *p, const plan_block_t *b)
