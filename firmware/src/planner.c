@@ -468,15 +468,32 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #if PLAN_CACHE_MOTION
     *m = motion[b - ring]; /* the axis settings cannot change while blocks are queued */
 #else
-    geometry(b, m, 0);
+    m->events_per_mm = 0.0f; /* not yet */
+    m->inv_accel = 0.0f;
+    if (memcmp(&axis.mm_per_step[0], &axis.mm_per_step[1], sizeof(float))) {
+        geometry(b, m, 0);
+        return;
+    }
+    /* both axes at the same steps/mm (the usual machine): the square root of
+     * the integer sum of squared steps (CoreXY: x^2 + y^2 = (A^2 + B^2) / 2),
+     * two 16-bit multiplies where geometry converts and multiplies floats;
+     * its axis limits when plan_motion_complete needs them (a block that
+     * ends within one segment does not) */
+    int32_t sq = (int32_t)b->steps[0] * b->steps[0] + (int32_t)b->steps[1] * b->steps[1];
+    if (settings.corexy) /* (at most 2 * 30000^2: no overflow) */
+        sq >>= 1;
+    m->mm = sqrtf((float)sq) * axis.mm_per_step[0];
 #endif
 }
 
 #if !PLAN_CACHE_MOTION
 void plan_motion_complete(const plan_block_t *b, plan_motion_t *m)
 {
-    if (!plan_lt(0.0f, m->events_per_mm))
-        run_accel(b, m, motion_finish(b, m));
+    if (plan_lt(0.0f, m->events_per_mm))
+        return;
+    if (!plan_lt(0.0f, m->inv_accel))
+        geometry(b, m, 0); /* the axis limits (and the length again, to within rounding) */
+    run_accel(b, m, motion_finish(b, m));
 }
 #endif
 

@@ -7,6 +7,12 @@ segment_t seg_ring[SEG_SIZE];
 step_block_t step_blocks[SEG_SIZE];
 volatile uint8_t seg_head, seg_tail;
 
+#ifndef PREP_WAIT_BLOCKS
+#define PREP_WAIT_BLOCKS 8
+#endif
+#ifndef PREP_WAIT_SEGMENTS
+#define PREP_WAIT_SEGMENTS 2
+#endif
 static struct prep_state {
     uint8_t active;      /* preparing plan_current() */
     uint8_t block;       /* its step_blocks index */
@@ -68,6 +74,19 @@ void seg_drop_block(void)
  * speed, cruise, decelerate to the exit speed, so a planner that raised
  * the exit speed meanwhile is followed at once. Returns the time used
  * (less than dt when the block or a hold ends first). */
+/* x / 2 for x >= 0: one off its exponent (a multiply is ~130 cycles here) */
+static float half(float x)
+{
+    int32_t bits;
+    memcpy(&bits, &x, sizeof(bits));
+    if (bits >= 0x01000000L) /* a normal number that stays one */
+        bits -= 1L << 23;
+    else
+        return 0.5f * x;
+    memcpy(&x, &bits, sizeof(x));
+    return x;
+}
+
 static float advance(struct prep_state *p, const plan_block_t *b, float dt)
 {
     float remaining = p->m.mm - p->s;
@@ -114,43 +133,54 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
             return tt;
         }
     }
-    if (!plan_lt(v2, vn2) && !plan_lt(ve2, v2) && plan_lt(0.0f, v)) {
-        /* cruising on at the block's speed to an exit no slower: the
-         * profile below comes down to this, without its dozen float steps */
-        float tc = remaining / v;
-        if (!plan_lt(tc, dt)) {
-            p->s += v * dt;
-            return dt;
-        }
-        p->s = p->m.mm;
-        return tc;
-    }
-    plan_motion_complete(b, &p->m);
-    float a = p->m.accel, inv_a = p->m.inv_accel;
     if (plan_lt(vn2, v2))
         vn2 = v2; /* still above it where the block ends: on at v, down to the exit at the end */
     if (plan_lt(vn2, ve2))
         ve2 = vn2;
-    /* the rest of the block gains or loses at most 2 r in speed^2: an exit
-     * out of reach becomes the nearest one it can reach */
-    float r = a * remaining, lo = v2 - (r + r), hi = v2 + (r + r);
-    if (plan_lt(ve2, lo))
-        ve2 = lo;
-    else if (plan_lt(hi, ve2))
-        ve2 = hi;
+    /* r2: the speed^2 the rest of the block gains or loses at most, 2 a
+     * times what remains. At the block's start its accel_dist2 (what the
+     * planner counted on) and 1 / a from it: on the 328P one division, no
+     * events per mm nor axis limits (plan_motion_complete) for a block that
+     * ends within dt */
+    float r2, inv_a;
+    int32_t s_bits;
+    memcpy(&s_bits, &p->s, sizeof(s_bits));
+    if (!s_bits) {
+        r2 = plan_sqr_to_float(b->accel_dist2);
+#if PLAN_CACHE_MOTION
+        inv_a = p->m.inv_accel;
+#else
+        inv_a = (remaining + remaining) / r2;
+#endif
+    } else {
+        plan_motion_complete(b, &p->m);
+        r2 = 2.0f * p->m.accel * remaining;
+        inv_a = p->m.inv_accel;
+    }
     /* the profile in closed form: accelerate to vp, cruise there (a * its
      * time: the speed^2 beyond vn^2 the peak would have reached, over vp),
-     * decelerate to ve */
-    float peak2 = 0.5f * (v2 + ve2) + r, cruise = 0.0f, vp = v;
+     * decelerate to ve. The peak is below v^2 or ve^2 when the exit is out
+     * of reach (|v^2 - ve^2| > r2): then the nearest one it can reach. */
+    float peak2 = half(v2 + ve2 + r2), cruise = 0.0f, vp = v;
+    if (plan_lt(peak2, v2)) {
+        ve2 = v2 - r2;
+        peak2 = v2;
+    } else if (plan_lt(peak2, ve2)) {
+        ve2 = v2 + r2;
+        peak2 = ve2;
+    }
     if (plan_lt(vn2, peak2)) {
         vp = sqrtf(vn2);
         cruise = (peak2 - vn2) / vp;
     } else if (plan_lt(v2, peak2)) {
         vp = sqrtf(peak2);
     }
+    /* (an exit at the peak or at v: no second square root) */
     float ve = sqrtf(ve2);
-    float ta = (vp - v) * inv_a, tc = cruise * inv_a;
-    float t = ta + tc + (vp - ve) * inv_a;
+    float t = vp - v + (vp - ve);
+    if (plan_lt(0.0f, cruise))
+        t += cruise;
+    t *= inv_a;
     if (!plan_lt(dt, t)) {
         /* the block ends within dt (the short lines of a fast stream: their
          * whole block in one step, no phase walked) */
@@ -160,6 +190,10 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
     }
     /* it goes on past dt: where dt ends the acceleration, the cruise or the
      * deceleration */
+    plan_motion_complete(b, &p->m);
+    float a = p->m.accel;
+    inv_a = p->m.inv_accel;
+    float ta = (vp - v) * inv_a, tc = cruise * inv_a;
     if (plan_lt(dt, ta)) {
         p->s += v * dt + 0.5f * a * dt * dt;
         p->v = v + a * dt;
@@ -204,7 +238,7 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
  * division is ~550). */
 static uint16_t event_period(float time, uint16_t n)
 {
-    float ticks = time * (float)STEP_TIMER_HZ + 0.5f;
+    float ticks = time * (float)STEP_TIMER_HZ; /* (rounded with the division's n / 2) */
     uint32_t total = plan_lt(ticks, 4.0e9f) ? (uint32_t)ticks : 4000000000UL; /* (and NaN) */
     total += n >> 1;
     uint32_t period = total <= 0xFFFFu ? (uint16_t)total / n : total / n;
@@ -213,14 +247,24 @@ static uint16_t event_period(float time, uint16_t n)
     return period > 0xFFFFu ? 0xFFFFu : (uint16_t)period;
 }
 
+/* Room for another segment: one slot fewer than the ring, so a step block
+ * is never reused while a queued segment still points at it. With few
+ * blocks queued (the last of them planned down to a stop near its end) only
+ * while little motion is queued: a segment prepared later is prepared
+ * with the lines that came meanwhile (a stream's start stopped after its
+ * first blocks). */
+static uint8_t prep_room(const struct prep_state *p)
+{
+    uint8_t n = ring_count(seg_head, seg_tail);
+    return n < SEG_SIZE - 1 && (n < PREP_WAIT_SEGMENTS || p->hold || plan_count() > PREP_WAIT_BLOCKS);
+}
+
 /* seg_fill once there is a block (its register saves are not for every
  * idle main-loop pass) */
 static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
 {
     uint8_t added = 0;
-    /* one slot fewer than the ring so a step block is never reused while a
-     * queued segment still points at it */
-    while (ring_count(seg_head, seg_tail) < SEG_SIZE - 1) {
+    for (;;) {
         if (p->hold && p->stopped)
             break;
         plan_block_t *b = plan_current();
@@ -228,6 +272,8 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             p->v = 0.0f;
             break;
         }
+        if (!prep_room(p))
+            break;
         if (!p->active)
             start_block(p, b);
         float time = 0.0f;
@@ -289,5 +335,7 @@ uint8_t seg_fill(void)
         prep.v = 0.0f;
         return 0;
     }
+    if (!prep_room(&prep))
+        return 0; /* (fill's register saves for nothing) */
     return fill(prep_at());
 }
