@@ -223,18 +223,23 @@ def lookahead_cap(accel: float, depth: int) -> float:
 
 
 def functions(elf: Path) -> list[tuple[int, int, str]]:
-    """(byte address, size, name) of the image's functions, by address. A
-    size runs at most to the next symbol: the float library's assembly
-    entries often have none or a wrong one (one entry's size spans the next)."""
-    syms = []
+    """(byte address, size, name) of the image's functions, by address. The
+    float library's assembly entries often have no size or a wrong one (one
+    entry's size spans the next): a size runs at most to the next function,
+    and an entry without one counts where no sized function covers it (not
+    the local labels inside the assembly interrupts)."""
+    sized, bare = [], []
     for line in run(["avr-nm", "-n", "-S", "-C", str(elf)]).splitlines():
         parts = line.split()
         if len(parts) in (3, 4) and parts[-2] in "tTW":
-            size = int(parts[1], 16) if len(parts) == 4 else 1 << 20
-            if not syms or syms[-1][0] != int(parts[0], 16):  # an alias: the first name
-                syms.append((int(parts[0], 16), size, parts[-1]))
-    return [(a, min(size, nxt[0] - a if nxt else size), name)
-            for (a, size, name), nxt in zip(syms, [*syms[1:], None], strict=True)]
+            (sized if len(parts) == 4 else bare).append((int(parts[0], 16), parts[-1], parts))
+    syms = {a: (int(p[1], 16), name) for a, name, p in sized}
+    for a, name, _ in bare:
+        if a not in syms and not any(b <= a < b + size for b, (size, _) in syms.items()):
+            syms[a] = (1 << 20, name)
+    order = sorted(syms)
+    return [(a, min(syms[a][0], nxt - a if nxt else syms[a][0]), syms[a][1])
+            for a, nxt in zip(order, [*order[1:], None], strict=True)]
 
 
 def function_at(funcs: list[tuple[int, int, str]], addr: int) -> str:

@@ -470,7 +470,7 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #else
     m->events_per_mm = 0.0f; /* not yet */
     m->inv_accel = 0.0f;
-    if (memcmp(&axis.mm_per_step[0], &axis.mm_per_step[1], sizeof(float))) {
+    if (!same_bits(axis.mm_per_step[0], axis.mm_per_step[1])) {
         geometry(b, m, 0);
         return;
     }

@@ -13,6 +13,12 @@ volatile uint8_t seg_head, seg_tail;
 #ifndef PREP_WAIT_SEGMENTS
 #define PREP_WAIT_SEGMENTS 2
 #endif
+#ifndef PREP_WAIT_SHORT
+#define PREP_WAIT_SHORT 4
+#endif
+#ifndef PREP_WAIT_TICKS
+#define PREP_WAIT_TICKS (STEP_TIMER_HZ / 250) /* 4 ms */
+#endif
 static struct prep_state {
     uint8_t active;      /* preparing plan_current() */
     uint8_t block;       /* its step_blocks index */
@@ -69,30 +75,29 @@ void seg_drop_block(void)
     prep.v = 0.0f;
 }
 
-/* Advance (s, v) along the block for up to dt seconds. The profile is
- * rebuilt from the present state each time: accelerate toward the cruise
- * speed, cruise, decelerate to the exit speed, so a planner that raised
- * the exit speed meanwhile is followed at once. Returns the time used
- * (less than dt when the block or a hold ends first). */
-/* x / 2 for x >= 0: one off its exponent (a multiply is ~130 cycles here) */
+/* x / 2 for x >= 0: one off its exponent (a multiply is ~130 cycles here);
+ * below 2^-125 (no speed^2 this code meets) x itself */
 static float half(float x)
 {
     int32_t bits;
     memcpy(&bits, &x, sizeof(bits));
     if (bits >= 0x01000000L) /* a normal number that stays one */
         bits -= 1L << 23;
-    else
-        return 0.5f * x;
     memcpy(&x, &bits, sizeof(x));
     return x;
 }
 
+/* Advance (s, v) along the block for up to dt seconds. The profile is
+ * rebuilt from the present state each time: accelerate toward the cruise
+ * speed, cruise, decelerate to the exit speed, so a planner that raised
+ * the exit speed meanwhile is followed at once. Returns the time used
+ * (less than dt when the block or a hold ends first). */
 static float advance(struct prep_state *p, const plan_block_t *b, float dt)
 {
-    float remaining = p->m.mm - p->s;
+    int32_t s_bits; /* 0: at the block's start */
+    memcpy(&s_bits, &p->s, sizeof(s_bits));
+    float remaining = s_bits ? p->m.mm - p->s : p->m.mm;
     float v = p->v;
-    /* a block cruised through needs only its length: the rest of its motion
-     * (plan_motion_complete) where the paths below need it */
     if (p->hold) {
         plan_motion_complete(b, &p->m);
         float a = p->m.accel;
@@ -143,8 +148,6 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
      * events per mm nor axis limits (plan_motion_complete) for a block that
      * ends within dt */
     float r2, inv_a;
-    int32_t s_bits;
-    memcpy(&s_bits, &p->s, sizeof(s_bits));
     if (!s_bits) {
         r2 = plan_sqr_to_float(b->accel_dist2);
 #if PLAN_CACHE_MOTION
@@ -175,7 +178,6 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
     } else if (plan_lt(v2, peak2)) {
         vp = sqrtf(peak2);
     }
-    /* (an exit at the peak or at v: no second square root) */
     float ve = sqrtf(ve2);
     float t = vp - v + (vp - ve);
     if (plan_lt(0.0f, cruise))
@@ -249,18 +251,24 @@ static uint16_t event_period(float time, uint16_t n)
 
 /* Room for another segment: one slot fewer than the ring, so a step block
  * is never reused while a queued segment still points at it. With few
- * blocks queued (the last of them planned down to a stop near its end) only
- * while little motion is queued: a segment prepared later is prepared
- * with the lines that came meanwhile (a stream's start stopped after its
- * first blocks). */
+ * blocks queued (the last of them planned down to a stop near its end), the
+ * planner open to more and a segment of at least PREP_WAIT_TICKS queued
+ * beyond the one under way, none: a segment prepared later sees the lines
+ * that came meanwhile (a stream's start stopped after each of its first
+ * blocks), and the one queued covers any main-loop pass meanwhile. */
 static uint8_t prep_room(const struct prep_state *p)
 {
     uint8_t n = ring_count(seg_head, seg_tail);
-    return n < SEG_SIZE - 1 && (n < PREP_WAIT_SEGMENTS || p->hold || plan_count() > PREP_WAIT_BLOCKS);
+    if (n >= SEG_SIZE - 1)
+        return 0;
+    if (n < PREP_WAIT_SEGMENTS || p->hold || plan_count() > PREP_WAIT_BLOCKS || !plan_free())
+        return 1; /* (a full planner takes no line while it waits) */
+    const segment_t *next = &seg_ring[ring_slot((uint8_t)(seg_tail + 1), SEG_SIZE)];
+    return n < PREP_WAIT_SHORT && (uint32_t)next->events * (next->period + 1u) < PREP_WAIT_TICKS;
 }
 
-/* seg_fill once there is a block (its register saves are not for every
- * idle main-loop pass) */
+/* seg_fill once there is a block and room (its register saves are not for
+ * every idle main-loop pass) */
 static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
 {
     uint8_t added = 0;
@@ -272,8 +280,6 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             p->v = 0.0f;
             break;
         }
-        if (!prep_room(p))
-            break;
         if (!p->active)
             start_block(p, b);
         float time = 0.0f;
@@ -281,7 +287,8 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
         uint8_t ended;
         uint8_t rounds = 0;
         do {
-            time += advance(p, b, SEGMENT_S);
+            float t = advance(p, b, SEGMENT_S);
+            time = rounds ? time + t : t;
             ended = !plan_lt(p->s, p->m.mm);
             target = p->events;
             if (!ended) { /* a step is due half way */
@@ -325,6 +332,8 @@ static __attribute__((noinline)) uint8_t fill(struct prep_state *const p)
             plan_motion_complete(b, &p->m);
             plan_set_exec_exit_limit(p->v * p->v + 2.0f * p->m.accel * (p->m.mm - p->s));
         }
+        if (!prep_room(p))
+            break;
     }
     return added;
 }
