@@ -28,6 +28,9 @@ static struct prep_state {
     float s;             /* mm prepared */
     float v;             /* speed at s, mm/s */
     plan_motion_t m;     /* the block's length and acceleration */
+#if PLAN_CACHE_MOTION
+    float ve, ve2;       /* the last block's exit and its square (RAM to spare: a multiply a block less) */
+#endif
 } prep;
 
 /* The preparer's state through a pointer the compiler cannot fold back into
@@ -74,6 +77,10 @@ void seg_drop_block(void)
     prep.active = 0;
     prep.v = 0.0f;
 }
+
+#if PLAN_CACHE_MOTION
+static uint8_t same_bits(float a, float b) { return !memcmp(&a, &b, sizeof(a)); }
+#endif
 
 /* x / 2 for x >= 0: one off its exponent (a multiply is ~130 cycles here);
  * below 2^-125 (no speed^2 this code meets) x itself */
@@ -122,7 +129,11 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
     }
     float ve2 = plan_next_entry_sqr();
     float vn2 = plan_f16_to_float(b->nominal_sqr); /* read each time: overrides change it */
+#if PLAN_CACHE_MOTION
+    float v2 = same_bits(v, p->ve) ? p->ve2 : v * v;
+#else
     float v2 = v * v;
+#endif
     if (plan_lt(vn2, v2) && plan_lt(vn2 * 1.0001f, v2)) { /* (the first test spares the multiply) */
         /* above the cruise speed (a feed override lowered it): slow down to
          * it first, where the block leaves room; otherwise the profile below
@@ -188,6 +199,10 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
          * whole block in one step, no phase walked) */
         p->s = p->m.mm;
         p->v = ve;
+#if PLAN_CACHE_MOTION
+        p->ve = ve;
+        p->ve2 = ve2;
+#endif
         return t;
     }
     /* it goes on past dt: where dt ends the acceleration, the cruise or the
@@ -261,8 +276,8 @@ static uint8_t prep_room(const struct prep_state *p)
     uint8_t n = ring_count(seg_head, seg_tail);
     if (n >= SEG_SIZE - 1)
         return 0;
-    if (n < PREP_WAIT_SEGMENTS || p->hold || plan_count() > PREP_WAIT_BLOCKS || !plan_free())
-        return 1; /* (a full planner takes no line while it waits) */
+    if (n < PREP_WAIT_SEGMENTS || p->hold || plan_count() > PREP_WAIT_BLOCKS)
+        return 1; /* (every planner holds more: it is open to more lines) */
     const segment_t *next = &seg_ring[ring_slot((uint8_t)(seg_tail + 1), SEG_SIZE)];
     return n < PREP_WAIT_SHORT && (uint32_t)next->events * (next->period + 1u) < PREP_WAIT_TICKS;
 }
