@@ -240,7 +240,7 @@ static void start_block(struct prep_state *p, const plan_block_t *b)
     sb->dir_negative = 0;
     sb->line = b->line;
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        int32_t st = b->steps[a];
+        int16_t st = b->steps[a]; /* |st| <= PLAN_MAX_EVENTS: -st fits */
         sb->steps[a] = (int16_t)(st < 0 ? -st : st);
         if (st < 0)
             sb->dir_negative |= (uint8_t)(1 << a);
