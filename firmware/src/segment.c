@@ -277,12 +277,13 @@ static uint16_t event_period(float time, uint16_t n)
  * any main-loop pass meanwhile. Inline: fill's loop is its one caller. */
 static inline __attribute__((always_inline)) uint8_t prep_room(const struct prep_state *p)
 {
-    uint8_t n = ring_count(seg_head, seg_tail);
+    uint8_t tail = seg_tail; /* once: the step interrupt moves it (then "next" is under way) */
+    uint8_t n = ring_count(seg_head, tail);
     if (n >= SEG_SIZE - 1)
         return 0;
     if (n < PREP_WAIT_SEGMENTS || p->hold || plan_count() > PREP_WAIT_BLOCKS)
         return 1;
-    const segment_t *next = &seg_ring[ring_slot((uint8_t)(seg_tail + 1), SEG_SIZE)];
+    const segment_t *next = &seg_ring[ring_slot((uint8_t)(tail + 1), SEG_SIZE)];
     return n < PREP_WAIT_SHORT && (uint32_t)next->events * (next->period + 1u) < PREP_WAIT_TICKS;
 }
 
