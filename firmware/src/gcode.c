@@ -428,7 +428,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
             if (st->motion != MOTION_G0) {
                 float f = jog ? blk->feed : st->feed;
-                if (f <= 0.0f)
+                if ((int32_t)float_bits(f) <= 0) /* f <= 0 (never negative: +0 or -0) */
                     return ERR_UNDEFINED_FEED;
                 blk->feed = f;
             }
