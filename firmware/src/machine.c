@@ -350,7 +350,8 @@ static uint8_t line_to(const float *target, float feed, uint8_t flags)
     if (mach.check)
         return STATUS_OK;
     uint8_t queued = plan_line_split(target, feed, flags, planner_room);
-    machine_poll(); /* the steppers start before the line's ok */
+    if (!stepper_busy()) /* (running, they are fed by the main loop's next poll) */
+        machine_poll(); /* the steppers start before the line's ok */
     return queued && !mach.abort ? STATUS_OK : ERR_LOCKED;
 }
 
