@@ -323,11 +323,23 @@ void machine_pen(uint8_t down)
     machine_dwell_ms((uint32_t)pen_servo(down) + settings.pen_settle_ms);
 }
 
+/* Every line's soft-limit check (homing boards have them on): the tests
+ * are integer compares of the floats' bits where they can be (a float
+ * compare is ~50 cycles here, the add ~100): below -eps is a negative
+ * float of greater magnitude, i.e. bits above -eps's as unsigned; the add
+ * only past max travel (plan_lt: max travel is not negative). */
 static uint8_t outside_work_area(const float *t)
 {
-    for (uint8_t a = 0; a < N_AXIS; a++)
-        if (t[a] < -SOFT_LIMIT_EPS || t[a] > settings.max_travel[a] + SOFT_LIMIT_EPS)
+    const float below = -SOFT_LIMIT_EPS;
+    uint32_t below_bits;
+    memcpy(&below_bits, &below, sizeof(below_bits));
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        uint32_t b;
+        memcpy(&b, &t[a], sizeof(b));
+        if (b > below_bits ||
+            (plan_lt(settings.max_travel[a], t[a]) && t[a] > settings.max_travel[a] + SOFT_LIMIT_EPS))
             return 1;
+    }
     return 0;
 }
 
