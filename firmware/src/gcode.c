@@ -40,6 +40,18 @@ static uint8_t magnitude_above(float v, float limit)
     return (float_bits(v) & 0x7FFFFFFFu) > float_bits(limit);
 }
 
+/* modal groups a line may name once, as bits */
+enum { GRP_UNITS = 1, GRP_DIST = 2, GRP_PLANE = 4, GRP_COORD = 8, GRP_FEED_MODE = 16,
+       GRP_PEN = 32, GRP_STOP = 64 };
+
+/* 1 when the group (0: none) was already named on the line; marks it */
+static inline uint8_t seen_group(uint8_t *groups, uint8_t group)
+{
+    uint8_t was = *groups & group;
+    *groups |= group;
+    return was;
+}
+
 /* non-modal G commands (GRBL's group 0, one per line) */
 enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1, NM_G10, NM_SET_HOME };
 #define N_COORD_SYSTEMS 6 /* G54..G59 */
@@ -118,10 +130,9 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     float val[W_COUNT];
     uint16_t seen = 0;
     int8_t motion = -1;
-    uint8_t non_modal = NM_NONE, g53 = 0, pen = PEN_KEEP, m300 = 0;
+    uint8_t non_modal = NM_NONE, g53 = 0, m300 = 0;
     uint8_t home_slot = GC_SLOT_G28; /* G28 or G30, and their .1 */
-    uint8_t g_units = 0, g_dist = 0, g_plane = 0, g_coord = 0, g_feed_mode = 0; /* groups seen on this line */
-    uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pause = 0, m_stop_groups = 0, m_pen_groups = 0;
+    uint8_t groups = 0; /* GRP_*: modal groups seen on this line (one byte of the frame) */
 
     memset(blk, 0, offsetof(gc_block_t, feed));
     for (uint8_t i = 0; line[i];) {
@@ -165,7 +176,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                 case 550: case 560: case 570: case 580: case 590:
 #endif
                 case 540:
-                    if (g_coord++)
+                    if (seen_group(&groups, GRP_COORD))
                         return ERR_MODAL_CONFLICT;
 #if GRBL_WCS
                     {
@@ -183,7 +194,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                 case 930:
 #endif
                 case 940:
-                    if (g_feed_mode++)
+                    if (seen_group(&groups, GRP_FEED_MODE))
                         return ERR_MODAL_CONFLICT;
 #if GRBL_G93
                     if (st->inverse_time && code10 == 940)
@@ -193,17 +204,17 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                     break;
                 case 530: g53 = 1; break;
                 case 170: case 180: case 190:
-                    if (g_plane++)
+                    if (seen_group(&groups, GRP_PLANE))
                         return ERR_MODAL_CONFLICT;
                     st->plane = (uint8_t)(code10 / 10 - 17);
                     break;
                 case 200: case 210:
-                    if (g_units++)
+                    if (seen_group(&groups, GRP_UNITS))
                         return ERR_MODAL_CONFLICT;
                     st->inches = code10 == 200;
                     break;
                 case 900: case 910:
-                    if (g_dist++)
+                    if (seen_group(&groups, GRP_DIST))
                         return ERR_MODAL_CONFLICT;
                     st->incremental = code10 == 910;
                     break;
@@ -216,18 +227,19 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             } else {
                 if (jog)
                     return ERR_INVALID_JOG;
+                uint8_t m_group = 0; /* (M17/M18/M84 and coolant: none) */
                 switch (code10) {
-                case 30: case 40: pen = PEN_DOWN; m_pen_groups++; break;
-                case 50: pen = PEN_UP; m_pen_groups++; break;
-                case 3000: m300 = 1; m_pen_groups++; break;
-                case 170: m_motors = MOTORS_ON; break;
-                case 180: case 840: m_motors = MOTORS_OFF; break;
-                case 0: case 10: m_pause = 1; m_stop_groups++; break;
-                case 20: case 300: m_end = 1; m_stop_groups++; break;
+                case 30: case 40: blk->pen = PEN_DOWN; m_group = GRP_PEN; break;
+                case 50: blk->pen = PEN_UP; m_group = GRP_PEN; break;
+                case 3000: m300 = 1; m_group = GRP_PEN; break;
+                case 170: blk->motors = MOTORS_ON; break;
+                case 180: case 840: blk->motors = MOTORS_OFF; break;
+                case 0: case 10: blk->pause = 1; m_group = GRP_STOP; break;
+                case 20: case 300: blk->program_end = 1; m_group = GRP_STOP; break;
                 case 80: case 90: break; /* coolant: no coolant on a plotter */
                 default: return bad_code(code10);
                 }
-                if (m_pen_groups > 1 || m_stop_groups > 1)
+                if (seen_group(&groups, m_group))
                     return ERR_MODAL_CONFLICT;
             }
             continue;
@@ -275,7 +287,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     if (m300) {
         if (!(seen & WB(W_S)))
             return ERR_VALUE_WORD_MISSING;
-        pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
+        blk->pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
     }
 #if GRBL_WCS
     if (non_modal == NM_SET_HOME) {
@@ -300,8 +312,8 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             if (magnitude_above(z, GC_MAX_COORD))
                 return ERR_INVALID_TARGET;
             st->z = z;
-            if (pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
-                pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
+            if (blk->pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
+                blk->pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
         }
     }
     if (g53 && non_modal)
@@ -335,10 +347,6 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     }
 
     uint16_t used = (uint16_t)(WB(W_X) | WB(W_Y) | WB(W_Z) | WB(W_F) | WB(W_N) | WB(W_S) | WB(W_T));
-    blk->pen = pen;
-    blk->motors = m_motors;
-    blk->program_end = m_end;
-    blk->pause = m_pause;
 
     if (non_modal == NM_DWELL) {
         if (axes || motion >= 0)
@@ -406,8 +414,11 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         blk->has_via = axes != 0;
         memcpy(blk->via, target, sizeof(blk->via));
         /* then to the stored position (machine 0 without GRBL_WCS); with
-         * axis words only those axes go there, as GRBL 1.1 does */
-        float home[GC_AXES] = {0};
+         * axis words only those axes go there, as GRBL 1.1 does. (Read into
+         * blk->store, unused without a store_slot: gc_parse's own frame
+         * stays within the 64 bytes the AVR reaches in one instruction.) */
+        float *home = blk->store;
+        memset(home, 0, sizeof(blk->store));
 #if GRBL_WCS
         if (!coord_load(home_slot, home))
             return ERR_EEPROM_READ;
@@ -473,7 +484,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     }
     if (seen & ~used)
         return ERR_UNUSED_WORDS;
-    if (m_end)
+    if (blk->program_end)
         gc_program_end(st);
 #if GRBL_G93
     if (inverse) /* an inverse-time F holds for its own line only */

@@ -52,7 +52,7 @@ typedef struct {
      * reads them (a 48-byte clear a line saved): feed for a line, an arc
      * or a jog, dwell_s for a dwell, start always, target for every motion
      * and G28 (and most other lines), via for G28, center for arcs, store
-     * when store_slot is set */
+     * when store_slot is set (G28 reads its stored position into it) */
     float feed;           /* mm/min */
     float dwell_s;
     float store[GC_AXES]; /* machine mm (G28.1/G30.1) or offset (G10) to store */
