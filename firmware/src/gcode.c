@@ -123,10 +123,21 @@ static uint8_t arc_center_from_radius(const float *s, const float *t, float r, u
     return STATUS_OK;
 }
 
-uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_block_t *blk, uint8_t jog)
+#define UNDO_NONE 0xFF /* undo->motion while the whole state is not in it */
+
+void gc_undo(gc_state_t *st, const gc_state_t *undo, const gc_block_t *blk)
 {
-    if (st != from) /* (in place, the caller holds the copy: protocol.c) */
-        *st = *from;
+    if (undo->motion != UNDO_NONE) {
+        memcpy(st, undo, sizeof(*st));
+    } else {
+        st->feed = undo->feed;
+        st->z = undo->z;
+        memcpy(st->pos, blk->start, sizeof(st->pos));
+    }
+}
+
+uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog, gc_state_t *undo)
+{
     float val[W_COUNT];
     uint16_t seen = 0;
     int8_t motion = -1;
@@ -135,6 +146,13 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     uint8_t groups = 0; /* GRP_*: modal groups seen on this line (one byte of the frame) */
 
     memset(blk, 0, offsetof(gc_block_t, feed));
+    /* what gc_undo puts back: a line without G or M words changes only
+     * feed, z and pos (pos as it was is blk->start); the whole state is
+     * copied before the first G or M word changes any of it */
+    undo->motion = UNDO_NONE;
+    undo->feed = st->feed;
+    undo->z = st->z;
+    memcpy(blk->start, st->pos, sizeof(blk->start));
     for (uint8_t i = 0; line[i];) {
         char letter = line[i++];
         if (letter == '/') /* block delete: GRBL ignores the character */
@@ -145,6 +163,8 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         if (!read_number(line, &i, &v))
             return ERR_BAD_NUMBER;
         if (letter == 'G' || letter == 'M') {
+            if (undo->motion == UNDO_NONE)
+                memcpy(undo, st, sizeof(*st));
             if (v < 0.0f || v > 1000.0f)
                 return ERR_UNSUPPORTED;
             uint16_t code10 = (uint16_t)lroundf(v * 10.0f);
@@ -327,7 +347,6 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     float *target = blk->target;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = st->pos[a];
-        blk->start[a] = t;
         if (axes & (1u << a)) {
             float v = val[a];
             if (g53)

@@ -488,9 +488,9 @@ uint8_t machine_check_limits(const gc_block_t *blk)
 
 uint8_t machine_jog(const char *body)
 {
-    gc_state_t tmp;
+    gc_state_t tmp = gc, undo; /* a jog changes no modal state: only pos is kept */
     gc_block_t blk;
-    uint8_t e = gc_parse(body, &gc, &tmp, &blk, 1);
+    uint8_t e = gc_parse(body, &tmp, &blk, 1, &undo);
     if (e)
         return e;
     if (settings.soft_limits && outside_work_area(blk.target))
