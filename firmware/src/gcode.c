@@ -13,6 +13,9 @@
 
 /* word letters that carry a value, as bits for repeat detection */
 enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_COUNT };
+/* words whose value is kept (L's only for G10: without GRBL_WCS it is
+ * always an unused word, its value never read) */
+#define W_VALUES (GRBL_WCS ? W_COUNT : W_L)
 /* each letter's word plus one (0: none), by letter - 'A': one flash read a
  * word instead of a search, and no table in RAM */
 #define WORD(letter, w) [(letter) - 'A'] = (w) + 1
@@ -42,7 +45,8 @@ static uint8_t magnitude_above(float v, float limit)
 
 /* modal groups a line may name once, as bits */
 enum { GRP_UNITS = 1, GRP_DIST = 2, GRP_PLANE = 4, GRP_COORD = 8, GRP_FEED_MODE = 16,
-       GRP_PEN = 32, GRP_STOP = 64 };
+       GRP_PEN = 32, GRP_STOP = 64, GRP_G53 = 128 /* (not a group: G53 seen) */ };
+#define PEN_M300 3 /* blk->pen while parsing: M300, whose S decides */
 
 /* 1 when the group (0: none) was already named on the line; marks it */
 static inline uint8_t seen_group(uint8_t *groups, uint8_t group)
@@ -138,10 +142,10 @@ void gc_undo(gc_state_t *st, const gc_state_t *undo, const gc_block_t *blk)
 
 uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog, gc_state_t *undo)
 {
-    float val[W_COUNT];
+    float val[W_VALUES];
     uint16_t seen = 0;
     int8_t motion = -1;
-    uint8_t non_modal = NM_NONE, g53 = 0, m300 = 0;
+    uint8_t non_modal = NM_NONE;
     uint8_t home_slot = GC_SLOT_G28; /* G28 or G30, and their .1 */
     uint8_t groups = 0; /* GRP_*: modal groups seen on this line (one byte of the frame) */
 
@@ -159,9 +163,14 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
             continue;
         if (letter < 'A' || letter > 'Z')
             return ERR_EXPECTED_LETTER;
-        float v;
-        if (!read_number(line, &i, &v))
+        /* the number read straight into its word's slot (G, M and the
+         * unsupported letters: into blk->dwell_s, which only a dwell writes,
+         * after this loop): no float of its own in the frame */
+        uint8_t w = (uint8_t)(pgm_read_byte(&word_of_letter[letter - 'A']) - 1); /* letter: A..Z here */
+        float *vp = w < W_VALUES ? &val[w] : &blk->dwell_s;
+        if (!read_number(line, &i, vp))
             return ERR_BAD_NUMBER;
+        float v = *vp;
         if (letter == 'G' || letter == 'M') {
             if (undo->motion == UNDO_NONE)
                 memcpy(undo, st, sizeof(*st));
@@ -222,7 +231,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                     st->inverse_time = code10 == 930;
 #endif
                     break;
-                case 530: g53 = 1; break;
+                case 530: groups |= GRP_G53; break;
                 case 170: case 180: case 190:
                     if (seen_group(&groups, GRP_PLANE))
                         return ERR_MODAL_CONFLICT;
@@ -251,7 +260,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                 switch (code10) {
                 case 30: case 40: blk->pen = PEN_DOWN; m_group = GRP_PEN; break;
                 case 50: blk->pen = PEN_UP; m_group = GRP_PEN; break;
-                case 3000: m300 = 1; m_group = GRP_PEN; break;
+                case 3000: blk->pen = PEN_M300; m_group = GRP_PEN; break;
                 case 170: blk->motors = MOTORS_ON; break;
                 case 180: case 840: blk->motors = MOTORS_OFF; break;
                 case 0: case 10: blk->pause = 1; m_group = GRP_STOP; break;
@@ -264,7 +273,6 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
             }
             continue;
         }
-        uint8_t w = (uint8_t)(pgm_read_byte(&word_of_letter[letter - 'A']) - 1); /* letter: A..Z here */
         if (w >= W_COUNT)
             return jog ? ERR_INVALID_JOG : ERR_UNSUPPORTED;
         if (seen & WB(w))
@@ -273,9 +281,9 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         if (w >= W_F && v < 0.0f) /* (the float compare only for those words) */
             return ERR_NEGATIVE;
         seen |= (uint16_t)WB(w);
-        val[w] = v;
     }
 
+    uint8_t g53 = groups & GRP_G53;
     uint8_t inverse = 0;
 #if GRBL_G93
     inverse = st->inverse_time; /* F is 1/min then, not a length */
@@ -304,7 +312,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         else
             st->feed = val[W_F];
     }
-    if (m300) {
+    if (blk->pen == PEN_M300) {
         if (!(seen & WB(W_S)))
             return ERR_VALUE_WORD_MISSING;
         blk->pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
