@@ -50,7 +50,8 @@ typedef struct {
     uint32_t line;        /* N word (its whole part), 0 without one */
     /* gc_parse zeroes the fields above and fills these where its action
      * reads them (a 48-byte clear a line saved): feed for a line, an arc
-     * or a jog, dwell_s for a dwell, start always, target for every motion
+     * or a jog, dwell_s for a dwell (while parsing, the G and M numbers'
+     * scratch), start always, target for every motion
      * and G28 (and most other lines), via for G28, center for arcs, store
      * when store_slot is set (G28 reads its stored position into it) */
     float feed;           /* mm/min */
