@@ -91,7 +91,7 @@ def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
 
 
 def line_chunks(path: Path, encoding: str,
-                size: int = 1 << 18) -> Iterator[tuple[int, str | bytes]]:
+                size: int = 1 << 20) -> Iterator[tuple[int, str | bytes]]:
     """(1-based number of the first line, whole lines each ending with a newline), about
     `size` characters at a time, streamed. A UTF-8 file's chunks are its bytes as they
     are (the text's UTF-8, which is what gcodescan.c reads: no decoding, counting and
