@@ -103,6 +103,14 @@ void machine_report_status(void)
         state = mach.jog ? PSTR("Jog") : PSTR("Run");
     report_char('<');
     report_pstr(state);
+    /* the executing block's line (as GRBL: only a positive one) is read
+     * before the position, which the steppers only move further along that
+     * line or past it: the position lies on or after its line's move. Read
+     * after (the float formatting below takes ~1 ms), a block boundary
+     * crossed in between named a line the position had not reached yet,
+     * and a resume from that line left the pen's last steps out (~5 steps
+     * at 3000 mm/min: tests/e2e/test_line_numbers.py) */
+    plan_line_t ln = seg_exec_line();
     int32_t motor[N_AXIS], cart[N_AXIS];
     stepper_get_position(motor);
     plan_cart_from_motor(motor, cart);
@@ -117,8 +125,6 @@ void machine_report_status(void)
         report_char(',');
         report_uint(serial_rx_free());
     }
-    /* the executing block's line, as GRBL: only a positive one */
-    plan_line_t ln = seg_exec_line();
     if (ln) {
         RPT("|Ln:");
         report_uint(ln);

@@ -9,6 +9,7 @@ a stroke vertex, a line or a layer, with an overlap back along the stroke (`pick
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import math
 import os
@@ -24,6 +25,11 @@ from plotbridge.program.reader import PEN_DOWN, PEN_UP, Command, read_program, s
 
 LOCATE_TOLERANCE = 0.05  # mm: four 80 steps/mm steps; a reported position is step-exact
 RUN_OUT_LINES = 256  # lines past the last report's acked count a dead server's board may run
+# A report's position may lie a few moves before its `Ln:`: stock GRBL names the block its
+# segment preparer works on, up to its 6-segment buffer ahead of the steps (ours names
+# the executing block, read before the position).
+LOOK_BACK_MOVES = 8
+LOOK_BACK_LINES = 4 * LOOK_BACK_MOVES  # (pen lifts and other lines between them)
 Point = tuple[float, float]
 
 
@@ -94,7 +100,8 @@ def first_unexecuted_line(motion: bytes, acked: int, queued_blocks: int, floor: 
 
 def executing_line(reported: int, conservative: int | None, floor: int) -> int | None:
     """The first line not known to be executed when the board reports (`Ln:`) that it
-    executes line `reported`: that line, exactly (the report's position lies on its move).
+    executes line `reported`: that line (the report's position lies on its move, or on
+    stock GRBL a few moves before it: `locate` looks back).
     A number before `floor` (from before this stream) tells nothing: `conservative`."""
     return reported if reported >= floor else conservative
 
@@ -203,36 +210,40 @@ def moves(program: Path, start: int = 1) -> Iterator[Move]:
 
 def locate(program: Path, mark: Mark, tolerance: float = LOCATE_TOLERANCE) -> ResumePoint:
     """The earliest move of the mark's line window that passes through the mark's
-    position, and that position (on an arc too); with `ran_to`, the earliest move from
-    there on that passes through where the board ran out. No match falls back to the
-    mark's point, else to the conservative first line."""
+    position, else the latest of the `LOOK_BACK_MOVES` moves before the window that does,
+    and that position (on an arc too); with `ran_to`, the earliest move from there on
+    that passes through where the board ran out. No match falls back to the mark's
+    point, else to the conservative first line."""
     point = (mark.x, mark.y)
-    with contextlib.closing(moves(program, mark.first)) as walk:
-        found = next((move for move in walk if move.line > mark.last
-                      or move.nearest(point)[0] <= tolerance), None)  # fmt: skip
-        if found is None or found.line > mark.last:
+    start = max(1, mark.first - LOOK_BACK_LINES)
+    with contextlib.closing(moves(program, start)) as walk:
+        window = list(itertools.takewhile(
+            lambda move: move.line <= mark.last + RUN_OUT_LINES, walk))  # fmt: skip
+    on = [i for i, move in enumerate(window)
+          if move.line <= mark.last and move.nearest(point)[0] <= tolerance]  # fmt: skip
+    behind = sum(move.line < mark.first for move in window)
+    found = next((i for i in on if i >= behind), None)
+    if found is None:
+        found = max((i for i in on if behind - LOOK_BACK_MOVES <= i), default=None)
+        if found is None:
             return ResumePoint(mark.first)
-        if mark.ran_to is None:
-            return ResumePoint(_past_end(found, walk, point).line, point)
-        distance, t = found.nearest(mark.ran_to)
-        if distance <= tolerance and t >= found.nearest(point)[1]:
-            return ResumePoint(found.line, mark.ran_to)
-        for move in walk:
-            if move.line > mark.last + RUN_OUT_LINES:
-                break
-            if move.nearest(mark.ran_to)[0] <= tolerance:
-                return ResumePoint(move.line, mark.ran_to)
-    return ResumePoint(found.line, point)
+    move, rest = window[found], window[found + 1:]
+    if mark.ran_to is None:
+        return ResumePoint(_past_end(move, rest[0] if rest else None, point).line, point)
+    distance, t = move.nearest(mark.ran_to)
+    if distance <= tolerance and t >= move.nearest(point)[1]:
+        return ResumePoint(move.line, mark.ran_to)
+    after = next((m for m in rest if m.nearest(mark.ran_to)[0] <= tolerance), None)
+    return ResumePoint(after.line, mark.ran_to) if after else ResumePoint(move.line, point)
 
 
-def _past_end(found: Move, walk: Iterator[Move], point: Point) -> Move:
+def _past_end(found: Move, after: Move | None, point: Point) -> Move:
     """A point within the tolerance of `found`'s end but past it (the pen stopped a step
     into the next line) lies on the move after it when that one passes closer: resuming
     on `found` would go back to its end and draw that bit twice."""
     distance, t = found.nearest(point)
     if t < 1.0 or distance == 0.0:
         return found
-    after = next(walk, None)
     return after if after is not None and after.nearest(point)[0] < distance else found
 
 

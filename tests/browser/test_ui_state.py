@@ -90,6 +90,28 @@ def test_stop_shows_on_every_page_and_goes_with_its_cause(two_pages, server, plo
         page.wait_for_selector("#banners .banner >> text=live connection", state="detached")
 
 
+def test_an_answer_older_than_a_live_report_is_not_shown(desktop, server):
+    """A REST answer that crossed a newer WebSocket report on the way is dropped: applied
+    last, its older state would stay up until the next change (an idle board: never)."""
+    page, _ = desktop
+    server.home()
+    login(page, server.url, server.token)
+    page.wait_for_function(f"() => ({BADGE})() === 'Idle'")
+    stale = server.machine()
+    assert stale["pen"] == "up", stale
+    held = []
+    page.route("**/api/machine", lambda route: held.append(route))
+    with page.expect_request("**/api/machine"):
+        load = page.evaluate_handle("() => ({ done: window.plotbridge.actions.loadAll() })")
+    response = server.client.post("/api/machine/pen", json={"down": True})
+    assert response.status_code == 200, response.text
+    page.wait_for_function("() => window.plotbridge.store.state.machine?.pen === 'down'")
+    held[0].fulfill(json=stale)
+    page.evaluate("(load) => load.done", load)  # the answer has been handled
+    assert page.evaluate("window.plotbridge.store.state.machine.pen") == "down"
+    assert page.locator("#sum-pen").text_content() == "pen down"
+
+
 def placement_of(server, job_id: str) -> dict:
     return server.job(job_id)["placement"]
 

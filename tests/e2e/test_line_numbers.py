@@ -7,10 +7,12 @@ nothing drawn twice."""
 
 from __future__ import annotations
 
+import re
 import time
 
 import pytest
 
+from tests.fixtures.grbl import Grbl, mpos, no_false_acks
 from tests.fixtures.plotsim import board_firmware
 from tests.fixtures.server import running_server
 from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
@@ -24,15 +26,27 @@ SEGMENT = 0.5  # mm: one planner block a line
 FIRST_MOVE = 5  # program line of the first 0.5 mm segment (after G21 G90 G0 M3)
 
 
+# one stroke of 0.5 mm segments: a row along y=20, 10 mm up, a row back along y=30
+POINTS = ([(10 + SEGMENT * k, 20.0) for k in range(1, 161)]
+          + [(90.0, 20 + SEGMENT * k) for k in range(1, 21)]
+          + [(90 - SEGMENT * k, 30.0) for k in range(1, 161)])  # fmt: skip
+
+
 def short_segments() -> tuple[str, int, float]:
-    """One stroke of 0.5 mm segments (a row along y=20, 10 mm up, a row back along
-    y=30): the G-code, its last segment's line and the pen-down length."""
-    points = [(10 + SEGMENT * k, 20.0) for k in range(1, 161)]
-    points += [(90.0, 20 + SEGMENT * k) for k in range(1, 21)]
-    points += [(90 - SEGMENT * k, 30.0) for k in range(1, 161)]
+    """The stroke's G-code, its last segment's line and the pen-down length."""
     lines = ["G21", "G90", "G0 X10 Y20", "M3"]
-    lines += [f"G1 X{x:.3f} Y{y:.3f} F{FEED}" for x, y in points]
-    return "\n".join([*lines, "M5"]) + "\n", len(lines), SEGMENT * len(points)
+    lines += [f"G1 X{x:.3f} Y{y:.3f} F{FEED}" for x, y in POINTS]
+    return "\n".join([*lines, "M5"]) + "\n", len(lines), SEGMENT * len(POINTS)
+
+
+def along(x: float, y: float) -> float:
+    """How far along the stroke (mm) a point on it lies."""
+    if abs(y - 20) < 1e-6:
+        return x - 10
+    if abs(x - 90) < 1e-6:
+        return 80 + (y - 20)
+    assert abs(y - 30) < 1e-6, (x, y)
+    return 90 + (90 - x)
 
 
 @pytest.fixture(scope="module", params=[UNO, MEGA])
@@ -73,3 +87,32 @@ def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(board, tmp_p
         redrawn = trace["draw_mm"] - length
         print(f"{board}: estop on 0.5 mm segments, resumed from Ln: {redrawn:.4f} mm drawn twice")
         assert -ESTOP_REDRAW_MM <= redrawn <= ESTOP_REDRAW_MM, f"{redrawn:.3f} mm drawn twice"
+
+
+def test_a_reports_position_lies_on_its_line_or_past_it(board, plotter_factory):
+    """`Ln:` and `MPos:` of one report agree: the position lies on the named line's move
+    or a little past it, never before it (an interrupted job resumes from that line at
+    that point). Reports are asked for every 10 ms while 0.5 mm segments stream."""
+    gcode, _, _ = short_segments()
+    plotter = plotter_factory(firmware=board_firmware(board), speed=1, args=("--board", board))
+    g = Grbl(plotter.port)
+    try:
+        g.reset(10)
+        g.ok("$X")
+        numbered = [f"N{n}{text}" for n, text in enumerate(gcode.splitlines(), 1)]
+        g.stream(numbered, timeout=60, poll_s=0.01)
+        g.wait_state("Idle")
+        no_false_acks(g.lines)
+    finally:
+        g.close()
+    step = 1 / 80  # mm: both profiles' default steps/mm
+    checked = 0
+    for report in g.lines:
+        line = re.search(r"\|Ln:(\d+)", report)
+        if not report.startswith("<Run") or not line or int(line[1]) < FIRST_MOVE:
+            continue
+        start = (int(line[1]) - FIRST_MOVE) * SEGMENT  # where the line's move begins
+        at = along(*mpos(report))
+        assert start - step / 2 <= at <= start + 2 * SEGMENT, (report, start)
+        checked += 1
+    assert checked >= 50, f"{checked} reports while drawing"

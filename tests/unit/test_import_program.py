@@ -123,6 +123,20 @@ def test_locate_finds_the_executing_line_and_point(tmp_path):
     assert locate(path, Mark(6, 8, 50.0, 50.0)) == ResumePoint(6)
     # a corner shared by two lines: the earlier (a zero-length rest, nothing skipped)
     assert locate(path, Mark(3, 8, 20.0, 20.0)) == ResumePoint(7, (20.0, 20.0))
+    # stock GRBL's Ln: may name a line its steps have not reached: the pen's own move
+    assert locate(path, Mark(8, 8, 20.0, 13.25)) == ResumePoint(7, (20.0, 13.25))
+    assert locate(path, Mark(8, 8, 20.0, 13.25, (15.0, 20.0))) == ResumePoint(8, (15.0, 20.0))
+
+
+def test_locate_looks_back_a_few_moves_only(tmp_path):
+    strokes = "".join(f"G1 X{k} F600\n" for k in range(1, 31))
+    r = run_import(tmp_path, f"G0 X0 Y0\nM3\n{strokes}M5\n")
+    path = r.program_path
+    line = {float(t.split()[1][1:]): n for n, t in enumerate(program_lines(r), 1)
+            if t.startswith("G1")}  # the line that ends at x
+    assert locate(path, Mark(line[20], line[20], 12.5, 0.0)) == ResumePoint(line[13], (12.5, 0.0))
+    # further back than a segment buffer runs ahead: not taken
+    assert locate(path, Mark(line[25], line[25], 12.5, 0.0)) == ResumePoint(line[25])
 
 
 def test_resume_after_an_arc(tmp_path):

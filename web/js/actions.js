@@ -85,15 +85,22 @@ export function createActions(store, socket, estop) {
     });
   }
 
+  // Socket messages heard so far, by kind. A REST answer that crossed a socket message of
+  // its kind on the way is dropped: the socket delivers every change, and the older answer
+  // applied last would show a stale state until the next change (an idle board may not
+  // change for hours).
+  const heard = { machine: 0, jobs: 0 };
+  const unchanged = (kind) => {
+    const at = heard[kind];
+    return () => heard[kind] === at;
+  };
+
   /** Over REST: the machine and the jobs. A network failure while the socket is down
    * means the server is unreachable: the header says so instead of stale values. */
   function resync() {
-    api.get(machinePath()).then((m) => {
-      store.update((st) => {
-        st.serverLost = false;
-      });
-      setMachine(m);
-    }, (err) => {
+    loadMachine(() => store.update((st) => {
+      st.serverLost = false;
+    })).catch((err) => {
       if (err.status === 0 && s.socket.status !== "open") {
         store.update((st) => {
           st.serverLost = true;
@@ -123,6 +130,14 @@ export function createActions(store, socket, estop) {
 
   const setMachine = (m) => onMachine({ type: "machine", machine: m });
 
+  /** The selected plotter's machine over REST; `answered` runs on any answer. */
+  async function loadMachine(answered = () => {}) {
+    const fresh = unchanged("machine");
+    const m = await api.get(machinePath());
+    answered();
+    if (fresh()) setMachine(m);
+  }
+
   /** A board verb's path: the selected plotter's when there are several. */
   function machinePath(verb = "") {
     const several = s.plotterOrder.length > 1 && s.plotter;
@@ -137,7 +152,9 @@ export function createActions(store, socket, estop) {
   }
 
   async function loadJobs() {
-    apply({ type: "jobs", jobs: asList(await api.get("/api/jobs"), "jobs") });
+    const fresh = unchanged("jobs");
+    const jobs = asList(await api.get("/api/jobs"), "jobs");
+    if (fresh()) apply({ type: "jobs", jobs });
     ensurePreview();
   }
 
@@ -229,8 +246,9 @@ export function createActions(store, socket, estop) {
     loadJobs,
     loadSettings,
 
+    /** Everything over REST; resolves when the machine's answer has been applied. */
     loadAll() {
-      api.get(machinePath()).then(setMachine).catch(() => {});
+      const machine = loadMachine().catch(() => {});
       loadJobs().catch(() => {});
       api.get("/api/server").then((d) => store.update((st) => {
         st.server = d;
@@ -239,6 +257,7 @@ export function createActions(store, socket, estop) {
       api.get("/api/patterns").then((d) => store.update((st) => {
         st.patterns = asList(d, "patterns");
       })).catch(() => {});
+      return machine;
     },
 
     async login(token) {
@@ -286,6 +305,8 @@ export function createActions(store, socket, estop) {
     // ---- WebSocket ----
 
     onSocketMessage(msg) {
+      if (msg.type === "machine") heard.machine += 1;
+      else if (["job", "jobs", "job_deleted", "queue"].includes(msg.type)) heard.jobs += 1;
       if (msg.type === "machine") onMachine(msg);
       else if (msg.type === "job") upsertJob(msg.job && typeof msg.job === "object" ? msg.job : msg);
       else if (["jobs", "job_deleted", "queue", "stopped", "pens"].includes(msg.type)) {

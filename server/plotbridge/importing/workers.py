@@ -75,7 +75,9 @@ def _serve(conn: Connection, memory_bytes: int) -> None:
     _bind_to_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the server's to handle
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
-    conn.send(("ready",))  # the time limit counts from here, not from a slow start
+    # the time limit counts from here, not from a slow start; CLOCK_MONOTONIC is the
+    # machine's, so the server can tell how long the start took
+    conn.send(("ready", time.monotonic()))
     while True:
         try:
             function, args = conn.recv()
@@ -140,8 +142,9 @@ class Worker:
             if answer[0] != "ready":
                 return answer
             self.started = True
-            log.info("import worker %d ready in %.1f s", self.process.pid,
-                     time.monotonic() - self.spawned)
+            # (its first job may come long after: the start's own time, not the wait)
+            log.info("import worker %d started in %.1f s", self.process.pid,
+                     answer[1] - self.spawned)
         try:
             self.conn.send((function, args))
         except OSError:
