@@ -12,6 +12,7 @@ from collections.abc import Iterator
 import pytest
 
 from tests.browser.conftest import QuietHandler, login
+from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
 
@@ -47,16 +48,17 @@ def test_a_page_on_another_port_cannot_start_or_stop_anything(desktop, server_vi
     other = page.context.new_page()
     other.goto(evil_site)
     other.wait_for_function("() => window.done === true")
-    time.sleep(1.0)  # the form's POST lands in the frame
+    # both POSTs (the upload's, then the form's in the frame) have landed and were refused
+    wait_until(server_virtual.log, lambda log: log.count("refused cross-site POST") >= 2, 10,
+               "two refused cross-site POSTs in the server log")
+    assert "refused cross-site POST /api/jobs " in server_virtual.log()
+    assert "refused cross-site POST /api/machine/estop " in server_virtual.log()
     assert server_virtual.client.get("/api/jobs").json() == []
     assert "EMERGENCY STOP" not in server_virtual.log()
-    assert "refused cross-site POST" in server_virtual.log()
     # The page itself still can.
     page.click("#estop")
-    deadline = time.monotonic() + 10
-    while "EMERGENCY STOP" not in server_virtual.log():
-        assert time.monotonic() < deadline, "the page's own stop did not arrive"
-        time.sleep(0.05)
+    wait_until(server_virtual.log, lambda log: "EMERGENCY STOP" in log, 10,
+               "the page's own stop in the server log")
 
 
 def test_the_csp_blocks_an_inline_script(desktop, server_virtual):

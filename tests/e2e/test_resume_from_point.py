@@ -13,7 +13,6 @@ import json
 import math
 import os
 import signal
-import time
 
 import pytest
 from plotbridge.plotter.runner import JOB_POLL_HZ, MARK_FILE
@@ -21,7 +20,7 @@ from websockets.sync.client import connect
 
 from tests.fixtures.drawings import FEED, TWO_STROKES
 from tests.fixtures.server import running_server
-from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
+from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing, wait_still
 from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
@@ -203,9 +202,7 @@ def test_server_killed_mid_stroke_redraws_at_most_one_report(plotter_factory, tm
         if killed is not None:  # its import workers (own process group) go too
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(killed, signal.SIGKILL)
-        steps = None
-        while steps != (steps := plotter.trace()["steps"]):  # the board runs out of moves
-            time.sleep(0.5)
+        wait_still(plotter, 60, every=0.5)  # the board runs out of moves
         server.start()
         server.wait_job(job["id"], ("interrupted",), 10)
         server.wait_machine(lambda m: m["connected"] and m["state"] == "Idle", 30)

@@ -24,6 +24,7 @@ from tests.fixtures.trace import (
     drawn_once_mm,
     stop_clock,
     stroke_length,
+    wait_still,
 )
 from tests.fixtures.waits import wait_until
 
@@ -121,15 +122,14 @@ def test_pause_resume(server, plotter):
     paused = server.client.post(f"/api/jobs/{job['id']}/pause")
     assert paused.status_code == 200 and paused.json()["state"] == "paused"
     server.wait_machine(lambda m: m["state"] == "Hold", 5)
-    time.sleep(0.5)  # deceleration ends
-    held = plotter.trace()["steps"]
-    time.sleep(0.3)
+    held = wait_still(plotter, 5)["steps"]  # the deceleration ends
+    time.sleep(0.3)  # a window in which nothing may move
     assert plotter.trace()["steps"] == held, "the machine moved during a feed hold"
     assert server.job(job["id"])["state"] == "paused"
     resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
     assert resumed.status_code == 200 and resumed.json()["state"] == "running"
     # the machine's own pause and resume buttons drive the job state too
-    time.sleep(0.6)
+    server.wait_machine(lambda m: m["state"] == "Run", 5)
     plotter.press("pause")
     server.wait_job(job["id"], ("paused",), 5)
     plotter.release("pause")
