@@ -85,10 +85,10 @@ static void run_block(const gc_block_t *b)
 static void run_dollar(const char *line)
 {
     if (line[1] == 'J' && line[2] == '=') {
-        gc_state_t tmp, next;
+        gc_state_t tmp, undo;
         gc_block_t b;
         gc_init(&tmp);
-        if (gc_parse(line + 3, &tmp, &next, &b, 1) == 0)
+        if (gc_parse(line + 3, &tmp, &b, 1, &undo) == 0)
             run_block(&b);
         return;
     }
@@ -123,12 +123,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             run_dollar(lb.text);
             continue;
         }
-        gc_state_t next;
+        gc_state_t undo;
         gc_block_t b;
-        if (gc_parse(lb.text, &gc, &next, &b, 0) == 0) {
-            gc = next;
+        if (gc_parse(lb.text, &gc, &b, 0, &undo) == 0)
             run_block(&b);
-        }
+        else
+            gc_undo(&gc, &undo, &b);
     }
     return 0;
 }

@@ -13,6 +13,9 @@
 
 /* word letters that carry a value, as bits for repeat detection */
 enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_COUNT };
+/* words whose value is kept (L's only for G10: without GRBL_WCS it is
+ * always an unused word, its value never read) */
+#define W_VALUES (GRBL_WCS ? W_COUNT : W_L)
 /* each letter's word plus one (0: none), by letter - 'A': one flash read a
  * word instead of a search, and no table in RAM */
 #define WORD(letter, w) [(letter) - 'A'] = (w) + 1
@@ -38,6 +41,19 @@ static inline uint32_t float_bits(float v)
 static uint8_t magnitude_above(float v, float limit)
 {
     return (float_bits(v) & 0x7FFFFFFFu) > float_bits(limit);
+}
+
+/* modal groups a line may name once, as bits */
+enum { GRP_UNITS = 1, GRP_DIST = 2, GRP_PLANE = 4, GRP_COORD = 8, GRP_FEED_MODE = 16,
+       GRP_PEN = 32, GRP_STOP = 64, GRP_G53 = 128 /* (not a group: G53 seen) */ };
+#define PEN_M300 3 /* blk->pen while parsing: M300, whose S decides */
+
+/* 1 when the group (0: none) was already named on the line; marks it */
+static inline uint8_t seen_group(uint8_t *groups, uint8_t group)
+{
+    uint8_t was = *groups & group;
+    *groups |= group;
+    return was;
 }
 
 /* non-modal G commands (GRBL's group 0, one per line) */
@@ -111,29 +127,53 @@ static uint8_t arc_center_from_radius(const float *s, const float *t, float r, u
     return STATUS_OK;
 }
 
-uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_block_t *blk, uint8_t jog)
+#define UNDO_NONE 0xFF /* undo->motion while the whole state is not in it */
+
+void gc_undo(gc_state_t *st, const gc_state_t *undo, const gc_block_t *blk)
 {
-    if (st != from) /* (in place, the caller holds the copy: protocol.c) */
-        *st = *from;
-    float val[W_COUNT];
+    if (undo->motion != UNDO_NONE) {
+        memcpy(st, undo, sizeof(*st));
+    } else {
+        st->feed = undo->feed;
+        st->z = undo->z;
+        memcpy(st->pos, blk->start, sizeof(st->pos));
+    }
+}
+
+uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog, gc_state_t *undo)
+{
+    float val[W_VALUES];
     uint16_t seen = 0;
     int8_t motion = -1;
-    uint8_t non_modal = NM_NONE, g53 = 0, pen = PEN_KEEP, m300 = 0;
+    uint8_t non_modal = NM_NONE;
     uint8_t home_slot = GC_SLOT_G28; /* G28 or G30, and their .1 */
-    uint8_t g_units = 0, g_dist = 0, g_plane = 0, g_coord = 0, g_feed_mode = 0; /* groups seen on this line */
-    uint8_t m_motors = MOTORS_KEEP, m_end = 0, m_pause = 0, m_stop_groups = 0, m_pen_groups = 0;
+    uint8_t groups = 0; /* GRP_*: modal groups seen on this line (one byte of the frame) */
 
     memset(blk, 0, offsetof(gc_block_t, feed));
+    /* what gc_undo puts back: a line without G or M words changes only
+     * feed, z and pos (pos as it was is blk->start); the whole state is
+     * copied before the first G or M word changes any of it */
+    undo->motion = UNDO_NONE;
+    undo->feed = st->feed;
+    undo->z = st->z;
+    memcpy(blk->start, st->pos, sizeof(blk->start));
     for (uint8_t i = 0; line[i];) {
         char letter = line[i++];
         if (letter == '/') /* block delete: GRBL ignores the character */
             continue;
         if (letter < 'A' || letter > 'Z')
             return ERR_EXPECTED_LETTER;
-        float v;
-        if (!read_number(line, &i, &v))
+        /* the number read straight into its word's slot (G, M and the
+         * unsupported letters: into blk->dwell_s, which only a dwell writes,
+         * after this loop): no float of its own in the frame */
+        uint8_t w = (uint8_t)(pgm_read_byte(&word_of_letter[letter - 'A']) - 1); /* letter: A..Z here */
+        float *vp = w < W_VALUES ? &val[w] : &blk->dwell_s;
+        if (!read_number(line, &i, vp))
             return ERR_BAD_NUMBER;
+        float v = *vp;
         if (letter == 'G' || letter == 'M') {
+            if (undo->motion == UNDO_NONE)
+                memcpy(undo, st, sizeof(*st));
             if (v < 0.0f || v > 1000.0f)
                 return ERR_UNSUPPORTED;
             uint16_t code10 = (uint16_t)lroundf(v * 10.0f);
@@ -165,7 +205,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                 case 550: case 560: case 570: case 580: case 590:
 #endif
                 case 540:
-                    if (g_coord++)
+                    if (seen_group(&groups, GRP_COORD))
                         return ERR_MODAL_CONFLICT;
 #if GRBL_WCS
                     {
@@ -183,7 +223,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                 case 930:
 #endif
                 case 940:
-                    if (g_feed_mode++)
+                    if (seen_group(&groups, GRP_FEED_MODE))
                         return ERR_MODAL_CONFLICT;
 #if GRBL_G93
                     if (st->inverse_time && code10 == 940)
@@ -191,19 +231,19 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
                     st->inverse_time = code10 == 930;
 #endif
                     break;
-                case 530: g53 = 1; break;
+                case 530: groups |= GRP_G53; break;
                 case 170: case 180: case 190:
-                    if (g_plane++)
+                    if (seen_group(&groups, GRP_PLANE))
                         return ERR_MODAL_CONFLICT;
                     st->plane = (uint8_t)(code10 / 10 - 17);
                     break;
                 case 200: case 210:
-                    if (g_units++)
+                    if (seen_group(&groups, GRP_UNITS))
                         return ERR_MODAL_CONFLICT;
                     st->inches = code10 == 200;
                     break;
                 case 900: case 910:
-                    if (g_dist++)
+                    if (seen_group(&groups, GRP_DIST))
                         return ERR_MODAL_CONFLICT;
                     st->incremental = code10 == 910;
                     break;
@@ -216,23 +256,23 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             } else {
                 if (jog)
                     return ERR_INVALID_JOG;
+                uint8_t m_group = 0; /* (M17/M18/M84 and coolant: none) */
                 switch (code10) {
-                case 30: case 40: pen = PEN_DOWN; m_pen_groups++; break;
-                case 50: pen = PEN_UP; m_pen_groups++; break;
-                case 3000: m300 = 1; m_pen_groups++; break;
-                case 170: m_motors = MOTORS_ON; break;
-                case 180: case 840: m_motors = MOTORS_OFF; break;
-                case 0: case 10: m_pause = 1; m_stop_groups++; break;
-                case 20: case 300: m_end = 1; m_stop_groups++; break;
+                case 30: case 40: blk->pen = PEN_DOWN; m_group = GRP_PEN; break;
+                case 50: blk->pen = PEN_UP; m_group = GRP_PEN; break;
+                case 3000: blk->pen = PEN_M300; m_group = GRP_PEN; break;
+                case 170: blk->motors = MOTORS_ON; break;
+                case 180: case 840: blk->motors = MOTORS_OFF; break;
+                case 0: case 10: blk->pause = 1; m_group = GRP_STOP; break;
+                case 20: case 300: blk->program_end = 1; m_group = GRP_STOP; break;
                 case 80: case 90: break; /* coolant: no coolant on a plotter */
                 default: return bad_code(code10);
                 }
-                if (m_pen_groups > 1 || m_stop_groups > 1)
+                if (seen_group(&groups, m_group))
                     return ERR_MODAL_CONFLICT;
             }
             continue;
         }
-        uint8_t w = (uint8_t)(pgm_read_byte(&word_of_letter[letter - 'A']) - 1); /* letter: A..Z here */
         if (w >= W_COUNT)
             return jog ? ERR_INVALID_JOG : ERR_UNSUPPORTED;
         if (seen & WB(w))
@@ -241,9 +281,9 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         if (w >= W_F && v < 0.0f) /* (the float compare only for those words) */
             return ERR_NEGATIVE;
         seen |= (uint16_t)WB(w);
-        val[w] = v;
     }
 
+    uint8_t g53 = groups & GRP_G53;
     uint8_t inverse = 0;
 #if GRBL_G93
     inverse = st->inverse_time; /* F is 1/min then, not a length */
@@ -272,10 +312,10 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         else
             st->feed = val[W_F];
     }
-    if (m300) {
+    if (blk->pen == PEN_M300) {
         if (!(seen & WB(W_S)))
             return ERR_VALUE_WORD_MISSING;
-        pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
+        blk->pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
     }
 #if GRBL_WCS
     if (non_modal == NM_SET_HOME) {
@@ -300,8 +340,8 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
             if (magnitude_above(z, GC_MAX_COORD))
                 return ERR_INVALID_TARGET;
             st->z = z;
-            if (pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
-                pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
+            if (blk->pen == PEN_KEEP) /* an explicit M3/M5 on the same line wins */
+                blk->pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
         }
     }
     if (g53 && non_modal)
@@ -315,7 +355,6 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     float *target = blk->target;
     for (uint8_t a = 0; a < N_AXIS; a++) {
         float t = st->pos[a];
-        blk->start[a] = t;
         if (axes & (1u << a)) {
             float v = val[a];
             if (g53)
@@ -335,10 +374,6 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     }
 
     uint16_t used = (uint16_t)(WB(W_X) | WB(W_Y) | WB(W_Z) | WB(W_F) | WB(W_N) | WB(W_S) | WB(W_T));
-    blk->pen = pen;
-    blk->motors = m_motors;
-    blk->program_end = m_end;
-    blk->pause = m_pause;
 
     if (non_modal == NM_DWELL) {
         if (axes || motion >= 0)
@@ -406,8 +441,11 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         blk->has_via = axes != 0;
         memcpy(blk->via, target, sizeof(blk->via));
         /* then to the stored position (machine 0 without GRBL_WCS); with
-         * axis words only those axes go there, as GRBL 1.1 does */
-        float home[GC_AXES] = {0};
+         * axis words only those axes go there, as GRBL 1.1 does. (Read into
+         * blk->store, unused without a store_slot: gc_parse's own frame
+         * stays within the 64 bytes the AVR reaches in one instruction.) */
+        float *home = blk->store;
+        memset(home, 0, sizeof(blk->store));
 #if GRBL_WCS
         if (!coord_load(home_slot, home))
             return ERR_EEPROM_READ;
@@ -428,7 +466,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
         if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
             if (st->motion != MOTION_G0) {
                 float f = jog ? blk->feed : st->feed;
-                if (f <= 0.0f)
+                if ((int32_t)float_bits(f) <= 0) /* f <= 0 (never negative: +0 or -0) */
                     return ERR_UNDEFINED_FEED;
                 blk->feed = f;
             }
@@ -473,7 +511,7 @@ uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *st, gc_bl
     }
     if (seen & ~used)
         return ERR_UNUSED_WORDS;
-    if (m_end)
+    if (blk->program_end)
         gc_program_end(st);
 #if GRBL_G93
     if (inverse) /* an inverse-time F holds for its own line only */

@@ -50,9 +50,10 @@ typedef struct {
     uint32_t line;        /* N word (its whole part), 0 without one */
     /* gc_parse zeroes the fields above and fills these where its action
      * reads them (a 48-byte clear a line saved): feed for a line, an arc
-     * or a jog, dwell_s for a dwell, start always, target for every motion
+     * or a jog, dwell_s for a dwell (while parsing, the G and M numbers'
+     * scratch), start always, target for every motion
      * and G28 (and most other lines), via for G28, center for arcs, store
-     * when store_slot is set */
+     * when store_slot is set (G28 reads its stored position into it) */
     float feed;           /* mm/min */
     float dwell_s;
     float store[GC_AXES]; /* machine mm (G28.1/G30.1) or offset (G10) to store */
@@ -63,14 +64,13 @@ typedef struct {
 } gc_block_t;
 
 void gc_init(gc_state_t *st);
-/* Parse line into *blk against the modal state *from; *next gets the
- * state after the line, valid on STATUS_OK: the caller commits it, or not
- * on any error or when it refuses the block. next may be from itself: the
- * state is then changed in place, also on an error, and the caller puts
- * back the copy it took before (protocol.c: one copy of the state a line
- * instead of two, ~220 cycles). jog: parse a $J= body (GRBL's jog rules). */
-uint8_t gc_parse(const char *line, const gc_state_t *from, gc_state_t *next, gc_block_t *blk,
-                 uint8_t jog);
+/* Parse line into *blk against the modal state *st, which it changes in
+ * place to the state after the line; on an error, or when the caller
+ * refuses the block, the caller puts the state back with gc_undo (undo: the
+ * caller's, for this line). No copy of the state a line (~220 cycles) but
+ * for a line with G or M words. jog: parse a $J= body (GRBL's jog rules). */
+uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog, gc_state_t *undo);
+void gc_undo(gc_state_t *st, const gc_state_t *undo, const gc_block_t *blk);
 /* Program end (M2/M30): modal state back to the power-up defaults, position kept. */
 void gc_program_end(gc_state_t *st);
 /* Work coordinate offset (wcs + g92) of axis a (0..2), as WCO and $# show it. */

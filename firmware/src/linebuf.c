@@ -1,4 +1,5 @@
 #include "linebuf.h"
+#include "ring.h"
 
 void linebuf_reset(linebuf_t *lb)
 {
@@ -11,7 +12,7 @@ void linebuf_reset(linebuf_t *lb)
  * signs, points and the rest of printable ASCII up to 'Z' */
 static inline uint8_t plain(uint8_t c)
 {
-    return c > ' ' && c <= 'Z' && c != '(' && c != ';';
+    return (uint8_t)(c - '!') <= 'Z' - '!' && c != '(' && c != ';'; /* (one compare for the range) */
 }
 
 uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
@@ -61,16 +62,23 @@ uint8_t linebuf_feed_ring(linebuf_t *lb, const uint8_t *ring, uint8_t mask, uint
         if (!(lb->flags & (LBF_PAREN | LBF_SEMICOLON))) {
             /* the common run: no comment state to keep, no line end in it
              * (the line is NUL-terminated at its end, not after every byte) */
-            uint8_t len = lb->len, start = len;
-            char *text = lb->text;
-            uint8_t c;
-            while (len < LINE_SIZE && plain(c = ring[tail & mask])) {
-                text[len++] = (char)c;
-                if (++tail == head)
+            uint8_t len = lb->len;
+            /* at most the bytes in the ring and the room in the line: one
+             * count down a byte (an overflow is linebuf_feed's) */
+            uint8_t n = ring_count(head, tail), room = (uint8_t)(LINE_SIZE - len);
+            if (n > room)
+                n = room;
+            char *t = lb->text + len;
+            for (; n; n--) {
+                uint8_t c = ring[tail & mask];
+                if (!plain(c))
                     break;
+                *t++ = (char)c;
+                tail++;
             }
-            if (len != start) {
-                lb->len = len;
+            uint8_t end = (uint8_t)(t - lb->text);
+            if (end != len) {
+                lb->len = end;
                 lb->flags &= (uint8_t)~LBF_AFTER_CR;
                 if (tail == head)
                     break;

@@ -329,11 +329,23 @@ void machine_pen(uint8_t down)
     machine_dwell_ms((uint32_t)pen_servo(down) + settings.pen_settle_ms);
 }
 
+/* Every line's soft-limit check (homing boards have them on): the tests
+ * are integer compares of the floats' bits where they can be (a float
+ * compare is ~50 cycles here, the add ~100): below -eps is a negative
+ * float of greater magnitude, i.e. bits above -eps's as unsigned; the add
+ * only past max travel (plan_lt: max travel is not negative). */
 static uint8_t outside_work_area(const float *t)
 {
-    for (uint8_t a = 0; a < N_AXIS; a++)
-        if (t[a] < -SOFT_LIMIT_EPS || t[a] > settings.max_travel[a] + SOFT_LIMIT_EPS)
+    const float below = -SOFT_LIMIT_EPS;
+    uint32_t below_bits;
+    memcpy(&below_bits, &below, sizeof(below_bits));
+    for (uint8_t a = 0; a < N_AXIS; a++) {
+        uint32_t b;
+        memcpy(&b, &t[a], sizeof(b));
+        if (b > below_bits ||
+            (plan_lt(settings.max_travel[a], t[a]) && t[a] > settings.max_travel[a] + SOFT_LIMIT_EPS))
             return 1;
+    }
     return 0;
 }
 
@@ -356,7 +368,8 @@ static uint8_t line_to(const float *target, float feed, uint8_t flags)
     if (mach.check)
         return STATUS_OK;
     uint8_t queued = plan_line_split(target, feed, flags, planner_room);
-    machine_poll(); /* the steppers start before the line's ok */
+    if (!stepper_busy()) /* (running, they are fed by the main loop's next poll) */
+        machine_poll(); /* the steppers start before the line's ok */
     return queued && !mach.abort ? STATUS_OK : ERR_LOCKED;
 }
 
@@ -481,9 +494,9 @@ uint8_t machine_check_limits(const gc_block_t *blk)
 
 uint8_t machine_jog(const char *body)
 {
-    gc_state_t tmp;
+    gc_state_t tmp = gc, undo; /* a jog changes no modal state: only pos is kept */
     gc_block_t blk;
-    uint8_t e = gc_parse(body, &gc, &tmp, &blk, 1);
+    uint8_t e = gc_parse(body, &tmp, &blk, 1, &undo);
     if (e)
         return e;
     if (settings.soft_limits && outside_work_area(blk.target))

@@ -8,9 +8,9 @@ uint8_t plan_line_split(const float *target, float feed, uint8_t flags, uint8_t 
     if (!room())
         return 0;
     /* plan_line finds out whether the move fits; the split is the rare case */
-    if (plan_line(target, feed, flags) != PLAN_TOO_LONG)
+    uint16_t pieces = plan_line(target, feed, flags);
+    if (pieces < 2)
         return 1;
-    uint16_t pieces = plan_pieces();
     int32_t from_steps[N_AXIS];
     float from[N_AXIS], p[N_AXIS];
     plan_get_position(from_steps);

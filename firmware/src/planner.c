@@ -16,10 +16,10 @@ static plan_block_t ring[RING_SLOTS];
 static plan_motion_t motion[RING_SLOTS]; /* ring[i]'s geometry, as geometry() gave it */
 #endif
 static uint8_t head, tail, count;
-static uint16_t split_pieces;      /* for the last move refused as too long (plan_pieces) */
 static int32_t position[N_AXIS];   /* cartesian steps where the last block ends */
-static float prev_unit[N_AXIS];
-static plan_f16_t prev_nominal;   /* the last block's cruise speed^2 as stored */
+/* the newest block's move in mm and its length (the next junction's corner;
+ * its cruise speed is its nominal_sqr) */
+static float prev_d[N_AXIS], prev_mm;
 static plan_sqr_t exec_exit_limit; /* for ring[tail] */
 static uint8_t feed_pct = 100, rapid_pct = 100; /* realtime overrides */
 static float last_feed;        /* the last block's feed as given, and as stored in blocks */
@@ -93,9 +93,7 @@ void plan_reset(void)
 #if PLAN_LAZY
     lazy_n = 0;
 #endif
-    prev_nominal = 0;
     exec_exit_limit = 0;
-    memset(prev_unit, 0, sizeof(prev_unit));
 }
 
 void plan_set_position(const int32_t *steps) { memcpy(position, steps, sizeof(position)); }
@@ -206,8 +204,6 @@ void plan_discard_current(void)
 #endif
     exec_exit_limit = count ? ring[tail].entry_sqr + ring[tail].accel_dist2 : 0;
 }
-
-uint16_t plan_pieces(void) { return split_pieces; }
 
 void plan_set_exec_exit_limit(float v_sqr) { exec_exit_limit = plan_sqr_from_float(v_sqr); }
 
@@ -419,16 +415,17 @@ static float motion_finish(const plan_block_t *b, plan_motion_t *m)
     return inv_mm;
 }
 
-/* Length, events per mm, 1 / acceleration along the move and (when unit
- * is given) the direction; returns 1 / length. Without unit (the segment
- * preparer's call on the 328P) only the length, and the rest when the
- * preparer needs it (plan_motion_complete): returns 0. The axis limits along the
- * move: accel <= accel / |u| for every moving axis; the tightest has the
- * largest |u| / limit, i.e. the largest |d_mm| / limit. */
-static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
+/* Length, axis deltas in mm (into d_mm when given) and (in m->inv_accel)
+ * the largest |d_mm| / accel; events per mm 0 (not yet: motion_finish, when
+ * needed). The axis limits along the move: accel <= accel / |u| for every
+ * moving axis; the tightest has the largest |u| / limit, i.e. the largest
+ * |d_mm| / limit. Returns the length squared. */
+static __attribute__((noinline)) float geometry(const plan_block_t *b, plan_motion_t *m, float *d_mm)
 {
     int32_t motor[N_AXIS] = {b->steps[0], b->steps[1]}, cart[N_AXIS];
-    float d_mm[N_AXIS], mm2 = 0.0f, x = 0.0f;
+    float d[N_AXIS], mm2 = 0.0f, x = 0.0f;
+    if (!d_mm)
+        d_mm = d;
     plan_cart_from_motor(motor, cart);
     for (uint8_t a = 0; a < N_AXIS; a++) {
         d_mm[a] = (float)cart[a] * axis.mm_per_step[a];
@@ -440,14 +437,8 @@ static float geometry(const plan_block_t *b, plan_motion_t *m, float *unit)
     }
     m->mm = sqrtf(mm2);
     m->inv_accel = x;
-    if (!unit) {
-        m->events_per_mm = 0.0f; /* not yet */
-        return 0.0f;
-    }
-    float inv_mm = motion_finish(b, m);
-    for (uint8_t a = 0; a < N_AXIS; a++)
-        unit[a] = d_mm[a] * inv_mm;
-    return inv_mm;
+    m->events_per_mm = 0.0f;
+    return mm2;
 }
 
 /* The acceleration the segment preparer runs a block at: the one its
@@ -504,12 +495,18 @@ static __attribute__((noinline)) plan_f16_t plain_nominal(float speed)
 }
 
 /* The block's cruise speed squared as stored (16 bits, never above the
- * float one), from its feed, flags and direction with the overrides. */
-static float set_nominal(plan_block_t *b, const plan_motion_t *m, const float *unit)
+ * float one), from its feed, flags and direction (from the deltas d_mm,
+ * with the motion finished here if it is not yet) with the overrides. A
+ * block at a plain feed takes feed_nominal: no direction, no events per mm. */
+static float set_nominal(plan_block_t *b, plan_motion_t *m, const float *d_mm)
 {
     if (feed_nominal && b->feed == last_feed_u16 && !(b->flags & PB_RAPID) && feed_pct == 100) {
         b->nominal_sqr = feed_nominal;
     } else {
+        float unit[N_AXIS];
+        float inv_mm = plan_lt(0.0f, m->events_per_mm) ? 1.0f / m->mm : motion_finish(b, m);
+        for (uint8_t a = 0; a < N_AXIS; a++)
+            unit[a] = d_mm[a] * inv_mm;
         float speed = cruise_speed(feed_mm_s(b->feed), b->flags, axis_s_per_mm(unit), m->events_per_mm);
         b->nominal_sqr = plan_f16_from_float(speed * speed);
     }
@@ -531,9 +528,9 @@ uint8_t plan_override_step(void)
     for (uint8_t n = OV_SLICE; n && ov_left; n--, ov_left--) {
         plan_block_t *b = &ring[ov_at];
         plan_motion_t m;
-        float unit[N_AXIS];
-        geometry(b, &m, unit);
-        float nominal = set_nominal(b, &m, unit);
+        float d[N_AXIS];
+        geometry(b, &m, d);
+        float nominal = set_nominal(b, &m, d);
         /* a junction is never faster than the cruise speeds on either side */
         if (ov_at != tail) {
             float before = plan_f16_to_float(ov_prev_nominal);
@@ -544,8 +541,6 @@ uint8_t plan_override_step(void)
         ov_prev_nominal = b->nominal_sqr;
         ov_at = next_index(ov_at);
     }
-    if (!ov_left)
-        prev_nominal = ov_prev_nominal; /* the newest block's: plan_line's next junction */
     materialize();
     recalculate(1);
     return ov_left != 0;
@@ -562,7 +557,39 @@ void planner_set_overrides(uint8_t feed, uint8_t rapid)
     plan_override_step();
 }
 
-uint8_t plan_line(const float *target, float feed, uint8_t flags)
+/* The junction speed squared (mm/s)^2 into a new block of deltas d (mm),
+ * length mm, x = its largest |d_mm| / accel and cruise speed squared cap
+ * (already the lower of its own and the block before's), after the newest
+ * block (prev_d, prev_mm): the acceleration along the move is mm / x, and
+ * the corner's cos is -(d_prev . d) / (L_prev L); the tests below are
+ * multiplied through by q = L_prev L and x (both > 0): no division but
+ * for a sharp corner. (A function of its own: in plan_line its floats were
+ * ~120 B of register spills.) */
+static __attribute__((noinline)) float junction_sqr(const float *d, float mm, float x, float cap)
+{
+    float p = prev_d[0] * d[0] + prev_d[1] * d[1]; /* -cos * q */
+    float q = prev_mm * mm;
+    float q_lim = q * -STRAIGHT_COS;
+    if (plan_lt(q_lim, p)) /* straight (plan_lt: one side not negative) */
+        return cap;
+    if (!plan_lt(-p, q_lim)) /* a reversal (otherwise q + p > 0) */
+        return 0.0f;
+    /* circle of radius r through the corner, deviating junction_deviation
+     * from it: r = jd * s / (1 - s) with s = sin(t/2), v^2 = a * r, at most
+     * cap. With k = a * jd and s^2 = (1 - cos t) / 2, k s^2 >= cap (1 - s^2),
+     * i.e. k (1 - cos t) >= cap (1 + cos t), is enough for k s / (1 - s) >=
+     * cap (s >= s^2 between 0 and 1): gentle corners (most of a curve) need
+     * neither the square root nor a division. Times q x:
+     * L jd (q + p) >= cap x (q - p). */
+    float ljd = mm * settings.junction_deviation;
+    if (!plan_lt(ljd * (q + p), cap * x * (q - p)))
+        return cap;
+    float sin_half = sqrtf(0.5f * (1.0f + p / q));
+    float junction = ljd * sin_half / (x * (1.0f - sin_half));
+    return plan_lt(cap, junction) ? cap : junction;
+}
+
+uint16_t plan_line(const float *target, float feed, uint8_t flags)
 {
     int32_t cart[N_AXIS], delta[N_AXIS], motor[N_AXIS];
     if (!count)
@@ -584,8 +611,7 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
     if (events > PLAN_MAX_EVENTS) {
         /* with a margin for rounding: no piece may come out above the limit */
         uint32_t pieces = events / (PLAN_MAX_EVENTS / 10 * 9) + 1;
-        split_pieces = pieces < 65535u ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
-        return PLAN_TOO_LONG;
+        return pieces < 65535u ? (uint16_t)pieces : 65535u; /* parser limits keep it far below */
     }
     if (events == 0)
         return 0;
@@ -601,50 +627,34 @@ uint8_t plan_line(const float *target, float feed, uint8_t flags)
         feed_nominal = plain_nominal(feed_mm_s(last_feed_u16));
     }
     b->feed = last_feed_u16;
+    /* The acceleration along the move is L / x (x: the largest |d_mm| /
+     * accel), so 2 a L = 2 L^2 / x, and junction_sqr works from the deltas:
+     * one division a line where there were two (1 / L and 1 / (x / L)), and
+     * for a plain feed on the 328P no unit vector and no events per mm. */
     plan_motion_t m;
-    float unit[N_AXIS];
-    float inv_mm = geometry(b, &m, unit);
-    float accel = 1.0f / m.inv_accel;
-    float nominal = set_nominal(b, &m, unit);
-    b->accel_dist2 = plan_sqr_from_float(2.0f * accel * m.mm);
+    float d[N_AXIS];
+    float mm2 = geometry(b, &m, d);
+    float x = m.inv_accel;
+#if PLAN_CACHE_MOTION
+    float inv_mm = motion_finish(b, &m);
+#endif
+    float nominal = set_nominal(b, &m, d);
+    b->accel_dist2 = plan_sqr_from_float((mm2 + mm2) / x);
 #if PLAN_CACHE_MOTION
     run_accel(b, &m, inv_mm);
     motion[head] = m;
-#else
-    (void)inv_mm;
 #endif
 
     float junction = 0.0f;
     if (count) {
-        float cos_theta = -(prev_unit[0] * unit[0] + prev_unit[1] * unit[1]);
-        float before = plan_f16_to_float(prev_nominal);
-        float cap = plan_lt(before, nominal) ? before : nominal;
-        if (plan_lt(-STRAIGHT_COS, -cos_theta)) { /* (plan_lt: one side not negative) */
-            junction = cap;
-        } else if (plan_lt(cos_theta, REVERSAL_COS)) {
-            /* circle of radius r through the corner, deviating junction_deviation
-             * from it: r = jd * s / (1 - s) with s = sin(t/2), v^2 = a * r, at
-             * most cap. With k = a * jd and s^2 = (1 - cos t) / 2, k s^2 >=
-             * cap (1 - s^2), i.e. k (1 - cos t) >= cap (1 + cos t), is enough
-             * for k s / (1 - s) >= cap (s >= s^2 between 0 and 1): gentle
-             * corners (most of a curve) need neither the square root nor the
-             * division, and three multiplies. */
-            float k = accel * settings.junction_deviation;
-            if (!plan_lt(k * (1.0f - cos_theta), cap * (1.0f + cos_theta))) {
-                junction = cap;
-            } else {
-                float sin_half = sqrtf(0.5f * (1.0f - cos_theta));
-                junction = k * sin_half / (1.0f - sin_half);
-                if (plan_lt(cap, junction))
-                    junction = cap;
-            }
-        }
+        float before = plan_f16_to_float((b == ring ? &ring[RING_SLOTS] : b)[-1].nominal_sqr);
+        junction = junction_sqr(d, m.mm, x, plan_lt(before, nominal) ? before : nominal);
     }
     b->max_entry_sqr = plan_sqr_from_float(junction);
     b->entry_sqr = 0;
 
-    memcpy(prev_unit, unit, sizeof(prev_unit));
-    prev_nominal = b->nominal_sqr;
+    memcpy(prev_d, d, sizeof(prev_d));
+    prev_mm = m.mm;
     memcpy(position, cart, sizeof(cart));
     if (ov_left)
         ov_left++; /* the walk also caps its junction by the block before's new speed */

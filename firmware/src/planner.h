@@ -109,10 +109,12 @@ uint8_t plan_free(void);
 uint8_t plan_count(void);
 /* Queue a move to target (machine mm) at feed (mm/min; ignored with PB_RAPID).
  * The caller makes sure plan_free() > 0. Returns 1 when queued, 0 for a move
- * too short for a step, PLAN_TOO_LONG (nothing queued) for one that needs
- * more than PLAN_MAX_EVENTS step events: the caller splits it (plan_pieces). */
-#define PLAN_TOO_LONG 2
-uint8_t plan_line(const float *target, float feed, uint8_t flags);
+ * too short for a step; for one that needs more than PLAN_MAX_EVENTS step
+ * events nothing is queued and it returns into how many equal pieces the
+ * caller must cut it (at least 2): from its motor step events, so that none
+ * comes out above the limit (the steps of the pieces round each on their
+ * own). */
+uint16_t plan_line(const float *target, float feed, uint8_t flags);
 /* The N number plan_line gives the blocks it queues from now on (0: none). */
 void plan_set_line_number(plan_line_t n);
 plan_block_t *plan_current(void);    /* oldest block, or 0 */
@@ -132,10 +134,6 @@ static inline plan_sqr_t plan_entry_sqr(const plan_block_t *b) { return b->entry
 #endif
 float plan_next_entry_sqr(void);     /* entry of the block after the oldest; 0 if none */
 void plan_discard_current(void);
-/* Into how many equal pieces the move plan_line last refused as
- * PLAN_TOO_LONG must be cut: from its motor step events, so that none comes
- * out above the limit (the steps of the pieces round each on its own). */
-uint16_t plan_pieces(void);
 /* Highest exit speed^2 the executing block can still reach (segment preparer). */
 void plan_set_exec_exit_limit(float v_sqr);
 /* GRBL's realtime overrides, percent (feed 10..200, rapid 25/50/100; 100 =

@@ -24,14 +24,13 @@ uint8_t protocol_gcode(const char *line)
         return ERR_LOCKED;
     if (mach.jog && machine_moving())
         return ERR_NOT_IDLE;
-    /* parsed in place: the one copy of the state a line costs is this one,
-     * put back when the line is bad or refused (gcode.h) */
-    gc_state_t was = gc;
+    /* parsed in place, put back when the line is bad or refused (gcode.h) */
+    gc_state_t undo;
     gc_block_t blk;
-    uint8_t e = gc_parse(line, &gc, &gc, &blk, 0);
+    uint8_t e = gc_parse(line, &gc, &blk, 0, &undo);
     uint8_t refused = !e && machine_check_limits(&blk);
     if (e || refused) {
-        gc = was;
+        gc_undo(&gc, &undo, &blk);
         if (refused) { /* (soft limits) */
             machine_resync();
             e = ERR_LOCKED;

@@ -11,13 +11,13 @@ static gc_state_t st;
 static gc_block_t blk;
 
 /* parse a line and commit its modal state as protocol.c does: in place,
- * the copy put back on an error (jogs parse into a second state: below) */
+ * put back on an error (jogs parse into a second state: below) */
+static gc_state_t undo;
 static uint8_t parse(const char *line)
 {
-    gc_state_t was = st;
-    uint8_t e = gc_parse(line, &st, &st, &blk, 0);
+    uint8_t e = gc_parse(line, &st, &blk, 0, &undo);
     if (e)
-        st = was;
+        gc_undo(&st, &undo, &blk);
     return e;
 }
 
@@ -108,17 +108,30 @@ void test_gcode_errors(void)
     CHECK(parse("G0X200000") == ERR_INVALID_TARGET);
     CHECK(parse("G1X1F1e5") == ERR_EXPECTED_LETTER); /* no exponents in G-code: 'e' is not a word here */
     CHECK(parse("N-1") == ERR_NEGATIVE);
-    /* a failed line changes nothing */
+    /* a failed line changes nothing, with G or M words (the whole state
+     * copied) or without (feed, z and pos put back) */
     gc_state_t before = st;
     CHECK(parse("G91G1X1") == ERR_UNDEFINED_FEED);
     CHECK(memcmp(&before, &st, sizeof(st)) == 0);
-    /* jog rules */
+    CHECK(parse("X3Y4Z-1F700I1") == ERR_UNUSED_WORDS);
+    CHECK(memcmp(&before, &st, sizeof(st)) == 0);
+    CHECK(parse("F700Z-1X200000") == ERR_INVALID_TARGET);
+    CHECK(memcmp(&before, &st, sizeof(st)) == 0);
+    /* and a line the caller refuses after it parsed (soft limits) is put
+     * back whole by gc_undo */
+    CHECK(parse("X3Y4Z-1F700") == STATUS_OK && memcmp(&before, &st, sizeof(st)) != 0);
+    gc_undo(&st, &undo, &blk);
+    CHECK(memcmp(&before, &st, sizeof(st)) == 0);
+    CHECK(parse("G91G1X1Y2F800M3") == STATUS_OK && st.incremental);
+    gc_undo(&st, &undo, &blk);
+    CHECK(memcmp(&before, &st, sizeof(st)) == 0);
+    /* jog rules (a jog parses a copy: it changes no modal state) */
     gc_block_t j;
-    gc_state_t after;
-    CHECK(gc_parse("G91X10F1000", &st, &after, &j, 1) == STATUS_OK && j.action == ACT_LINE);
-    CHECK(gc_parse("X10", &st, &after, &j, 1) == ERR_INVALID_JOG);
-    CHECK(gc_parse("G0X10F100", &st, &after, &j, 1) == ERR_INVALID_JOG);
-    CHECK(gc_parse("M3X1F100", &st, &after, &j, 1) == ERR_INVALID_JOG);
+    gc_state_t after = st;
+    CHECK(gc_parse("G91X10F1000", &after, &j, 1, &undo) == STATUS_OK && j.action == ACT_LINE);
+    CHECK(gc_parse("X10", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G0X10F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("M3X1F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
 }
 
 void test_gcode_arcs(void)

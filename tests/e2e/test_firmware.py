@@ -186,6 +186,17 @@ def test_soft_limit_rejects_before_moving(plotter, grbl: Grbl) -> None:
     assert grbl.send("$J=G91 X-20 F1000")[-1] == "error:15"
 
 
+def test_soft_limit_edges_keep_their_tolerance(plotter, grbl: Grbl) -> None:
+    # within 0.0005 mm of the work area is inside; past it, the line is refused
+    unlocked(grbl)
+    grbl.ok("G0 X300.0004 Y-0.0004")
+    got = grbl.send("G0 X-0.001")
+    assert got[-2:] == ["ALARM:2", "error:9"], got
+    unlocked(grbl)
+    got = grbl.send("G0 X300.001")
+    assert got[-2:] == ["ALARM:2", "error:9"], got
+
+
 def test_hard_limit_hit(plotter, grbl: Grbl) -> None:
     unlocked(grbl)
     grbl.ok("$20=0")  # soft limits off, so the move reaches the switch
