@@ -100,6 +100,41 @@ def test_control_bytes_found_natively_are_those_text_files_do_not_hold():
     assert first_control(b"") == -1
 
 
+@pytest.mark.parametrize("data", [
+    b"G21\nG1 X1 Y2 F600 ; \xc3\xa9t\xc3\xa9\n" * 40 + b"M5",      # LF, UTF-8, no last LF
+    b"G21\r\nG1 X1 Y2 F600\r\n" * 40,                             # CRLF from the start
+    b"G1 X1 Y2 F600\n" * 40 + b"G1 X2 Y2\r\nM5\rM3\r\n" + b"G1 X3 Y3\n" * 40,  # CR later
+    b"\xef\xbb\xbfG1 X1 Y2 F600\n\n" * 30,                          # a BOM, blank lines
+])
+@pytest.mark.parametrize("size", [7, 64, 1 << 18])
+def test_line_chunks_give_the_text_read_with_universal_newlines(tmp_path, data, size):
+    # A UTF-8 file's chunks are its bytes until one holds a CR, then text read as before.
+    src = tmp_path / "a.gcode"
+    src.write_bytes(data)
+    text = src.read_text(encoding="utf-8")
+    text += "" if text.endswith("\n") else "\n"
+    got, line = [], 1
+    for first, chunk in line_chunks(src, "utf-8", size):
+        chunk = chunk.decode("utf-8") if isinstance(chunk, bytes) else chunk
+        assert first == line and chunk.endswith("\n")
+        got.append(chunk)
+        line += chunk.count("\n")
+    assert "".join(got) == text
+    if b"\r" not in data:
+        assert all(isinstance(c, bytes) for _, c in line_chunks(src, "utf-8", size))
+
+
+def test_a_crlf_file_imports_as_its_lf_twin(tmp_path):
+    lines = [f"G1 X{k % 7 + 1} Y{k % 5 + 1} F600" for k in range(300)]
+    text = "G21\nM3\n" + "\n".join(lines) + "\nM5\n"
+    (tmp_path / "lf.gcode").write_bytes(text.encode())
+    (tmp_path / "crlf.gcode").write_bytes(text.replace("\n", "\r\n").encode())
+    lf = _write(tmp_path / "lf.gcode", tmp_path / "lf", ImportOptions(), True, Transform(), 100)
+    crlf = _write(tmp_path / "crlf.gcode", tmp_path / "crlf", ImportOptions(), True,
+                  Transform(), 100)
+    assert lf == crlf
+
+
 def test_strokes_are_read_as_path_ops_a_chunk_at_a_time(tmp_path):
     src = tmp_path / "s.gcode"
     src.write_text("G21\n" + "G0 X1 Y1\nM3\nG1 X2 Y2 F600\nG1 X3 Y1\nM5\n" * 50)

@@ -25,6 +25,46 @@ def test_simplify_keeps_shape_and_drops_collinear_points():
     assert len(simplify(spike, 0.1)) == 3
 
 
+def _rdp_reference(pts: np.ndarray, tol: float, fixed: list[int]) -> np.ndarray:
+    """Ramer-Douglas-Peucker as simplify.c states it, a segment at a time in numpy."""
+    keep = np.zeros(len(pts), bool)
+    keep[fixed] = True
+    at = np.flatnonzero(keep)
+    todo = [(int(a), int(b)) for a, b in itertools.pairwise(at) if b > a + 1]
+    while todo:
+        a, b = todo.pop()
+        d = pts[b] - pts[a]
+        dd = d[0] * d[0] + d[1] * d[1]
+        r = pts[a + 1:b] - pts[a]
+        t = np.clip((r[:, 0] * d[0] + r[:, 1] * d[1]) / (dd if dd > 0 else 1.0), 0.0, 1.0)
+        o = r - t[:, None] * d
+        d2 = o[:, 0] * o[:, 0] + o[:, 1] * o[:, 1]
+        if np.isnan(d2).any() or not d2.max() > tol * tol:
+            continue
+        k = a + 1 + int(np.argmax(d2))
+        keep[k] = True
+        todo += [(a, k)] * (k > a + 1) + [(k, b)] * (b > k + 1)
+    return keep
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_simplify_mask_keeps_the_points_the_algorithm_names(seed):
+    # Ties (repeated and grid points: the first farthest is kept), zero-length
+    # segments, NaN, and every length around the two-at-a-time loop.
+    from plotbridge.importing.simplify import simplify_mask
+    rng = np.random.default_rng(seed)
+    for n in [*range(2, 14), 200, 1000]:
+        pts = np.cumsum(rng.choice([-1.0, 0.0, 1.0], size=(n, 2)), axis=0)
+        if seed % 2:
+            pts = np.cumsum(rng.normal(size=(n, 2)), axis=0)
+        if seed == 4 and n > 5:
+            pts[n // 2] = np.nan
+        fixed = sorted({0, n - 1, *rng.integers(0, n, size=n // 50).tolist()})
+        for tol in (0.0, 0.3, 1.0, 4.0):
+            got = simplify_mask(pts, tol, np.array(fixed))
+            assert got.tolist() == _rdp_reference(pts, tol, fixed).tolist()
+
+
 def test_preview_is_decimated_within_budget_and_tolerance():
     t = np.linspace(0, 40 * math.pi, 100_000)
     spiral = np.c_[100 + t * np.cos(t) / 2, 100 + t * np.sin(t) / 2]

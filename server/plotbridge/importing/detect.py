@@ -7,6 +7,8 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
+
 from ..native.textcheck import first_control
 from .models import ImportFailed
 
@@ -88,11 +90,32 @@ def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
             yield n, line.rstrip("\n")
 
 
-def line_chunks(path: Path, encoding: str, size: int = 1 << 18) -> Iterator[tuple[int, str]]:
-    """(1-based number of the first line, text of whole lines each ending with a newline),
-    about `size` characters at a time, streamed."""
+def line_chunks(path: Path, encoding: str,
+                size: int = 1 << 20) -> Iterator[tuple[int, str | bytes]]:
+    """(1-based number of the first line, whole lines each ending with a newline), about
+    `size` characters at a time, streamed. A UTF-8 file's chunks are its bytes as they
+    are (the text's UTF-8, which is what gcodescan.c reads: no decoding, counting and
+    encoding again) while they hold no CR; from the first chunk with one, and for
+    Latin-1 files, they are text with universal newlines (CR LF and CR read as LF)."""
     first = 1
+    offset = 0
+    if encoding == "utf-8":
+        with path.open("rb") as f:
+            while data := f.read(size):
+                if not data.endswith(b"\n"):
+                    data += f.readline()
+                if b"\r" in data:
+                    break
+                if not data.endswith(b"\n"):
+                    data += b"\n"
+                yield first, data
+                # (numpy counts 6 times as fast as bytes.count)
+                first += int(np.count_nonzero(np.frombuffer(data, np.uint8) == 10))
+                offset += len(data)
+            else:
+                return
     with path.open("r", encoding=encoding, newline=None) as f:
+        f.seek(offset)      # a line's start: the decoder has nothing pending there
         while text := f.read(size):
             if not text.endswith("\n"):
                 text += f.readline()

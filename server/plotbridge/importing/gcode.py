@@ -34,6 +34,7 @@ _CONSOLE = ("$", "?", "~", "!")
 _BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
 _WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
 _COMMENT = re.compile(r"\([^)]*\)|;.*")
+_SEMICOLON_COMMENT = re.compile(r";.*")
 # G words accepted without effect on a plotter (plane XY, feed per minute, work
 # coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
 _NOOP_G = {17.0, 94.0, 54.0, 61.0, 64.0, 40.0, 49.0, 80.0, 91.1}
@@ -603,7 +604,8 @@ def sniff_dialect(head: str) -> str:
     least two heights (M3/M5 are then the spindle of a Z-axis machine); M3 switched on
     and then G0 travel between G1 strokes with no M5 (a laser's file: G0 is pen-up
     travel, as GRBL's laser mode); M3/M5; no pen command at all: every G1 draws."""
-    text = _COMMENT.sub("", head)
+    # (without parentheses only ';' comments: that search is 3 times as fast)
+    text = (_COMMENT if "(" in head else _SEMICOLON_COMMENT).sub("", head)
     # Each search only where its words' plain text occurs (a search is 100 times slower
     # than looking for a substring, and this is a megabyte).
     folded = text.replace("m", "M") if "300" in text or "280" in text else text

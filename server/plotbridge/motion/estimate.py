@@ -15,8 +15,12 @@ from . import library as lib
 from .library import ARC_CCW, ARC_CW, DWELL, LINE, OTHER, RAPID
 
 TIMELINE_SAMPLES = 2000
-BATCH = 1 << 16     # lines the library runs at a time, while the next batch is collected
-QUEUED = 4          # full batches waiting for the library at most (bounded memory)
+# Lines the library runs at a time, while the next batch is collected: small (~5 ms of
+# the library's CPU), so the estimate starts soon after the import does and ends soon
+# after it (with 65,536 the import bench under load waited 50-280 ms for it after
+# preview.json, one core idle; with 8,192 its thread cost ~0.015 s more CPU).
+BATCH = 1 << 14
+QUEUED = 8          # full batches waiting for the library at most (bounded memory)
 
 
 def _config(p: MachineProfile) -> lib.Config:

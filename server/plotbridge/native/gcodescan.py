@@ -41,13 +41,14 @@ class Scan(NamedTuple):
                                                                      "surrogateescape")
 
 
-def scan(text: str, max_line: int) -> Scan:
-    """The lines of `text` (which ends with a newline); a common line is G0/G1 X Y [F]
-    [; comment] of at most `max_line` characters whose F, when given, is positive; a pen
-    line is M3, M4 or M5 [; comment]."""
-    data = text.encode("utf-8", "surrogateescape")
-    # Room for a line per byte (no counting pass; only what the lines use is touched).
-    room = len(data)
+def scan(text: str | bytes, max_line: int) -> Scan:
+    """The lines of `text` (which ends with a newline; bytes: its UTF-8); a common line
+    is G0/G1 X Y [F] [; comment] of at most `max_line` characters whose F, when given, is
+    positive; a pen line is M3, M4 or M5 [; comment]."""
+    data = text if isinstance(text, bytes) else text.encode("utf-8", "surrogateescape")
+    # Room for its lines (its newlines, and a last line without one): arrays of a line
+    # per byte cost more to map than numpy takes to count.
+    room = int(np.count_nonzero(np.frombuffer(data, np.uint8) == 10)) + 1
     kind = np.empty(room, np.uint8)
     x, y, f, feed = np.empty(room), np.empty(room), np.empty(room), np.empty(room)
     start = np.empty(room + 1, np.int_)
