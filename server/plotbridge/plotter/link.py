@@ -167,7 +167,11 @@ class Link:
     banner_wait = 0.5          # s to wait for a banner before asking with '?' (pty)
     banner_wait_serial = 2.0   # the same for a real port: DTR reset + bootloader take ~1-2 s
     handshake_timeout = 5.0    # s for the board to answer at all
-    silence_timeout = 0.8      # s without a byte from the board while polling: link lost
+    # s without a byte from the board while polling: link lost. A pulled cable closes the
+    # port at once; this is for a hung board (a working one answers '?' within ms). 0.8 s
+    # took a virtual plotter kept off a loaded host's CPU (a process beside the server)
+    # for lost, and interrupted its job.
+    silence_timeout = 2.0
     silent_polls = 3           # ... and at least this many '?' sent since the last byte
     reset_settle = 2.5         # s commands wait for the banner after a soft reset
     backoff_min = 0.5
