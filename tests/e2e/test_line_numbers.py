@@ -71,6 +71,7 @@ def test_status_reports_carry_the_line_and_an_estop_resumes_from_it(board, tmp_p
                 assert machine["line"] is not None, machine  # every report while it draws
                 seen.append(machine["line"])
             time.sleep(0.1)
+        assert seen, (server.job(job["id"]), server.machine())  # it drew while watched
         assert seen == sorted(seen), seen  # the executing line only moves on
         assert FIRST_MOVE <= seen[0] and seen[-1] <= last_move, seen
         assert server.client.post("/api/machine/estop").status_code == 202

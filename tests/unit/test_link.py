@@ -459,6 +459,23 @@ async def test_stalled_event_loop_is_not_taken_for_a_silent_board():
         assert not any(e.kind == "disconnected" for e in link.events)
 
 
+async def test_a_board_stalled_with_the_server_gets_its_time_after_the_stall():
+    # a frozen host stops the server and a simulated board alike; after it the board takes
+    # a moment to answer again while the server's polls go out at once
+    board = FakeBoard()
+    async with running(board) as link:
+        board.muted = True
+        time.sleep(link.silence_timeout * 3)  # noqa: ASYNC251 - the loop stalls on purpose
+        await asyncio.sleep(link.silence_timeout * 2 / 3)  # polls go out, none answered
+        board.muted = False
+        await asyncio.sleep(0.2)
+        assert link.connected
+        assert not any(e.kind == "disconnected" for e in link.events)
+        # a board that stays silent is still lost
+        board.muted = True
+        await settle(lambda: not link.connected, what="a silent board is lost")
+
+
 async def test_smaller_receive_buffer_from_build_info_is_respected():
     board = FakeBoard()
     board.script["$I"] = ["[VER:1.1h.20190825:]", "[OPT:V,15,64]", "ok"]

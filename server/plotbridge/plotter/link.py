@@ -173,6 +173,7 @@ class Link:
     # for lost, and interrupted its job.
     silence_timeout = 2.0
     silent_polls = 3           # ... and at least this many '?' sent since the last byte
+    stall = 0.5                # s a poll came late by: this process stalled (silence restarts)
     reset_settle = 2.5         # s commands wait for the banner after a soft reset
     backoff_min = 0.5
     backoff_max = 5.0
@@ -713,6 +714,7 @@ class Link:
         assert self._lost is not None
         while not self._lost.done():
             interval = 1.0 / self.poll_hz  # the runner raises it while a job runs
+            start = time.monotonic()
             with contextlib.suppress(LinkDown):
                 self._write(STATUS_QUERY, urgent=True)
                 self._unanswered_polls += 1
@@ -724,7 +726,12 @@ class Link:
                 await asyncio.wait_for(asyncio.shield(self._lost), interval)
             # Time alone is not enough: if this process stalled, the answers may
             # be waiting unread. The board must also have ignored several polls.
-            silence = time.monotonic() - self._last_rx
+            now = time.monotonic()
+            if now - start > interval + self.stall:
+                # this process was kept off the CPU (a loaded or frozen host), and so may
+                # the board have been (a simulator beside it): its silence counts from now
+                self._last_rx, self._unanswered_polls = now, 0
+            silence = now - self._last_rx
             if (silence > self.silence_timeout and self._unanswered_polls >= self.silent_polls
                     and not self._slow_command_pending()):
                 self._lose(f"no answer from the board for {silence:.1f} s")
