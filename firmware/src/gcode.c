@@ -1,6 +1,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <string.h>
+#include "float_bits.h"
 #include "gcode.h"
 #include "numparse.h"
 #include "progmem.h"
@@ -29,13 +30,6 @@ static const uint8_t word_of_letter[26] PROGMEM = {
 /* A float's bits: on the AVR every float compare or add is a library call
  * (50-100 cycles), and the tests below on every axis word of every line are
  * exact on the bits. */
-static inline uint32_t float_bits(float v)
-{
-    uint32_t b;
-    memcpy(&b, &v, sizeof(b));
-    return b;
-}
-
 /* |v| > limit for a finite v and a positive limit: the magnitudes' bit
  * patterns order as their values do */
 static uint8_t magnitude_above(float v, float limit)

@@ -4,6 +4,7 @@
 #include <math.h>
 #include <string.h>
 #include "arc.h"
+#include "float_bits.h"
 #include "inputs.h"
 #include "machine.h"
 #include "plan_split.h"
@@ -336,13 +337,9 @@ void machine_pen(uint8_t down)
  * only past max travel (plan_lt: max travel is not negative). */
 static uint8_t outside_work_area(const float *t)
 {
-    const float below = -SOFT_LIMIT_EPS;
-    uint32_t below_bits;
-    memcpy(&below_bits, &below, sizeof(below_bits));
+    const uint32_t below = float_bits(-SOFT_LIMIT_EPS);
     for (uint8_t a = 0; a < N_AXIS; a++) {
-        uint32_t b;
-        memcpy(&b, &t[a], sizeof(b));
-        if (b > below_bits ||
+        if (float_bits(t[a]) > below ||
             (plan_lt(settings.max_travel[a], t[a]) && t[a] > settings.max_travel[a] + SOFT_LIMIT_EPS))
             return 1;
     }

@@ -76,13 +76,6 @@ static void refresh_axis(void)
     }
 }
 
-static uint8_t same_bits(float a, float b)
-{
-    uint32_t i, j;
-    memcpy(&i, &a, sizeof(i));
-    memcpy(&j, &b, sizeof(j));
-    return i == j;
-}
 
 static uint8_t next_index(uint8_t i) { return (uint8_t)(i + 1 == RING_SLOTS ? 0 : i + 1); }
 static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 : i - 1); }
@@ -461,7 +454,7 @@ void plan_block_motion(const plan_block_t *b, plan_motion_t *m)
 #else
     m->events_per_mm = 0.0f; /* not yet */
     m->inv_accel = 0.0f;
-    if (!same_bits(axis.mm_per_step[0], axis.mm_per_step[1])) {
+    if (!float_same(axis.mm_per_step[0], axis.mm_per_step[1])) {
         geometry(b, m, 0);
         return;
     }
@@ -638,7 +631,7 @@ uint16_t plan_line(const float *target, float feed, uint8_t flags)
     b->line = line_number;
     for (uint8_t a = 0; a < N_AXIS; a++)
         b->steps[a] = (int16_t)motor[a];
-    if (!same_bits(feed, last_feed)) { /* F is modal: converted once per change */
+    if (!float_same(feed, last_feed)) { /* F is modal: converted once per change */
         last_feed = feed;
         last_feed_u16 = feed < 65535.0f ? (uint16_t)(feed + 0.5f) : 65535u;
         feed_nominal = plain_nominal(feed_mm_s(last_feed_u16));

@@ -6,6 +6,7 @@
 #include <stdint.h>
 #include <string.h>
 #include "config.h"
+#include "float_bits.h"
 
 #define PLAN_MAX_EVENTS 30000 /* the step interrupt counts in 16 bits: longer moves are split */
 #define PLAN_MAX_STEPS 1.0e9f /* machine positions stay well inside int32 */
@@ -27,10 +28,7 @@ float plan_sqr_to_float(plan_sqr_t v);
  * the AVR with its call, this a few (a constant side is folded). */
 static inline uint8_t plan_lt(float a, float b)
 {
-    int32_t i, j;
-    memcpy(&i, &a, sizeof(i));
-    memcpy(&j, &b, sizeof(j));
-    return i < j;
+    return (int32_t)float_bits(a) < (int32_t)float_bits(b);
 }
 #define PB_RAPID 0x01
 #define PB_JOG 0x02

@@ -80,10 +80,6 @@ void seg_drop_block(void)
     prep.v = 0.0f;
 }
 
-#if PLAN_CACHE_MOTION
-static uint8_t same_bits(float a, float b) { return !memcmp(&a, &b, sizeof(a)); }
-#endif
-
 /* x / 2 for x >= 0: one off its exponent (a multiply is ~130 cycles here);
  * below 2^-125 (no speed^2 this code meets) x itself */
 static float half(float x)
@@ -132,7 +128,7 @@ static float advance(struct prep_state *p, const plan_block_t *b, float dt)
     float ve2 = plan_next_entry_sqr();
     float vn2 = plan_f16_to_float(b->nominal_sqr); /* read each time: overrides change it */
 #if PLAN_CACHE_MOTION
-    float v2 = same_bits(v, p->ve) ? p->ve2 : v * v;
+    float v2 = float_same(v, p->ve) ? p->ve2 : v * v;
 #else
     float v2 = v * v;
 #endif
