@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from tests.fixtures.grbl import Grbl, mpos, no_false_acks
+from tests.fixtures.grbl import mpos, session, unlocked
 from tests.fixtures.plotsim import board_firmware
 from tests.fixtures.server import running_server
 from tests.fixtures.trace import ESTOP_REDRAW_MM, assert_same_drawing
@@ -96,16 +96,10 @@ def test_a_reports_position_lies_on_its_line_or_past_it(board, plotter_factory):
     that point). Reports are asked for every 10 ms while 0.5 mm segments stream."""
     gcode, _, _ = short_segments()
     plotter = plotter_factory(firmware=board_firmware(board), speed=1, args=("--board", board))
-    g = Grbl(plotter.port)
-    try:
-        g.reset(10)
-        g.ok("$X")
+    with session(plotter) as g:
         numbered = [f"N{n}{text}" for n, text in enumerate(gcode.splitlines(), 1)]
-        g.stream(numbered, timeout=60, poll_s=0.01)
+        unlocked(g).stream(numbered, timeout=60, poll_s=0.01)
         g.wait_state("Idle")
-        no_false_acks(g.lines)
-    finally:
-        g.close()
     step = 1 / 80  # mm: both profiles' default steps/mm
     checked = 0
     for report in g.lines:

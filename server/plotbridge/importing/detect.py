@@ -7,8 +7,7 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-
+from ..native.gcodescan import newlines
 from ..native.textcheck import first_control
 from .models import ImportFailed
 
@@ -109,8 +108,7 @@ def line_chunks(path: Path, encoding: str,
                 if not data.endswith(b"\n"):
                     data += b"\n"
                 yield first, data
-                # (numpy counts 6 times as fast as bytes.count)
-                first += int(np.count_nonzero(np.frombuffer(data, np.uint8) == 10))
+                first += newlines(data)
                 offset += len(data)
             else:
                 return
