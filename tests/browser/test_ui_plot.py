@@ -12,9 +12,25 @@ import pytest
 
 from tests.browser.conftest import DESKTOP, PHONE, login, screenshot
 from tests.fixtures.artifacts import record
-from tests.fixtures.pages import SQUARE_SVG, circles_svg, job_id, job_row, upload, wait_job_state
+from tests.fixtures.pages import (
+    SQUARE_SVG,
+    circles_svg,
+    job_id,
+    job_row,
+    spiral_svg,
+    upload,
+    wait_job_state,
+)
 
 pytestmark = pytest.mark.browser
+
+
+@pytest.fixture
+def plotter(plotter_factory):
+    """The real firmware at real time: the server streams ahead of it, so the planner is
+    full when the stop comes (an unthrottled simulator drains it between lines, and a
+    stop that finds it empty and the carriage standing is no ALARM:3, as in GRBL)."""
+    return plotter_factory(speed=1)
 
 
 # Starts the stop timer at the first input event, resolves when the page shows stopped.
@@ -77,13 +93,22 @@ def wait_preview_pixels(page, colour: str, more_than: int, timeout: float = 5) -
         page.wait_for_timeout(50)
 
 
+def wait_drawing(server) -> None:
+    """Waits for the carriage to move with the pen down: past the pen's settle, in the
+    stroke (a stop during the settle would find nothing moving, so no alarm to clear)."""
+    settling = server.wait_machine(lambda m: m["pen"] == "down" and m["state"] == "Run")
+    server.wait_machine(
+        lambda m: m["pen"] == "down" and m["position"] != settling["position"], timeout=10
+    )
+
+
 def plot_stop_unlock_next(
     page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False,
     pause_resume: bool = False, cancel_next: bool = False,
 ) -> tuple[float, float]:
     """The main story; returns the ms from the stop input to 'Machine stopped' shown, and
     to the plotter's last step pulse."""
-    long_name, next_name = f"{prefix}-circles.svg", f"{prefix}-square.svg"
+    long_name, next_name = f"{prefix}-spiral.svg", f"{prefix}-square.svg"
     # with homing enabled the board starts in Alarm: the banner offers Home
     page.wait_for_function(
         "() => ['Idle', 'Alarm'].includes(document.querySelector('#sum-state').textContent)"
@@ -93,7 +118,7 @@ def plot_stop_unlock_next(
         page.wait_for_function(
             "() => document.querySelector('#sum-state').textContent === 'Idle'", timeout=60_000
         )
-    upload(page, long_name, circles_svg(30))
+    upload(page, long_name, spiral_svg(30))
     wait_job_state(page, long_name, ("queued",))
     page.wait_for_function("() => (window.plotbridge.preview.geom?.strokes.count ?? 0) > 100")
     page.wait_for_function("() => window.plotbridge.preview.layersBuilt > 0")
@@ -139,6 +164,7 @@ def plot_stop_unlock_next(
     assert all(b.is_disabled() for b in page.locator("#tab-control button").all())
     page.click(".tab[data-tab=plot]")
 
+    wait_drawing(server)  # the stop lands on a moving carriage: ALARM:3
     page.evaluate(ARM_STOP_TIMER, "pointerdown")
     press_stop()
     elapsed, input_epoch = page.evaluate("window.__stopped")
