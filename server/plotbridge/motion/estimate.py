@@ -1,6 +1,7 @@
 """The plot time estimate: the program's lines, collected as arrays and run through the
 firmware's own motion code (library.py) in batches on a thread beside the caller, with
-the host-side timing of timing.py."""
+the host-side timing of timing.py. Each line costs the bytes the server sends for it:
+its compact wire form (program/wire.py, wirebytes.py), counted on that thread batch by batch."""
 
 from __future__ import annotations
 
@@ -11,8 +12,13 @@ import threading
 import numpy as np
 
 from ..importing.models import MachineProfile
+from ..program.wire import plain
+from ..program.wirebytes import WireBytes
 from . import library as lib
 from .library import ARC_CCW, ARC_CW, DWELL, LINE, OTHER, RAPID
+
+# WireBytes takes a motion line's kind as its G number
+assert (RAPID, LINE, ARC_CW, ARC_CCW) == (0, 1, 2, 3)
 
 TIMELINE_SAMPLES = 2000
 # Lines the library runs at a time, while the next batch is collected: small (~5 ms of
@@ -67,7 +73,16 @@ class _Batch:
         self.x, self.y, self.i, self.j, self.feed = (np.empty(BATCH, np.float32)
                                                      for _ in range(5))
         self.bytes = np.empty(BATCH, np.uint16)
+        self.keeps = np.empty(BATCH, np.uint8)    # a line that is no motion keeps the modes
         self.n = 0
+
+    def count_bytes(self, wire: WireBytes) -> None:
+        """The motion lines' bytes on the wire (the others' are set as received)."""
+        n = self.n
+        counted = wire.count(self.kind[:n], self.x[:n], self.y[:n], self.i[:n], self.j[:n],
+                             self.feed[:n], self.keeps[:n], self.bytes[:n])
+        np.minimum(counted, 65535, out=counted)
+        self.bytes[:n] = counted
 
     def args(self) -> tuple:
         """The arrays as motion_feed and motion_plan take them."""
@@ -99,9 +114,11 @@ class _Runner:
         try:
             library = lib.load()
             config = _config(profile)
+            wire = WireBytes(profile.steps_per_mm, profile.line_numbers)
             with lib.run_lock:
                 library.motion_configure(ctypes.byref(config))
                 while isinstance(item := self.queue.get(), _Batch):
+                    item.count_bytes(wire)
                     ack = np.empty(item.n)
                     library.motion_feed(*item.args(),
                                         ack.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
@@ -141,11 +158,12 @@ class Estimator:
         self._batch = _Batch()
         return self._batch
 
-    def receive(self, nbytes: int) -> None:
-        """The next program line, `nbytes` long with its newline."""
+    def receive(self, text: str) -> None:
+        """The next program line (`move`, `arc` or `stop` then say what it does)."""
         b = self._batch if self._batch.n < BATCH else self._send()
         k = b.n
         b.kind[k] = OTHER
+        nbytes, b.keeps[k] = plain(text)
         b.bytes[k] = min(nbytes, 65535)
         b.x[k] = b.y[k] = b.i[k] = b.j[k] = b.feed[k] = 0.0
         b.n = k + 1
@@ -167,8 +185,8 @@ class Estimator:
     def moves(self, kind: np.ndarray, x: np.ndarray, y: np.ndarray, feed: np.ndarray,
               nbytes: np.ndarray) -> None:
         """`receive` and `move` for each of a run of lines, given as the library takes
-        them: kind (uint8, RAPID or LINE), x, y, feed (float32, 0 for rapids), bytes
-        (uint16)."""
+        them: kind (uint8, RAPID or LINE; DWELL for a pen change), x, y, feed (float32, 0
+        for rapids), bytes (uint16; a motion line's are counted on the wire instead)."""
         done, n = 0, len(kind)
         while done < n:
             b = self._batch if self._batch.n < BATCH else self._send()
@@ -176,6 +194,7 @@ class Estimator:
             to, src = slice(b.n, b.n + k), slice(done, done + k)
             b.kind[to] = kind[src]
             b.bytes[to] = nbytes[src]
+            b.keeps[to] = 1     # the pen changes (M3, M5)
             b.x[to] = x[src]
             b.y[to] = y[src]
             b.feed[to] = feed[src]

@@ -31,7 +31,7 @@ def stock_grbl(settings: dict[int, float], baud: int = 115200) -> MachineProfile
     """The estimate's profile for a stock GRBL 1.1 board with these $ settings: the same
     motion library, configured with GRBL's planner depth and line time."""
     return replace(MachineProfile.from_settings(settings), planner_blocks=GRBL_PLANNER_BLOCKS,
-                   plan_block_s=GRBL_LINE_S, baud=baud)
+                   plan_block_s=GRBL_LINE_S, baud=baud, line_numbers=False)
 
 
 def profile_for(settings: dict[int, float], firmware: str | None) -> MachineProfile:
