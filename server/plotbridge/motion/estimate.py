@@ -16,6 +16,7 @@ from ..program.wire import plain
 from ..program.wirebytes import WireBytes
 from . import library as lib
 from .library import ARC_CCW, ARC_CW, DWELL, LINE, OTHER, RAPID
+from .timing import RX_SIZE
 
 # WireBytes takes a motion line's kind as its G number
 assert (RAPID, LINE, ARC_CW, ARC_CCW) == (0, 1, 2, 3)
@@ -41,7 +42,7 @@ def _config(p: MachineProfile) -> lib.Config:
     c.depth = p.planner_blocks or lib.planner_depth()
     c.byte_s = 10.0 / p.baud if p.baud else 0.0
     c.line_cpu_s = p.plan_block_s
-    c.rx_size = 128
+    c.rx_size = RX_SIZE
     return c
 
 
