@@ -404,7 +404,11 @@ def accuracy_drawings(tmp: Path) -> dict[str, Path]:
     return out
 
 
-def _plot_through_server(plotsim, tmp: Path, name: str, src: Path,
+ATTEMPTS = 4     # runs of a drawing at most while the machine is busy
+QUIET = 0.05     # a run counts when the simulator was off the CPU at most this share
+
+
+def _plot_through_server(plotsim, tmp: Path, src: Path,
                          speed: float) -> tuple[float, float, int, float, float]:
     """One drawing through a real `plotbridge serve` on a fresh virtual plotter at (0, 0):
     uploaded, imported and estimated by the server for that board, then plotted. Returns
@@ -414,11 +418,12 @@ def _plot_through_server(plotsim, tmp: Path, name: str, src: Path,
     to catch up, and the server's pace counts for less)."""
     from tests.fixtures.server import running_server
 
-    plotter = plotsim.Plotter(plotsim.PLOTSIM, plotsim.FIRMWARE_ELF, tmp / f"{src.stem}.eeprom",
-                              speed, (0.0, 0.0), ())
+    run = Path(tempfile.mkdtemp(prefix=f"{src.stem}-", dir=tmp))
+    plotter = plotsim.Plotter(plotsim.PLOTSIM, plotsim.FIRMWARE_ELF, run / "eeprom.bin", speed,
+                              (0.0, 0.0), ())
     plotter.start()
     try:
-        with running_server(tmp / f"server-{src.stem}", ["--serial", plotter.port]) as server:
+        with running_server(run / "server", ["--serial", plotter.port]) as server:
             server.wait_machine(lambda m: m["connected"], 60)
             if server.machine()["state"] != "Idle":
                 assert server.client.post("/api/machine/unlock").status_code < 300
@@ -480,12 +485,22 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
           f"{'with' if profile.line_numbers else 'without'} N words "
           f"(the firmware's own motion code via libmotion)")
     for name, src in accuracy_drawings(tmp).items():
-        try:
-            estimate, measured, lines, settle, waited = _plot_through_server(
-                plotsim, tmp, name, src, speed)
-        except (RuntimeError, AssertionError) as e:
-            print(f"(c) {name:14s} NOT MEASURED: {e}")
+        # At sim speed 1 the server's pace counts: a simulator kept off the CPU (a busy
+        # machine) runs faster than the wall clock to catch up, and a dense drawing then
+        # waits for lines it would have had. Such a run is repeated (up to ATTEMPTS),
+        # and the one with the simulator longest on the CPU is reported.
+        runs = []
+        for _ in range(ATTEMPTS):
+            try:
+                runs.append(_plot_through_server(plotsim, tmp, src, speed))
+            except (RuntimeError, AssertionError) as e:
+                print(f"(c) {name:14s} NOT MEASURED: {e}")
+                break
+            if runs[-1][4] <= QUIET * runs[-1][1]:
+                break
+        if not runs:
             continue
+        estimate, measured, lines, settle, waited = min(runs, key=lambda r: r[4] / r[1])
         # The program ends with the last stroke and M5: motion ends at the last vertex,
         # and the estimate adds the final pen settle.
         predicted = estimate - settle
@@ -493,7 +508,8 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
         print(f"(c) {name:14s} {lines:6d} lines: predicted {predicted:8.2f} s, plotted "
               f"{measured:8.2f} s (simulated): error {err * 100:+.2f}% "
               f"[{'MET' if abs(err) <= 0.02 else 'NOT MET'}] (simulator off the CPU "
-              f"{waited:.2f} s)")
+              f"{waited:.2f} s{'' if waited <= QUIET * measured else ': a busy machine'}; "
+              f"run {len(runs)} of {ATTEMPTS} at most)")
 
 
 def main() -> int:

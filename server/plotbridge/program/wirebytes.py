@@ -20,17 +20,15 @@ def _digits(a: np.ndarray) -> np.ndarray:
     return np.searchsorted(_POW10, a, side="right")
 
 
-def _text_len(q: np.ndarray, d: int) -> np.ndarray:
-    """len(number(q / 10**d, d)) for integers q: the text of q with d decimals, without
-    trailing zeros or a leading zero, "0" for zero."""
-    a = np.abs(q)
-    dd = np.full(a.shape, d, np.int64)
-    for _ in range(d):
-        z = (dd > 0) & (a % 10 == 0)
-        a = np.where(z, a // 10, a)
-        dd -= z
-    n = (q < 0) + np.where(dd > 0, _digits(a // np.power(10, dd)) + 1 + dd, _digits(a))
-    return np.where(q == 0, 1, n)
+def _text_len(m: np.ndarray) -> np.ndarray:
+    """len(number(m / 1000)) for integer thousandths m: without trailing zeros or a
+    leading zero, "0" for zero (a text of fewer decimals is the same text: its value in
+    thousandths has the zeros)."""
+    a = np.abs(m)
+    whole = a // 1000
+    frac = a - whole * 1000
+    point = np.where(frac == 0, 0, np.where(frac % 100 == 0, 2, np.where(frac % 10 == 0, 3, 4)))
+    return (m < 0) + _digits(whole) + point + (a == 0)
 
 
 def _side(m: np.ndarray) -> np.ndarray:
@@ -67,16 +65,14 @@ def _on_step(m: np.ndarray, spm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     thousandths (where the board is after it)."""
     target = _steps(m / 1000.0, spm)
     side = _side(m)
-    length = _text_len(m, 3)     # 3 decimals always land on the step: the value itself
-    sent = m
+    sent = m     # 3 decimals always land on the step: the value itself
     todo = np.ones(m.shape, bool)
     for d in range(3):
         q = _round(m, d, side)
         ok = todo & (_steps(q / 10.0 ** d, spm) == target)
-        length = np.where(ok, _text_len(q, d), length)
         sent = np.where(ok, q * 10 ** (3 - d), sent)
         todo &= ~ok
-    return length, sent
+    return _text_len(sent), sent
 
 
 def _held(event: np.ndarray, values: np.ndarray, carry: int) -> tuple[np.ndarray, int]:
@@ -110,9 +106,11 @@ class WireBytes:
 
     Equal to `len(numbered(n, Compactor(steps_per_mm).line(text))) + 1` for the program
     lines importing/program.py writes (coordinates of up to 3 decimals, below 8,000 mm:
-    float32 keeps them to the thousandth). A feed is taken to the tenth as its F text
-    is; one closer than float32's precision (~0.004 mm/min) to a half tenth may be taken
-    to the other tenth, and its F word be counted a few bytes off."""
+    float32 keeps them to the thousandth; ties of the shorter texts' rounding as Python
+    formats them). A feed is taken to the tenth as its F text is, but from float32: one
+    on a tie (F1000.05, neither float exactly) may go to the other tenth than the
+    double does, and its F word be counted a few bytes off (sent or not, a digit more or
+    less: tests/unit/test_wire_bytes.py)."""
 
     def __init__(self, steps_per_mm: tuple[float, float], line_numbers: bool) -> None:
         self.spm = np.array(steps_per_mm, np.float64).reshape(2, 1)
@@ -141,20 +139,20 @@ class WireBytes:
         fed = mv & (motion > 0)
         tenths = np.rint(feed.astype(np.float64) * 10.0).astype(np.int64)
         last_feed, s.feed = _held(fed | reset, np.where(fed, tenths, -1), s.feed)
-        out += np.where(fed & (tenths != last_feed), 1 + _text_len(tenths, 1), 0)
+        out += np.where(fed & (tenths != last_feed), 1 + _text_len(100 * tenths), 0)
         arc = mv & (motion >= 2)
         at = mv | reset     # where the original and the wire program are, reset to 0
-        orig, sent_before = [], []
+        last_orig, last_sent = [], []
         for a, centre in enumerate((i, j)):
-            o, last_o = _held(at, np.where(mv, xy[a], 0), s.orig[a])
-            w, last_w = _held(at, np.where(mv, sent[a], 0), s.sent[a])
-            orig.append(last_o)
-            sent_before.append(last_w)
+            o, after = _held(at, np.where(mv, xy[a], 0), s.orig[a])
+            last_orig.append(after)
+            w, after = _held(at, np.where(mv, sent[a], 0), s.sent[a])
+            last_sent.append(after)
             if arc.any():   # same centre: sent start + I' = original start + I
                 k = np.rint(centre.astype(np.float64) * 1000.0).astype(np.int64) + o - w
-                out += np.where(arc, 1 + _text_len(k, 3), 0)
-        s.orig = (orig[0], orig[1])
-        s.sent = (sent_before[0], sent_before[1])
+                out += np.where(arc, 1 + _text_len(k), 0)
+        s.orig = (last_orig[0], last_orig[1])
+        s.sent = (last_sent[0], last_sent[1])
         out = np.where(mv, out, nbytes)
         if self.line_numbers:
             ln = np.arange(s.line + 1, s.line + n + 1, dtype=np.int64)
