@@ -37,7 +37,8 @@ def test_a_dense_drawings_estimate_is_its_simulated_plot_time(plotter_factory, t
         if server.machine()["state"] != "Idle":
             assert server.client.post("/api/machine/unlock").status_code == 200
             server.wait_machine(lambda m: m["state"] == "Idle", 60)
-        job = server.submit(spiral(), start=False)
+        drawing = spiral()
+        job = server.submit(drawing, start=False)
         settle = next(s["value"] for s in server.client.get("/api/machine/settings").json()[
             "settings"] if s["id"] == 62) / 1000
         t0 = plotter.trace()["sim_time"]
@@ -50,5 +51,7 @@ def test_a_dense_drawings_estimate_is_its_simulated_plot_time(plotter_factory, t
     plotted = trace["strokes"][-1][-1][2] - t0
     predicted = job["estimate_s"] - settle
     print(f"estimate {predicted:.2f} s, simulated plot {plotted:.2f} s")
-    assert len(trace["strokes"]) == 1 and len(trace["strokes"][0]) > 1000
+    end = [float(w[1:]) for w in drawing.splitlines()[-2].split()[1:3]]
+    assert len(trace["strokes"]) == 1     # all of it drawn, to its end
+    assert trace["strokes"][0][-1][:2] == pytest.approx(end, abs=0.02)
     assert predicted == pytest.approx(plotted, rel=0.03), (predicted, plotted)
