@@ -1,4 +1,4 @@
-"""The estimate's bytes on the wire (program/wirebytes.py) against the compactor itself
+"""The estimate's bytes on the wire (native/wirebytes.c) against the compactor itself
 (program/wire.py): line for line over random programs, and over a real import."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from plotbridge.importing import ImportOptions, MachineProfile, import_file
 from plotbridge.motion import estimate
+from plotbridge.native.wirebytes import WireBytes
 from plotbridge.program.wire import Compactor, compact, numbered, plain
-from plotbridge.program.wirebytes import WireBytes
 
 HEADS = ("G0", "G1", "G2", "G3")
 OTHER = ("M3", "M5", "G4 P0.500", "M0", "G21", "G90", "G4 P0.000")
@@ -46,7 +46,7 @@ def arrays(lines: list[str]) -> tuple[np.ndarray, ...]:
     n = len(lines)
     motion = np.full(n, 7, np.uint8)
     x, y, i, j, feed = (np.zeros(n, np.float32) for _ in range(5))
-    keeps = np.zeros(n, bool)
+    keeps = np.zeros(n, np.uint8)
     nbytes = np.zeros(n, np.uint16)
     for k, text in enumerate(lines):
         head, *words = text.split()
@@ -63,9 +63,10 @@ def counted(lines: list[str], spm: tuple[float, float], numbers: bool,
             run: int = 777) -> np.ndarray:
     """WireBytes over the lines, in runs of `run` lines (the state goes on across runs)."""
     wire = WireBytes(spm, numbers)
-    a = arrays(lines)
-    return np.concatenate([wire.count(*(v[s:s + run] for v in a))
-                           for s in range(0, len(lines), run)])
+    *a, nbytes = arrays(lines)
+    for s in range(0, len(lines), run):
+        wire.count(*(v[s:s + run] for v in a), nbytes[s:s + run])
+    return nbytes.astype(np.int64)
 
 
 def sent(lines: list[str], spm: tuple[float, float], numbers: bool) -> np.ndarray:

@@ -1,7 +1,8 @@
 """The plot time estimate: the program's lines, collected as arrays and run through the
 firmware's own motion code (library.py) in batches on a thread beside the caller, with
 the host-side timing of timing.py. Each line costs the bytes the server sends for it:
-its compact wire form (program/wire.py, wirebytes.py), counted on that thread batch by batch."""
+its compact wire form (program/wire.py), counted on that thread batch by batch
+(native/wirebytes.c)."""
 
 from __future__ import annotations
 
@@ -12,8 +13,8 @@ import threading
 import numpy as np
 
 from ..importing.models import MachineProfile
+from ..native.wirebytes import WireBytes
 from ..program.wire import plain
-from ..program.wirebytes import WireBytes
 from . import library as lib
 from .library import ARC_CCW, ARC_CW, DWELL, LINE, OTHER, RAPID
 from .timing import RX_SIZE
@@ -78,12 +79,10 @@ class _Batch:
         self.n = 0
 
     def count_bytes(self, wire: WireBytes) -> None:
-        """The motion lines' bytes on the wire (the others' are set as received)."""
+        """Each line's bytes on the wire (a line that is no motion came with its own)."""
         n = self.n
-        counted = wire.count(self.kind[:n], self.x[:n], self.y[:n], self.i[:n], self.j[:n],
-                             self.feed[:n], self.keeps[:n], self.bytes[:n])
-        np.minimum(counted, 65535, out=counted)
-        self.bytes[:n] = counted
+        wire.count(self.kind[:n], self.x[:n], self.y[:n], self.i[:n], self.j[:n],
+                   self.feed[:n], self.keeps[:n], self.bytes[:n])
 
     def args(self) -> tuple:
         """The arrays as motion_feed and motion_plan take them."""

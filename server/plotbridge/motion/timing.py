@@ -7,7 +7,7 @@ motion code (which runs as itself, see library.py). In one place:
   (`rx_size`, character counting). A line is acknowledged once it is planned. Its
   bytes are those the server sends: the compact wire line (program/wire.py), with an
   `N` word where the board reports `Ln:` (`MachineProfile.line_numbers`: ours does,
-  stock GRBL does not), counted by program/wirebytes.py.
+  stock GRBL does not), counted by native/wirebytes.c.
 - Per-line firmware time (`MachineProfile.plan_block_s`): from a line's last byte
   to its `ok` when the main loop was waiting for it and the planner has room (reading,
   parsing, planning, the `ok` going out; the step interrupt's share at plotting speed

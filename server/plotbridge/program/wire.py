@@ -13,9 +13,9 @@ To a board that reports the executing line (`$I` OPT letter `N`), each program l
 with its number as an `N` word (`N120X5Y7`), which comes back as the status report's
 `Ln:`; lines numbered 0 (a resume's preamble) and `$` commands go without.
 
-wirebytes.py counts, for the estimate, the bytes each program line takes on the wire
-from the estimate's arrays: these rules over arrays (keep the two in step; a unit test
-holds them equal).
+native/wirebytes.c counts, for the estimate, the bytes each program line takes on the
+wire from the estimate's arrays: these rules over arrays, in C (keep the two in step;
+tests/unit/test_wire_bytes.py holds them equal line for line).
 """
 
 from __future__ import annotations
