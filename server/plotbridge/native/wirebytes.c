@@ -15,6 +15,8 @@
 #include <math.h>
 #include <stdint.h>
 
+#define FAR INT64_MIN   /* rounded(): no candidate */
+
 #define MAX_LINE_NUMBER 10000000L   /* wire.py's: GRBL's largest N */
 
 /* What the compactor remembers from line to line, in and out. */
@@ -28,15 +30,11 @@ typedef struct {
     int64_t line;           /* lines counted so far */
 } wire_state_t;
 
-static const double POW10[] = {1.0, 10.0, 100.0, 1000.0};
-
 static int digits(int64_t a)
 {
     int n = 1;
-    while (a >= 10) {
-        a /= 10;
+    for (int64_t p = 10; a >= p && n < 18; p *= 10)
         n++;
-    }
     return n;
 }
 
@@ -53,17 +51,27 @@ static int text_len(int64_t m)
     return n;
 }
 
-/* wire.py's step_of: the same float operations. */
-static double step_of(double v, double spm)
+/* wire.py's step_of: the same float operations (floor of a positive double by a cast:
+ * without SSE4.1, floor() is a library call). */
+static int64_t step_of(double v, double spm)
 {
     double t = v * spm;
-    return t >= 0 ? floor(t + 0.5) : -floor(-t + 0.5);
+    return t >= 0 ? (int64_t)(t + 0.5) : -(int64_t)(-t + 0.5);
 }
 
-static int64_t floor_div(int64_t a, int64_t b)
+/* The text of m thousandths rounded to a multiple of r (1000, 100 or 10: 0 to 2
+ * decimals) as Python formats the double m / 1000 (`side`: its sign against the
+ * decimal decides a tie; an exact tie goes to even), in units of r; FAR when that
+ * text lies a step or more from m (it cannot land on m's step: no float work). */
+static inline int64_t rounded(int64_t m, int64_t r, double side, double spm)
 {
-    int64_t q = a / b;
-    return q * b > a ? q - 1 : q;
+    int64_t base = m / r;
+    if (base * r > m)
+        base--;                 /* floor */
+    int64_t twice = 2 * (m - base * r);
+    int64_t q = base + (twice > r || (twice == r && (side > 0 || (side == 0 && (base & 1)))));
+    int64_t off = q * r - m;
+    return (double)(off < 0 ? -off : off) * spm > 1000.000001 ? FAR : q;
 }
 
 /* on_step(m / 1000): the shortest text of at most 3 decimals on the same step, as its
@@ -71,17 +79,24 @@ static int64_t floor_div(int64_t a, int64_t b)
 static int64_t on_step(int64_t m, double spm)
 {
     double v = (double)m / 1000.0;
-    double target = step_of(v, spm);
-    /* which way the double lies from the decimal: decides Python's rounding of a tie */
-    double p = v * 1000.0;
-    double side = (p - (double)m) + fma(v, 1000.0, -p);
-    for (int d = 0; d < 3; d++) {
-        int64_t r = d == 0 ? 1000 : d == 1 ? 100 : 10;
-        int64_t base = floor_div(m, r), twice = 2 * (m - base * r);
-        int64_t q = base + (twice > r || (twice == r && (side > 0 || (side == 0 && (base & 1)))));
-        if (step_of((double)q / POW10[d], spm) == target)
-            return q * r;
+    int64_t target = step_of(v, spm);
+    /* which way the double lies from the decimal: decides Python's rounding of a tie
+     * (only a tie needs it: fma may be a slow library call) */
+    double side = 0.0;
+    if (m % 10 == 5 || m % 10 == -5 || m % 100 == 50 || m % 100 == -50 || m % 1000 == 500
+        || m % 1000 == -500) {
+        double p = v * 1000.0;
+        side = (p - (double)m) + fma(v, 1000.0, -p);
     }
+    int64_t q = rounded(m, 1000, side, spm);
+    if (q != FAR && step_of((double)q, spm) == target)
+        return q * 1000;
+    q = rounded(m, 100, side, spm);
+    if (q != FAR && step_of((double)q / 10.0, spm) == target)
+        return q * 100;
+    q = rounded(m, 10, side, spm);
+    if (q != FAR && step_of((double)q / 100.0, spm) == target)
+        return q * 10;
     return m;   /* 3 decimals always land on the step: the value itself */
 }
 
