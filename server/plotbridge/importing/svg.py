@@ -563,6 +563,7 @@ class SvgReader:
                 marks.append((first, len(runs), lists))
 
         collect(elem, ctx)
+        del collect  # it names itself: a cycle that would keep the runs for the collector
         if runs and not preserve:   # leading and trailing white space of the element
             runs[0] = (runs[0][0].lstrip(), runs[0][1])
             runs[-1] = (runs[-1][0].rstrip(), runs[-1][1])
