@@ -215,7 +215,7 @@ def test_any_text_imports_or_fails_cleanly(tmp_path, text):
 
 def _ops_and_errors(lines: list[str], options: ImportOptions) -> tuple[list, list]:
     errors = ErrorLog()
-    ops = list(single_moves(read_ops([(1, "".join(f"{ln}\n" for ln in lines))], options,
+    ops = list(single_moves(read_ops(["".join(f"{ln}\n" for ln in lines)], options,
                                      errors)))
     return ops, errors.errors
 
@@ -248,8 +248,8 @@ def test_common_lines_read_as_the_general_parser_reads_them(lines):
 
 def _chunks_then(error: BaseException):
     """Two chunks of G-code, then `error` (a failing read)."""
-    yield 1, "G0 X1 Y1\nM3\n"
-    yield 3, "G1 X2 Y2 F600\n"
+    yield "G0 X1 Y1\nM3\n"
+    yield "G1 X2 Y2 F600\n"
     raise error
 
 
@@ -265,10 +265,8 @@ def test_a_failing_read_is_raised_after_the_chunks_before_it():
 
 def test_a_reader_stopped_early_leaves_no_thread_behind():
     def endless():
-        n = 1
         while True:
-            yield n, "G1 X1 Y1 F600\nG1 X2 Y2\n"
-            n += 2
+            yield "G1 X1 Y1 F600\nG1 X2 Y2\n"
     ops = read_ops(endless(), ImportOptions(), ErrorLog())
     next(ops)
     ops.close()

@@ -7,7 +7,6 @@ import re
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..native.gcodescan import newlines
 from ..native.textcheck import first_control
 from .models import ImportFailed
 
@@ -89,14 +88,12 @@ def numbered_lines(path: Path, encoding: str) -> Iterator[tuple[int, str]]:
             yield n, line.rstrip("\n")
 
 
-def line_chunks(path: Path, encoding: str,
-                size: int = 1 << 20) -> Iterator[tuple[int, str | bytes]]:
-    """(1-based number of the first line, whole lines each ending with a newline), about
-    `size` characters at a time, streamed. A UTF-8 file's chunks are its bytes as they
+def line_chunks(path: Path, encoding: str, size: int = 1 << 20) -> Iterator[str | bytes]:
+    """Whole lines, each ending with a newline, about `size` characters at a time,
+    streamed. A UTF-8 file's chunks are its bytes as they
     are (the text's UTF-8, which is what gcodescan.c reads: no decoding, counting and
     encoding again) while they hold no CR; from the first chunk with one, and for
     Latin-1 files, they are text with universal newlines (CR LF and CR read as LF)."""
-    first = 1
     offset = 0
     if encoding == "utf-8":
         with path.open("rb") as f:
@@ -107,8 +104,7 @@ def line_chunks(path: Path, encoding: str,
                     break
                 if not data.endswith(b"\n"):
                     data += b"\n"
-                yield first, data
-                first += newlines(data)
+                yield data
                 offset += len(data)
             else:
                 return
@@ -119,5 +115,4 @@ def line_chunks(path: Path, encoding: str,
                 text += f.readline()
                 if not text.endswith("\n"):
                     text += "\n"
-            yield first, text
-            first += text.count("\n")
+            yield text

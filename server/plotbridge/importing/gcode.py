@@ -162,9 +162,9 @@ class GcodeReader:
         # thousands of times), each read the same way every time.
         self._plain: dict[str, list[tuple[str, str]]] = {}
 
-    def ops(self, chunks: Iterable[tuple[int, str]]) -> Iterator[tuple]:
-        """The ops of the source, given as chunks of whole lines: (number of the chunk's
-        first line, text ending with a newline). The common lines (G0/G1 X Y [F]
+    def ops(self, chunks: Iterable[str | bytes]) -> Iterator[tuple]:
+        """The ops of the source, given as chunks of whole lines (text ending with a
+        newline, or its UTF-8), numbered from 1. The common lines (G0/G1 X Y [F]
         [; comment], read by the native fast path, native/gcodescan.c) become MOVES ops,
         a run at a time, and with the pen lines among them (M3, M4, M5, in the auto and
         m3 dialects) PATH ops; every other line goes through the general parser."""
@@ -174,7 +174,8 @@ class GcodeReader:
         out: list[tuple] = []
         # the largest kind read in bulk: pen lines too where M3/M5 move the pen
         bulk = (PEN_UP if self.dialect in ("auto", "m3") else LINE) if self.fast else OTHER
-        for first, lines in _ahead((first, scan(text, MAX_LINE)) for first, text in chunks):
+        first = 1   # the chunk's first line
+        for lines in _ahead(scan(text, MAX_LINE) for text in chunks):
             kind = lines.kind
             common = (kind != OTHER) & (kind <= bulk)
             cuts = [0, *(np.flatnonzero(common[1:] != common[:-1]) + 1).tolist(), len(kind)]
@@ -194,6 +195,7 @@ class GcodeReader:
                 if out:
                     yield from out
                     out.clear()
+            first += len(kind)
 
     def _feeds(self, first: int, draw: np.ndarray, feed: np.ndarray) -> np.ndarray:
         """The feed of each line of a run: the last F given at or before it, else the one
@@ -622,7 +624,7 @@ def sniff_dialect(head: str) -> str:
     return "m3"
 
 
-def read_ops(chunks: Iterable[tuple[int, str]], options: ImportOptions, errors: ErrorLog,
+def read_ops(chunks: Iterable[str | bytes], options: ImportOptions, errors: ErrorLog,
              fast: bool = True) -> Iterator[tuple]:
     """The ops of G-code given as chunks of whole lines (detect.line_chunks)."""
     return GcodeReader(options, errors, fast).ops(chunks)

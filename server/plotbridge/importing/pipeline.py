@@ -99,7 +99,7 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
         raise
     planner = writer.planner
     after = writer.travel_mm
-    timeline = planner.timeline.finish(writer.line, round(planner.time, 3))
+    timeline = planner.timeline(writer.line, round(planner.time, 3))
     return ImportResult(
         format=fmt,
         program_path=program,

@@ -22,8 +22,19 @@ PREVIEW_ARC_TOL = 0.05
 SHORT_RUN = 4      # moves: fewer cost less written one by one than in bulk
 
 
-def _feed(f: float) -> str:
-    return f"{round(f, 1):g}"
+class FeedTexts:
+    """A feed's text in the program, remembered (movelines.c asks for each new one)."""
+
+    def __init__(self) -> None:
+        self._texts: dict[float, str] = {}
+
+    def __call__(self, feed: float) -> str:
+        f = self._texts.get(feed)
+        if f is None:
+            if len(self._texts) >= 256:    # a file of ever new feeds
+                self._texts.clear()
+            f = self._texts[feed] = f"{round(feed, 1):g}"
+        return f
 
 
 class ProgramWriter:
@@ -50,7 +61,9 @@ class ProgramWriter:
         self._buf: list[bytes] = []  # whole lines (ASCII), each ending with a newline
         self._buffered = 0           # lines in _buf
         self.last = ""
-        self._feed_texts: dict[float, str] = {}
+        # not a bound method: MoveLines keeps it, and the cycle would keep the writer's
+        # buffers until the collector's next full pass (a worker grew 17 MB an import)
+        self._feed_text = FeedTexts()
         self._runs = MoveLines(self._area, self._feed_text, motion.RAPID, motion.LINE,
                                motion.DWELL, profile.pen_settle_s)
         self.layers: list[dict] = []
@@ -77,14 +90,6 @@ class ProgramWriter:
             self.out.write(b"".join(self._buf))
             self._buf = []
             self._buffered = 0
-
-    def _feed_text(self, feed: float) -> str:
-        f = self._feed_texts.get(feed)
-        if f is None:
-            if len(self._feed_texts) >= 256:    # a file of ever new feeds
-                self._feed_texts.clear()
-            f = self._feed_texts[feed] = _feed(feed)
-        return f
 
     def _check(self, src_line: int | None, x: float, y: float) -> bool:
         """Within the work area? Reports the source line when not."""
@@ -313,7 +318,8 @@ class ProgramWriter:
         if not (self._check(src_line, ext[0], ext[1]) and self._check(src_line, ext[2], ext[3])):
             self.x, self.y = x, y     # the import fails; do not simulate a huge arc
             return
-        self._write(f"{'G2' if cw else 'G3'} X{x:.3f} Y{y:.3f} I{i:.3f} J{j:.3f} F{_feed(feed)}")
+        self._write(f"{'G2' if cw else 'G3'} X{x:.3f} Y{y:.3f} I{i:.3f} J{j:.3f} "
+                    f"F{self._feed_text(feed)}")
         self.planner.arc(self.line, x, y, i, j, feed, cw)
         px, py = x0, y0
         length = 0.0

@@ -9,7 +9,7 @@ import ctypes
 
 import numpy as np
 
-from ..native import function
+from ..native import array, function
 
 
 def simplify(points: np.ndarray, tolerance: float) -> np.ndarray:
@@ -56,6 +56,5 @@ def simplify_mask(points: np.ndarray, tolerance: float, fixed: np.ndarray) -> np
 
 def _native():
     return function("simplify", "simplify_mask",
-                    [ctypes.c_long, np.ctypeslib.ndpointer(np.float64, 2, flags="C_CONTIGUOUS"),
-                     ctypes.c_double, np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")],
+                    [ctypes.c_long, array(np.float64, 2), ctypes.c_double, array(np.uint8)],
                     ctypes.c_int)

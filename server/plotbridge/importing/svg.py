@@ -544,25 +544,7 @@ class SvgReader:
         marks: list[tuple[int, int, dict[str, list[float]]]] = []
         preserve = elem.get("{http://www.w3.org/XML/1998/namespace}space") == "preserve"
 
-        def collect(node: Element, nctx: Ctx) -> None:
-            first = len(runs)
-            if node.text:
-                runs.append((svgtext.collapse(node.text, preserve), nctx))
-            for child in node:
-                ctag = local(child.tag)
-                if ctag == "tspan":
-                    cstyle, cown = cascade(child, ctag, nctx.style, self.sheet)
-                    if cown.get("display", "").strip() != "none":
-                        collect(child, replace(nctx, style=cstyle))
-                elif ctag == "textPath":
-                    self._text_path(child, nctx, font, preserve)
-                if child.tail:
-                    runs.append((svgtext.collapse(child.tail, preserve), nctx))
-            lists = self._positions(node, nctx)
-            if lists:
-                marks.append((first, len(runs), lists))
-
-        collect(elem, ctx)
+        self._collect_runs(elem, ctx, preserve, runs, marks)
         if runs and not preserve:   # leading and trailing white space of the element
             runs[0] = (runs[0][0].lstrip(), runs[0][1])
             runs[-1] = (runs[-1][0].rstrip(), runs[-1][1])
@@ -578,6 +560,29 @@ class SvgReader:
             svgtext.assign(chars[starts[first]:starts[end]], lists)
         for n, strokes in sorted(svgtext.layout(font, chars).items()):
             self._emit_text(elem, runs[n][1], runs[n][0], strokes)
+
+    def _collect_runs(self, node: Element, ctx: Ctx, preserve: bool,
+                      runs: list[tuple[str, Ctx]],
+                      marks: list[tuple[int, int, dict[str, list[float]]]]) -> None:
+        """The text runs of `node` and its tspans into `runs`, each element's position
+        lists into `marks` (descendants first). (A method, not a closure: one that calls
+        itself is a reference cycle, left to the collector with all it holds.)"""
+        first = len(runs)
+        if node.text:
+            runs.append((svgtext.collapse(node.text, preserve), ctx))
+        for child in node:
+            ctag = local(child.tag)
+            if ctag == "tspan":
+                cstyle, cown = cascade(child, ctag, ctx.style, self.sheet)
+                if cown.get("display", "").strip() != "none":
+                    self._collect_runs(child, replace(ctx, style=cstyle), preserve, runs, marks)
+            elif ctag == "textPath":
+                self._text_path(child, ctx, self.options.font, preserve)
+            if child.tail:
+                runs.append((svgtext.collapse(child.tail, preserve), ctx))
+        lists = self._positions(node, ctx)
+        if lists:
+            marks.append((first, len(runs), lists))
 
     def _positions(self, node: Element, ctx: Ctx) -> dict[str, list[float]]:
         """The x, y, dx and dy lists of a text or tspan, in user units, and its rotate

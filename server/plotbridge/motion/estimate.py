@@ -59,14 +59,6 @@ def thin_timeline(ack: np.ndarray, line: int, total: float,
     return out[-limit:]
 
 
-class Timeline:
-    def __init__(self, owner: Estimator) -> None:
-        self.owner = owner
-
-    def finish(self, line: int, t: float) -> list[tuple[int, float]]:
-        return thin_timeline(self.owner.ack, line, t)
-
-
 class _Batch:
     """The library's inputs for up to BATCH lines (motion.c's motion_feed)."""
 
@@ -85,11 +77,11 @@ class _Batch:
                    self.feed[:n], self.keeps[:n], self.bytes[:n])
 
     def args(self) -> tuple:
-        """The arrays as motion_feed and motion_plan take them."""
-        f = ctypes.POINTER(ctypes.c_float)
-        return (self.n, self.kind.ctypes.data_as(ctypes.POINTER(ctypes.c_uint8)),
-                *(a.ctypes.data_as(f) for a in (self.x, self.y, self.i, self.j, self.feed)),
-                self.bytes.ctypes.data_as(ctypes.POINTER(ctypes.c_uint16)))
+        """The arrays' addresses as motion_feed and motion_plan take them (`data_as`
+        would make each pointer a reference cycle with its array: an import's batches
+        stayed in memory until the collector's next full pass)."""
+        arrays = (self.kind, self.x, self.y, self.i, self.j, self.feed, self.bytes)
+        return (self.n, *(a.ctypes.data for a in arrays))
 
 
 _ABORT = object()
@@ -120,8 +112,7 @@ class _Runner:
                 while isinstance(item := self.queue.get(), _Batch):
                     item.count_bytes(wire)
                     ack = np.empty(item.n)
-                    library.motion_feed(*item.args(),
-                                        ack.ctypes.data_as(ctypes.POINTER(ctypes.c_double)))
+                    library.motion_feed(*item.args(), ack.ctypes.data)
                     self.acks.append(ack)
                 if item is None:
                     self.time = library.motion_end()
@@ -133,7 +124,7 @@ class _Runner:
 
 class Estimator:
     """Feed it the program line by line (`receive`, then what the line does; runs of
-    lines at once with `moves`); after `flush`, `time` is the estimate and `timeline`
+    lines at once with `moves`); after `flush`, `time` is the estimate and `timeline()`
     the progress samples. The start is (0, 0) with the pen up, as the firmware after
     homing. The library runs on a thread of its own, given each batch of BATCH lines as
     it fills while the caller goes on (ctypes lets go of the GIL), the last one at
@@ -148,7 +139,6 @@ class Estimator:
         self._runner: _Runner | None = None
         self.ack = np.empty(0)
         self.time = 0.0
-        self.timeline = Timeline(self)
 
     def _send(self) -> _Batch:
         """The full batch goes to the library; returns the next one."""
@@ -237,6 +227,10 @@ class Estimator:
     def flush(self) -> None:
         self.end()
         self.wait()
+
+    def timeline(self, line: int, total: float) -> list[tuple[int, float]]:
+        """After `wait`: the progress samples of the program, `line` lines long."""
+        return thin_timeline(self.ack, line, total)
 
     def close(self) -> None:
         """Drops the program (after a failed import); nothing runs on."""

@@ -76,10 +76,8 @@ def load(board: str = DEFAULT_BOARD) -> ctypes.CDLL:
             lib.motion_configure.argtypes = [ctypes.POINTER(Config)]
             lib.motion_configure.restype = None
             lib.motion_plan_size.restype = ctypes.c_int
-            f = ctypes.POINTER(ctypes.c_float)
-            lib.motion_feed.argtypes = [ctypes.c_int, ctypes.POINTER(ctypes.c_uint8), f, f, f,
-                                        f, f, ctypes.POINTER(ctypes.c_uint16),
-                                        ctypes.POINTER(ctypes.c_double)]
+            # kind (uint8), x, y, i, j, feed (float), bytes (uint16), ack (double) arrays
+            lib.motion_feed.argtypes = [ctypes.c_int] + [ctypes.c_void_p] * 8
             lib.motion_feed.restype = None
             lib.motion_end.restype = ctypes.c_double
             lib.motion_plan.argtypes = lib.motion_feed.argtypes[:7]

@@ -6,10 +6,13 @@ does not matter. A helper missing at first use is built then."""
 from __future__ import annotations
 
 import ctypes
+import functools
 import subprocess
 import threading
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[2]
@@ -35,6 +38,25 @@ def library(name: str) -> ctypes.CDLL:
                                         f"{r.stderr.strip() or r.stdout.strip()}")
             lib = _loaded[name] = ctypes.CDLL(str(path))
         return lib
+
+
+@functools.cache
+def array(dtype: Any, ndim: int | None = None) -> Any:
+    """An argtype for a C-contiguous numpy array of `dtype` (and `ndim` dimensions), passed
+    as its address. numpy's ndpointer passes `a.ctypes`, whose pointer forms a reference
+    cycle with the array: each call's arrays lived on until the collector's next full
+    pass (an import worker grew by tens of MB an import)."""
+    want = np.dtype(dtype)
+
+    class Array:
+        @staticmethod
+        def from_param(a: Any) -> ctypes.c_void_p:
+            if not (isinstance(a, np.ndarray) and a.dtype == want and a.flags.c_contiguous
+                    and (ndim is None or a.ndim == ndim)):
+                raise TypeError(f"expected a C-contiguous {want} array, got {type(a).__name__}")
+            return ctypes.c_void_p(a.ctypes.data)
+
+    return Array
 
 
 def function(name: str, symbol: str, argtypes: list[Any], restype: Any) -> Any:

@@ -7,11 +7,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from . import function
+from . import array, function
 
-_f64 = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
-_u8 = np.ctypeslib.ndpointer(np.uint8, flags="C_CONTIGUOUS")
-_long = np.ctypeslib.ndpointer(np.int_, flags="C_CONTIGUOUS")
+_f64, _u8, _long = array(np.float64), array(np.uint8), array(np.int_)
 OTHER, RAPID, LINE, PEN_DOWN, PEN_UP = 0, 1, 2, 3, 4
 
 
