@@ -6,7 +6,7 @@ import ctypes
 
 import numpy as np
 
-from . import function
+from . import array, function
 
 
 class _State(ctypes.Structure):
@@ -23,10 +23,10 @@ class _State(ctypes.Structure):
 
 
 def _fn():
-    u8, f32 = ctypes.POINTER(ctypes.c_uint8), ctypes.POINTER(ctypes.c_float)
+    u8, f32 = array(np.uint8, 1), array(np.float32, 1)
     return function("wirebytes", "wire_bytes",
                     [ctypes.POINTER(_State), ctypes.c_long, u8, f32, f32, f32, f32, f32, u8,
-                     ctypes.POINTER(ctypes.c_uint16)], None)
+                     array(np.uint16, 1)], None)
 
 
 class WireBytes:
@@ -55,11 +55,5 @@ class WireBytes:
         line's G number (0-3), above 3 for a line that is no motion, whose `nbytes` (its
         own, `wire.plain`) stay and whose `keeps` (uint8) says it leaves the modal state
         alone; x, y: a motion's end point, i, j: an arc's centre offsets, feed: mm/min
-        (float32). Contiguous arrays (a batch's, or slices of them)."""
-        def p(a: np.ndarray, ctype):
-            assert a.flags.c_contiguous
-            return a.ctypes.data_as(ctypes.POINTER(ctype))
-
-        self._fn(self._ref, len(kind), p(kind, ctypes.c_uint8),
-                 *(p(a, ctypes.c_float) for a in (x, y, i, j, feed)),
-                 p(keeps, ctypes.c_uint8), p(nbytes, ctypes.c_uint16))
+        (float32). C-contiguous arrays (a batch's, or slices of them)."""
+        self._fn(self._ref, len(kind), kind, x, y, i, j, feed, keeps, nbytes)
