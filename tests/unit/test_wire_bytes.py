@@ -85,6 +85,16 @@ def test_bytes_equal_the_compactors_line_for_line(spm, numbers):
     assert np.array_equal(counted(lines, spm, numbers), sent(lines, spm, numbers))
 
 
+@pytest.mark.parametrize("spm", [78.74, 100.0, 6.25, 157.48, 32.5])
+def test_coordinates_a_half_step_from_a_step_round_as_python_rounds_them(spm):
+    # m / 1000 * spm on (or a hair off) a half step: the C side's fast product must
+    # hand these to Python's own operations
+    ties = [m for m in range(-2000, 300_000) if abs((m * spm) % 1000 - 500) < 1e-6]
+    assert len(ties) > 5
+    lines = [f"G1 X{m / 1000:.3f} Y{ties[-1 - k] / 1000:.3f} F3000" for k, m in enumerate(ties)]
+    assert np.array_equal(counted(lines, (spm, spm), True), sent(lines, (spm, spm), True))
+
+
 def test_line_numbers_grow_a_digit_at_the_powers_of_ten():
     lines = ["G1 X1.000 Y1.000 F3000"] * 10_050
     got = counted(lines, (80.0, 80.0), True, run=4096)
