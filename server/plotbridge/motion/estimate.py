@@ -89,37 +89,57 @@ _ABORT = object()
 
 class _Runner:
     """The library on a thread of its own, run through the batches put in `queue` in
-    order, then None (the end: `time`) or _ABORT. The thread holds the library's lock
-    from the first batch to the end (the firmware code keeps its state in globals)."""
+    order, then None (the end: `time`) or _ABORT, each batch's wire bytes counted first
+    on a thread before it. The library's thread holds its lock from the first batch to
+    the end (the firmware code keeps its state in globals)."""
 
     def __init__(self, profile: MachineProfile) -> None:
         self.queue: queue.Queue = queue.Queue(QUEUED)
+        self._counted: queue.Queue = queue.Queue(2)     # batches with their wire bytes
         self.acks: list[np.ndarray] = []
         self.time = 0.0
         self.error: BaseException | None = None
+        wire = WireBytes(profile.steps_per_mm, profile.line_numbers)
+        self.counter = threading.Thread(target=self._count, args=(wire,), daemon=True,
+                                        name="estimate-wire")
         self.thread = threading.Thread(target=self._work, args=(profile,), daemon=True,
                                        name="estimate")
+        self.counter.start()
         self.thread.start()
+
+    def _count(self, wire: WireBytes) -> None:
+        """Each batch's bytes on the wire, a stage before the library (its own thread:
+        the two run side by side), everything passed on in order, to the end."""
+        while True:
+            item = self.queue.get()
+            if isinstance(item, _Batch) and self.error is None:
+                try:
+                    item.count_bytes(wire)
+                except BaseException as e:     # given to the caller by Estimator.wait
+                    self.error = e
+            self._counted.put(item)
+            if not isinstance(item, _Batch):
+                return
 
     def _work(self, profile: MachineProfile) -> None:
         item: object = self
         try:
             library = lib.load()
             config = _config(profile)
-            wire = WireBytes(profile.steps_per_mm, profile.line_numbers)
             with lib.run_lock:
                 library.motion_configure(ctypes.byref(config))
-                while isinstance(item := self.queue.get(), _Batch):
-                    item.count_bytes(wire)
+                while isinstance(item := self._counted.get(), _Batch):
+                    if self.error is not None:
+                        continue    # the counting failed: the rest only drains
                     ack = np.empty(item.n)
                     library.motion_feed(*item.args(), ack.ctypes.data)
                     self.acks.append(ack)
-                if item is None:
+                if item is None and self.error is None:
                     self.time = library.motion_end()
         except BaseException as e:     # given to the caller by Estimator.wait
             self.error = e
             while item is not None and item is not _ABORT:   # the caller goes on putting
-                item = self.queue.get()
+                item = self._counted.get()
 
 
 class Estimator:
