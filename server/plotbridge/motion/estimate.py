@@ -1,8 +1,8 @@
 """The plot time estimate: the program's lines, collected as arrays and run through the
 firmware's own motion code (library.py) in batches on a thread beside the caller, with
 the host-side timing of timing.py. Each line costs the bytes the server sends for it:
-its compact wire form (program/wire.py), counted on that thread batch by batch
-(native/wirebytes.c)."""
+its compact wire form (program/wire.py), counted batch by batch (native/wirebytes.c)
+on a thread just ahead of the library's."""
 
 from __future__ import annotations
 
