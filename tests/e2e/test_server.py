@@ -7,6 +7,7 @@ then drives it only through the REST and WebSocket API.
 from __future__ import annotations
 
 import json
+import sqlite3
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -203,7 +204,8 @@ def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
         moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
         assert moved.status_code == 200
         server.wait_progress(job["id"], 60)
-        time.sleep(1.2)  # a progress write reaches the store
+        wait_until(lambda: server.stored_job(job["id"]).get("lines_done", 0), lambda n: n >= 60,
+                   30, "progress written to the store", errors=(sqlite3.Error,))
         server.kill()
         server.start()
         jobs = server.client.get("/api/jobs").json()
