@@ -15,6 +15,25 @@ def hold_label(page) -> str:
     return page.locator("#hold").text_content()
 
 
+# Does the button's text fit inside it, with each label it shows (its style per action)?
+LABELS_FIT = """() => {
+    const b = document.querySelector('#hold');
+    const was = [b.textContent, b.dataset.action];
+    const fits = [['HOLD', 'hold'], ['CONTINUE', 'continue']].map(([text, action]) => {
+        b.textContent = text;
+        b.dataset.action = action;
+        return [text, b.scrollWidth <= b.clientWidth];
+    });
+    [b.textContent, b.dataset.action] = was;
+    return fits;
+}"""
+
+
+def assert_labels_fit(page) -> None:
+    """Neither label runs over the button's edge (on a phone, onto STOP beside it)."""
+    assert page.evaluate(LABELS_FIT) == [["HOLD", True], ["CONTINUE", True]]
+
+
 def test_hold_and_continue_by_click_and_key(desktop, server, plotter):
     page, _ = desktop
     server.home()
@@ -31,6 +50,7 @@ def test_hold_and_continue_by_click_and_key(desktop, server, plotter):
     wait_job_state(page, "hold-circles.svg", ("paused",))
     server.wait_machine(lambda m: m["state"] == "Hold", timeout=10)
     page.wait_for_function("() => document.querySelector('#hold').textContent === 'CONTINUE'")
+    assert_labels_fit(page)
     screenshot(page, "desktop-hold")
 
     # typing an "h" in a text field does not continue
@@ -73,4 +93,5 @@ def test_phone_hold_beside_stop_on_every_tab(phone, server):
             [hold["x"] + hold["width"] / 2, hold["y"] + hold["height"] / 2],
         )
         assert hit == "hold"
+    assert_labels_fit(page)
     screenshot(page, "phone-hold")

@@ -174,7 +174,7 @@ def plot_stop_unlock_next(
     panel = page.locator("#estop-panel").bounding_box()
     assert panel and panel["y"] >= 0 and panel["y"] < viewport["height"] / 2, panel  # in view
     # the server agrees: the job is stopped and the carriage stands still
-    assert server.wait_job(job_id(page, long_name), "stopped", timeout=5)["state"] == "stopped"
+    assert server.wait_job(job_id(page, long_name), "stopped", timeout=20)["state"] == "stopped"
     wait_job_state(page, long_name, ("stopped",))
     # the simulated carriage stands still, and its last step came soon after the click
     time.sleep(0.3)

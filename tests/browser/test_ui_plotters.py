@@ -37,10 +37,10 @@ def test_cards_stop_one_then_all_and_select(desktop, tmp_path):
         card = '#plotter-cards [data-plotter="{}"]'
         page.wait_for_selector(card.format("plotter2") + " progress:not([hidden])")
         page.click(card.format("plotter2") + ' [data-verb="stop"]')
-        server.wait_job(jobs["plotter2"], ("stopped",), 5)
+        server.wait_job(jobs["plotter2"], ("stopped",), 20)
         assert server.job(jobs["plotter1"])["state"] == "running"  # the other plots on
         page.click('#plotters [data-verb="stop-all"]')
-        server.wait_job(jobs["plotter1"], ("stopped",), 5)
+        server.wait_job(jobs["plotter1"], ("stopped",), 20)
         page.click(card.format("plotter2") + " .name")
         page.wait_for_function("""() => {
             const s = window.plotbridge.store.state;

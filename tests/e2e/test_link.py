@@ -56,8 +56,7 @@ async def test_connect_reads_settings_and_status(plotter):
         assert link.settings[100] == 80 and 60 in link.settings and 63 in link.settings
         assert link.status.state in ("Idle", "Alarm")
         before = link.status.updated_at
-        await asyncio.sleep(0.5)
-        assert link.status.updated_at > before      # still polling
+        await settle(lambda: link.status.updated_at > before, what="the next poll's report")
 
 
 async def test_stream_few_hundred_segments_and_trace_completes(plotter):

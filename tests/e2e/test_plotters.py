@@ -98,7 +98,7 @@ def test_a_plotter_that_drops_out_interrupts_only_its_job_which_resumes(three):
     for job in jobs.values():
         server.wait_progress(job["id"], 100, 60)
     sims["plotter2"].stop()
-    interrupted = server.wait_job(jobs["plotter2"]["id"], ("interrupted",), 5)
+    interrupted = server.wait_job(jobs["plotter2"]["id"], ("interrupted",), 20)
     assert interrupted["resume_line"] and interrupted["plotter"] == "plotter2"
     assert {server.job(jobs[n]["id"])["state"] for n in ("plotter1", "plotter3")} == {"running"}
     before = sims["plotter2"].trace()

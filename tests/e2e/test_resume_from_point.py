@@ -213,3 +213,27 @@ def test_server_killed_mid_stroke_redraws_at_most_one_report(plotter_factory, tm
         allowance = FEED / 60 / JOB_POLL_HZ
         print(f"server kill -9: {redrawn:.3f} mm drawn twice (allowed {allowance:.2f})")
         assert -ESTOP_REDRAW_MM <= redrawn <= allowance, f"{redrawn:.3f} mm drawn twice"
+
+
+def test_a_stop_while_the_pen_settles_keeps_the_position_and_resumes(plotter_factory, tmp_path):
+    """A stop while the pen comes down (the planner empty, nothing stepping) is no alarm,
+    as a reset of a GRBL board in a dwell: the position is kept, so the stopped job
+    resumes at once, without homing, and the drawing comes out whole."""
+    plotter = plotter_factory(speed=1)  # real time: the settle lasts long enough to stop in
+    with running_server(tmp_path / "data", ["--serial", str(plotter.port)]) as server:
+        server.home()
+        changed = server.client.put("/api/machine/settings", json={"settings": {"62": 3000}})
+        assert changed.status_code == 200, changed.text
+        job = server.submit(TWO_STROKES)
+        # the pen down at the first stroke's start: the board settles there for 3 s
+        server.wait_machine(lambda m: m["pen"] == "down" and m["state"] == "Run", 20)
+        assert server.client.post("/api/machine/estop").status_code == 202
+        stopped = server.wait_job(job["id"], ("stopped",), 10)
+        machine = server.wait_machine(lambda m: m["state"] != "Run", 10)
+        assert machine["state"] == "Idle" and machine["pen"] == "up", machine
+        assert plotter.trace()["draw_mm"] == 0, "the pen drew before the stop"
+        server.client.put("/api/machine/settings", json={"settings": {"62": 150}})
+        resumed = resume(server, job["id"])
+        assert resumed["state"] == "running", (stopped, resumed)
+        finish(server, job["id"])
+        assert_same_drawing(server.preview(job["id"])["strokes"], plotter.trace()["strokes"])

@@ -7,6 +7,7 @@ then drives it only through the REST and WebSocket API.
 from __future__ import annotations
 
 import json
+import sqlite3
 import time
 from concurrent.futures import ThreadPoolExecutor
 
@@ -121,7 +122,7 @@ def test_pause_resume(server, plotter):
     server.wait_progress(job["id"], 30)
     paused = server.client.post(f"/api/jobs/{job['id']}/pause")
     assert paused.status_code == 200 and paused.json()["state"] == "paused"
-    server.wait_machine(lambda m: m["state"] == "Hold", 5)
+    server.wait_machine(lambda m: m["state"] == "Hold", 20)
     held = wait_still(plotter, 5)["steps"]  # the deceleration ends
     time.sleep(0.3)  # a window in which nothing may move
     assert plotter.trace()["steps"] == held, "the machine moved during a feed hold"
@@ -129,12 +130,12 @@ def test_pause_resume(server, plotter):
     resumed = server.client.post(f"/api/jobs/{job['id']}/resume")
     assert resumed.status_code == 200 and resumed.json()["state"] == "running"
     # the machine's own pause and resume buttons drive the job state too
-    server.wait_machine(lambda m: m["state"] == "Run", 5)
+    server.wait_machine(lambda m: m["state"] == "Run", 20)
     plotter.press("pause")
-    server.wait_job(job["id"], ("paused",), 5)
+    server.wait_job(job["id"], ("paused",), 20)
     plotter.release("pause")
     plotter.press("resume")
-    server.wait_job(job["id"], ("running", "done"), 5)
+    server.wait_job(job["id"], ("running", "done"), 20)
     plotter.release("resume")
     done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
     assert done["state"] == "done", done
@@ -146,11 +147,11 @@ def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
     job = server.submit(drawing(circles=6))
     server.wait_progress(job["id"], 40)
     plotter.press("estop")
-    failed = server.wait_job(job["id"], ("failed", "stopped", "interrupted", "done"), 5)
+    failed = server.wait_job(job["id"], ("failed", "stopped", "interrupted", "done"), 20)
     plotter.release("estop")
     assert failed["state"] == "failed", failed
     assert "ALARM:10" in failed["error"] and failed["error"].startswith("line ")
-    machine = server.wait_machine(lambda m: m["state"] == "Alarm", 5)
+    machine = server.wait_machine(lambda m: m["state"] == "Alarm", 20)
     assert machine["alarm"] == 10
 
 
@@ -166,7 +167,7 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     # (after SIGKILL the file can lag the pen by 50 ms, which would fake a gap).
     plotter.stop()
     killed_at = time.monotonic()
-    interrupted = server.wait_job(job["id"], ("interrupted",), 5)
+    interrupted = server.wait_job(job["id"], ("interrupted",), 20)
     assert time.monotonic() - killed_at < 2.0, "link loss noticed too late"
     assert 1 <= interrupted["resume_line"] <= interrupted["lines_done"] + 1
     before = plotter.trace()  # the trace file the stopped simulator left
@@ -203,7 +204,8 @@ def test_server_killed_mid_job_keeps_queue(plotter_factory, tmp_path):
         moved = server.client.post(f"/api/jobs/{waiting[1]}/move", json={"position": 0})
         assert moved.status_code == 200
         server.wait_progress(job["id"], 60)
-        time.sleep(1.2)  # a progress write reaches the store
+        wait_until(lambda: server.stored_job(job["id"]).get("lines_done", 0), lambda n: n >= 60,
+                   30, "progress written to the store", errors=(sqlite3.Error,))
         server.kill()
         server.start()
         jobs = server.client.get("/api/jobs").json()

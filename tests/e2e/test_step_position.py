@@ -15,7 +15,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from tests.fixtures.grbl import Grbl, clean, mpos, unlocked
+from tests.fixtures.grbl import Grbl, clean, mpos, session, unlocked
 from tests.fixtures.plotsim import Plotter
 from tests.fixtures.waits import wait_until
 
@@ -40,12 +40,8 @@ def moved(g: Grbl, start: tuple[float, float], mm: float) -> None:
 def board(plotter_factory) -> Iterator[tuple[Plotter, Grbl]]:
     """Real time (a stop comes in the middle of a move), after a soft reset and $X."""
     plotter = plotter_factory(speed=1.0)
-    g = Grbl(plotter.port)
-    try:
-        g.reset()
+    with session(plotter) as g:
         yield plotter, unlocked(g)
-    finally:
-        g.close()
 
 
 def test_a_hold_part_way_reads_where_the_motors_stand_and_resumes_exactly(board) -> None:

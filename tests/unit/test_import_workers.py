@@ -15,6 +15,8 @@ import time
 import pytest
 from plotbridge.importing.workers import ImportLimit, ImportService, Limits
 
+from tests.fixtures.waits import settle
+
 
 def echo(value: int) -> int:
     return value
@@ -26,6 +28,14 @@ def pid() -> int:
 
 def sleep_then(seconds: float, value: str) -> str:
     time.sleep(seconds)
+    return value
+
+
+def wait_for_file(path: str, value: str) -> str:
+    """Runs until `path` exists (the test's release), at most a minute."""
+    deadline = time.monotonic() + 60
+    while not os.path.exists(path) and time.monotonic() < deadline:
+        time.sleep(0.01)
     return value
 
 
@@ -102,12 +112,19 @@ async def test_an_imports_threads_share_one_malloc_arena(service):
     assert await service.call(thread_address_space) < 32 * 1024
 
 
-async def test_small_uploads_do_not_wait_behind_a_large_one(service):
-    large = [asyncio.create_task(service.call(sleep_then, 15, "large", size=10**6))
+async def test_small_uploads_do_not_wait_behind_a_large_one(service, tmp_path):
+    release = tmp_path / "release"
+    large = [asyncio.create_task(service.call(wait_for_file, str(release), "large",
+                                              size=10**6))
              for _ in range(2)]  # fmt: skip
-    await asyncio.sleep(0.5)
-    small = await service.call(echo, 1, size=10)  # the second large one waits, not this
-    assert small == 1 and not any(task.done() for task in large)
+    # one large import runs; the other waits, as it may not take the last free worker
+    await settle(lambda: len(service.waiting) == 1
+                 and sum(w.busy for w in service.workers) == 1, what="the large ones in")
+    try:  # the second large one waits, not this
+        small = await asyncio.wait_for(service.call(echo, 1, size=10), 30)
+        assert small == 1 and not any(task.done() for task in large)
+    finally:
+        release.touch()
     assert await asyncio.gather(*large) == ["large", "large"]
 
 
