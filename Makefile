@@ -33,7 +33,8 @@ setup-test: .stamps/system-test $(VENV)/.stamp-dev native
 # The server's C helpers (server/plotbridge/native/), loaded with ctypes.
 NATIVE_DIR := server/plotbridge/native
 native: $(NATIVE_DIR)/build/libgcodescan.so $(NATIVE_DIR)/build/libmovelines.so $(NATIVE_DIR)/build/libsimplify.so \
-        $(NATIVE_DIR)/build/libpreviewjson.so $(NATIVE_DIR)/build/libtextcheck.so
+        $(NATIVE_DIR)/build/libpreviewjson.so $(NATIVE_DIR)/build/libtextcheck.so \
+        $(NATIVE_DIR)/build/libwirebytes.so
 
 $(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c $(NATIVE_DIR)/thousandths.h
 	@mkdir -p $(dir $@)

@@ -1,6 +1,7 @@
 """One motion model: the estimate (the firmware's planner, arc and segment code built
 for the host, plus the host-side timing) against the real firmware in the virtual
-plotter; and the compact wire format against the readable program on the same board."""
+plotter, fed what the server sends (compact wire lines with N words); and the compact
+wire format against the readable program on the same board."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import subprocess
 import pytest
 from plotbridge.importing import MachineProfile
 from plotbridge.motion.estimate import Estimator
-from plotbridge.program.wire import compact
+from plotbridge.program.wire import compact, numbered
 
 from tests.fixtures.grbl_sender import Board
 from tests.fixtures.plotsim import FIRMWARE_ELF
@@ -57,7 +58,7 @@ def received(lines: list[str], profile: MachineProfile = PROFILE) -> Estimator:
     e = Estimator(profile)
     down = False
     for n, text in enumerate(lines, 1):
-        e.receive(len(text) + 1)
+        e.receive(text)
         words = {w[0]: float(w[1:]) for w in text.split()[1:]}
         head = text.split()[0]
         if head in ("G0", "G1"):
@@ -89,10 +90,16 @@ def plot(plotter_factory, lines: list[str], speed: float = SIM_SPEED) -> tuple[d
     return trace, t0
 
 
+def sent(lines: list[str], profile: MachineProfile = PROFILE) -> list[str]:
+    """The lines as the server sends them to our firmware (the estimate's bytes)."""
+    assert profile.line_numbers
+    return [numbered(n, t) for n, t in compact(enumerate(lines, 1), profile.steps_per_mm)]
+
+
 @pytest.mark.parametrize("name", list(PROGRAMS))
 def test_estimate_equals_the_simulated_plot_time(plotter_factory, name):
     lines = PROGRAMS[name]
-    trace, t0 = plot(plotter_factory, lines)
+    trace, t0 = plot(plotter_factory, sent(lines))
     # the program ends with its last stroke and M5: motion ends at the last vertex,
     # and the estimate adds the final pen settle
     measured = trace["strokes"][-1][-1][2] - t0

@@ -13,6 +13,7 @@ from plotbridge.motion import estimate, library
 from plotbridge.motion.estimate import Estimator, thin_timeline
 from plotbridge.motion.eta import eta, share_done
 from plotbridge.motion.timing import GRBL_PLANNER_BLOCKS, stock_grbl
+from plotbridge.program.wire import compact, numbered
 
 # 1000 mm/s², 100 mm/s max rate, junction deviation 0.02 mm; lines reach the planner
 # without delay unless a test says otherwise.
@@ -27,10 +28,15 @@ def trapezoid(v0, v1, vn, a, length):
     return (vp - v0) / a + (vp - v1) / a
 
 
-def run(moves, profile=P, nbytes=20):
+def text(x, y, f=None):
+    """A move's program line."""
+    return f"G0 X{x:.3f} Y{y:.3f}" if f is None else f"G1 X{x:.3f} Y{y:.3f} F{f:g}"
+
+
+def run(moves, profile=P):
     e = Estimator(profile)
     for n, (x, y, f) in enumerate(moves, 1):
-        e.receive(nbytes)
+        e.receive(text(x, y, f))
         e.move(n, x, y, f)
     e.flush()
     return e.time
@@ -111,11 +117,11 @@ def test_stock_grbl_uses_its_planner_depth_and_line_time():
 
 def test_arcs_are_cut_by_the_arc_tolerance():
     e = Estimator(P)
-    e.receive(10)
+    e.receive(text(2, 0))
     e.move(1, 2.0, 0.0, None)
-    e.receive(10)
+    e.receive("M3")
     e.stop(2, 0.0)
-    e.receive(30)
+    e.receive("G3 X-2.000 Y0.000 I-2.000 J0.000 F6000")
     e.arc(3, -2.0, 0.0, -2.0, 0.0, 6000, False)
     e.flush()
     n = math.ceil(math.pi / (2 * math.acos(1 - 0.002 / 2)))
@@ -125,10 +131,10 @@ def test_arcs_are_cut_by_the_arc_tolerance():
     # the same chords as G1 lines (after a stop at the start) take the same time
     e2 = Estimator(P)
     for k, (x, y, f) in enumerate(chords):
-        e2.receive(10)
+        e2.receive(text(x, y, f))
         e2.move(k, x, y, f)
         if k == 0:
-            e2.receive(10)
+            e2.receive("M3")
             e2.stop(1, 0.0)
     e2.flush()
     assert e.time == pytest.approx(e2.time, rel=1e-6)
@@ -137,37 +143,50 @@ def test_arcs_are_cut_by_the_arc_tolerance():
 
 def test_pen_moves_and_dwell_stop_and_settle():
     e = Estimator(P)
-    e.receive(20)
+    e.receive(text(100, 0, 3000))
     e.move(1, 100, 0, 3000)
-    e.receive(3)
+    e.receive("M3")
     e.stop(2, P.pen_settle_s)
-    e.receive(20)
+    e.receive(text(200, 0, 3000))
     e.move(3, 200, 0, 3000)
     e.flush()
     assert e.time == pytest.approx(2 * run([(100, 0, 3000)]) + 0.15, rel=0.005)
 
 
-def feed_lines(profile, lines, step=0.05):
+def dense(n=2000):
+    """n moves of 0.05 mm along Y=0.123 at F6000 (on the wire `X12.05Y.12`)."""
+    return [(0.05 * k, 0.123) for k in range(1, n + 1)]
+
+
+def feed_lines(profile, points):
     e = Estimator(profile)
-    for n, text in enumerate(lines, 1):
-        e.receive(len(text) + 1)
-        e.move(n, step * n, 0.0, 6000)
+    for n, (x, y) in enumerate(points, 1):
+        e.receive(text(x, y, 6000))
+        e.move(n, x, y, 6000)
     e.flush()
     return e.time
 
 
 def test_serial_line_bounds_dense_short_moves():
-    lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
-    fast = feed_lines(P, lines)
-    slow = feed_lines(MachineProfile(plan_block_s=0), lines)
-    serial = sum(len(t) + 1 for t in lines) * 10 / 115200
-    assert fast < serial
-    assert slow == pytest.approx(serial, rel=0.06)
+    # what goes over the serial line: the compact wire lines, numbered (`N241X12.05Y.12`)
+    # or not. A slow line, and an acceleration so high that a move alone in the planner
+    # (the line starves it) takes little longer than at full speed (~2 ms: the step
+    # segments' granularity)
+    points = dense()
+    lines = [text(x, y, 6000) for x, y in points]
+    quick = {"accel": (1e6, 1e6), "plan_block_s": 0}
+    fast = feed_lines(MachineProfile(baud=0, **quick), points)
+    for numbers in (True, False):
+        slow = feed_lines(MachineProfile(line_numbers=numbers, baud=19200, **quick), points)
+        sent = [numbered(n, t) if numbers else t
+                for n, t in compact(enumerate(lines, 1), P.steps_per_mm)]
+        serial = sum(len(t) + 1 for t in sent) * 10 / 19200
+        assert fast < serial
+        assert slow == pytest.approx(serial, rel=0.06)
 
 
 def test_firmware_line_time_bounds_dense_short_moves():
-    lines = [f"G1 X{0.05 * k:.3f} Y0.000 F6000" for k in range(1, 2001)]
-    cpu = feed_lines(MachineProfile(baud=0, plan_block_s=0.0034), lines)
+    cpu = feed_lines(MachineProfile(baud=0, plan_block_s=0.0034), dense())
     assert cpu == pytest.approx(2000 * 0.0034, rel=0.05)
 
 
@@ -202,7 +221,7 @@ def _zigzag(e: Estimator, n: int) -> Estimator:
     x = (np.arange(n) % 7).astype(np.float32)
     y = (np.arange(n) % 5).astype(np.float32) * 0.5
     feed = np.where(kind == library.LINE, 3000.0, 0.0).astype(np.float32)
-    e.receive(3)
+    e.receive("M3")
     e.stop(1, P.pen_settle_s)
     e.moves(kind, x, y, feed, np.full(n, 24, np.uint16))
     return e

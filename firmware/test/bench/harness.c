@@ -27,6 +27,7 @@ static char *text;
 static size_t text_len, line_start[MAX_LINES];
 static size_t line_count, acked, inflight;
 static uint64_t ack_cycle[MAX_LINES];
+static uint64_t last_byte_cycle[MAX_LINES]; /* when each line's newline went in */
 static unsigned errors;
 static uint64_t byte_cycles, next_byte_at;
 static char outline[256];
@@ -239,6 +240,7 @@ static avr_cycle_count_t feed(avr_t *a, avr_cycle_count_t when, void *param)
         avr_raise_irq(avr_io_getirq(a, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_INPUT),
                       (uint8_t)text[line_start[next_line] + pos_in_line]);
         if (++pos_in_line == line_len(next_line)) {
+            last_byte_cycle[next_line] = a->cycle;
             pos_in_line = 0;
             next_line++;
         }
@@ -324,8 +326,10 @@ int main(int argc, char **argv)
 
     /* the firmware runs U2X with UBRR 16: 117647 baud. simavr's UART takes
      * input bytes a little slower than 10 bits each and drops what overflows
-     * its FIFO, so pace at 11 bits a byte. */
-    byte_cycles = 11ULL * 8ULL * 17ULL;
+     * its FIFO, so pace at 11 bits a byte (HARNESS_BYTE_BITS: slower, for
+     * bench/line_time.py, which has each line meet an idle main loop). */
+    const char *bits = getenv("HARNESS_BYTE_BITS");
+    byte_cycles = (bits && atoi(bits) > 11 ? (uint64_t)atoi(bits) : 11ULL) * 8ULL * 17ULL;
     next_byte_at = F_CPU / 5; /* after the banner and the EEPROM defaults */
     avr_cycle_timer_register(avr, next_byte_at, feed, 0);
 
@@ -403,6 +407,10 @@ int main(int argc, char **argv)
            (unsigned long long)steps[0], (unsigned long long)steps[1],
            (unsigned long long)(steps[0] > 1 ? min_interval[0] : 0),
            (unsigned long long)(steps[1] > 1 ? min_interval[1] : 0));
+    printf(" \"last_byte_cycles\": [");
+    for (size_t i = 0; i < line_count; i++)
+        printf("%s%llu", i ? "," : "", (unsigned long long)last_byte_cycle[i]);
+    printf("],");
     printf(" \"ack_cycles\": [");
     for (size_t i = 0; i < acked; i++)
         printf("%s%llu", i ? "," : "", (unsigned long long)ack_cycle[i]);

@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..motion.timing import LINE_S
+
 MAX_ERRORS = 100
 
 
@@ -23,7 +25,8 @@ class MachineProfile:
     corexy: bool = False
     planner_blocks: int = 0    # blocks the board's planner holds; 0: the library's board's depth
     baud: int = 115200  # serial speed: bounds how fast lines reach the planner (0: no bound)
-    plan_block_s: float = 0.0022  # firmware time to parse and plan one line (motion/timing.py)
+    plan_block_s: float = LINE_S  # firmware time from a line's arrival to its ok (motion/timing.py)
+    line_numbers: bool = True  # lines go with an N word (the board reports `Ln:`: ours does)
 
     @classmethod
     def from_settings(cls, settings: dict[int, float]) -> MachineProfile:

@@ -79,7 +79,7 @@ class ProgramWriter:
     def _write(self, text: str) -> None:
         self.last = text
         self.line += 1
-        self.planner.receive(len(text) + 1)
+        self.planner.receive(text)
         self._buf.append(f"{text}\n".encode("ascii"))
         self._buffered += 1
         if self._buffered >= 4096:

@@ -1,6 +1,8 @@
 """The plot time estimate: the program's lines, collected as arrays and run through the
 firmware's own motion code (library.py) in batches on a thread beside the caller, with
-the host-side timing of timing.py."""
+the host-side timing of timing.py. Each line costs the bytes the server sends for it:
+its compact wire form (program/wire.py), counted batch by batch (native/wirebytes.c)
+on a thread just ahead of the library's."""
 
 from __future__ import annotations
 
@@ -11,8 +13,14 @@ import threading
 import numpy as np
 
 from ..importing.models import MachineProfile
+from ..native.wirebytes import WireBytes
+from ..program.wire import plain
 from . import library as lib
 from .library import ARC_CCW, ARC_CW, DWELL, LINE, OTHER, RAPID
+from .timing import RX_SIZE
+
+# WireBytes takes a motion line's kind as its G number
+assert (RAPID, LINE, ARC_CW, ARC_CCW) == (0, 1, 2, 3)
 
 TIMELINE_SAMPLES = 2000
 # Lines the library runs at a time, while the next batch is collected: small (~5 ms of
@@ -35,7 +43,7 @@ def _config(p: MachineProfile) -> lib.Config:
     c.depth = p.planner_blocks or lib.planner_depth()
     c.byte_s = 10.0 / p.baud if p.baud else 0.0
     c.line_cpu_s = p.plan_block_s
-    c.rx_size = 128
+    c.rx_size = RX_SIZE
     return c
 
 
@@ -59,7 +67,14 @@ class _Batch:
         self.x, self.y, self.i, self.j, self.feed = (np.empty(BATCH, np.float32)
                                                      for _ in range(5))
         self.bytes = np.empty(BATCH, np.uint16)
+        self.keeps = np.empty(BATCH, np.uint8)    # a line that is no motion keeps the modes
         self.n = 0
+
+    def count_bytes(self, wire: WireBytes) -> None:
+        """Each line's bytes on the wire (a line that is no motion came with its own)."""
+        n = self.n
+        wire.count(self.kind[:n], self.x[:n], self.y[:n], self.i[:n], self.j[:n],
+                   self.feed[:n], self.keeps[:n], self.bytes[:n])
 
     def args(self) -> tuple:
         """The arrays' addresses as motion_feed and motion_plan take them (`data_as`
@@ -74,17 +89,37 @@ _ABORT = object()
 
 class _Runner:
     """The library on a thread of its own, run through the batches put in `queue` in
-    order, then None (the end: `time`) or _ABORT. The thread holds the library's lock
-    from the first batch to the end (the firmware code keeps its state in globals)."""
+    order, then None (the end: `time`) or _ABORT, each batch's wire bytes counted first
+    on a thread before it. The library's thread holds its lock from the first batch to
+    the end (the firmware code keeps its state in globals)."""
 
     def __init__(self, profile: MachineProfile) -> None:
         self.queue: queue.Queue = queue.Queue(QUEUED)
+        self._counted: queue.Queue = queue.Queue(2)     # batches with their wire bytes
         self.acks: list[np.ndarray] = []
         self.time = 0.0
         self.error: BaseException | None = None
+        wire = WireBytes(profile.steps_per_mm, profile.line_numbers)
+        self.counter = threading.Thread(target=self._count, args=(wire,), daemon=True,
+                                        name="estimate-wire")
         self.thread = threading.Thread(target=self._work, args=(profile,), daemon=True,
                                        name="estimate")
+        self.counter.start()
         self.thread.start()
+
+    def _count(self, wire: WireBytes) -> None:
+        """Each batch's bytes on the wire, a stage before the library (its own thread:
+        the two run side by side), everything passed on in order, to the end."""
+        while True:
+            item = self.queue.get()
+            if isinstance(item, _Batch) and self.error is None:
+                try:
+                    item.count_bytes(wire)
+                except BaseException as e:     # given to the caller by Estimator.wait
+                    self.error = e
+            self._counted.put(item)
+            if not isinstance(item, _Batch):
+                return
 
     def _work(self, profile: MachineProfile) -> None:
         item: object = self
@@ -93,16 +128,18 @@ class _Runner:
             config = _config(profile)
             with lib.run_lock:
                 library.motion_configure(ctypes.byref(config))
-                while isinstance(item := self.queue.get(), _Batch):
+                while isinstance(item := self._counted.get(), _Batch):
+                    if self.error is not None:
+                        continue    # the counting failed: the rest only drains
                     ack = np.empty(item.n)
                     library.motion_feed(*item.args(), ack.ctypes.data)
                     self.acks.append(ack)
-                if item is None:
+                if item is None and self.error is None:
                     self.time = library.motion_end()
         except BaseException as e:     # given to the caller by Estimator.wait
             self.error = e
             while item is not None and item is not _ABORT:   # the caller goes on putting
-                item = self.queue.get()
+                item = self._counted.get()
 
 
 class Estimator:
@@ -131,11 +168,12 @@ class Estimator:
         self._batch = _Batch()
         return self._batch
 
-    def receive(self, nbytes: int) -> None:
-        """The next program line, `nbytes` long with its newline."""
+    def receive(self, text: str) -> None:
+        """The next program line (`move`, `arc` or `stop` then say what it does)."""
         b = self._batch if self._batch.n < BATCH else self._send()
         k = b.n
         b.kind[k] = OTHER
+        nbytes, b.keeps[k] = plain(text)
         b.bytes[k] = min(nbytes, 65535)
         b.x[k] = b.y[k] = b.i[k] = b.j[k] = b.feed[k] = 0.0
         b.n = k + 1
@@ -157,8 +195,8 @@ class Estimator:
     def moves(self, kind: np.ndarray, x: np.ndarray, y: np.ndarray, feed: np.ndarray,
               nbytes: np.ndarray) -> None:
         """`receive` and `move` for each of a run of lines, given as the library takes
-        them: kind (uint8, RAPID or LINE), x, y, feed (float32, 0 for rapids), bytes
-        (uint16)."""
+        them: kind (uint8, RAPID or LINE; DWELL for a pen change), x, y, feed (float32, 0
+        for rapids), bytes (uint16; a motion line's are counted on the wire instead)."""
         done, n = 0, len(kind)
         while done < n:
             b = self._batch if self._batch.n < BATCH else self._send()
@@ -166,6 +204,7 @@ class Estimator:
             to, src = slice(b.n, b.n + k), slice(done, done + k)
             b.kind[to] = kind[src]
             b.bytes[to] = nbytes[src]
+            b.keeps[to] = 1     # the pen changes (M3, M5)
             b.x[to] = x[src]
             b.y[to] = y[src]
             b.feed[to] = feed[src]

@@ -12,6 +12,10 @@ are sent as they are (without spaces) and make it forget the modal state.
 To a board that reports the executing line (`$I` OPT letter `N`), each program line goes
 with its number as an `N` word (`N120X5Y7`), which comes back as the status report's
 `Ln:`; lines numbered 0 (a resume's preamble) and `$` commands go without.
+
+native/wirebytes.c counts, for the estimate, the bytes each program line takes on the
+wire from the estimate's arrays: these rules over arrays, in C (keep the two in step;
+tests/unit/test_wire_bytes.py holds them equal line for line).
 """
 
 from __future__ import annotations
@@ -22,6 +26,13 @@ from collections.abc import AsyncIterable, AsyncIterator, Iterable, Iterator
 MOTION = ("G0", "G1", "G2", "G3")
 MAX_LINE_NUMBER = 10_000_000  # GRBL's largest N (error:27 above it)
 KEEPS_MODES = ("M3", "M5", "G21", "G90")   # lines that leave the motion mode and F alone
+
+
+def plain(text: str) -> tuple[int, bool]:
+    """A program line that is no motion (`M3`, `G4 P0.500`): its bytes on the wire with
+    the newline (no N word), and whether it leaves the modal state alone."""
+    head = text.split(maxsplit=1)[0] if text else ""
+    return len(text) - text.count(" ") + 1, head in KEEPS_MODES or head in MOTION
 
 
 def number(v: float, decimals: int = 3) -> str:
@@ -134,3 +145,4 @@ async def compact_async(lines: AsyncIterable[tuple[int, str]],
     async for n, text in lines:
         wire = c.line(text)
         yield n, numbered(n, wire) if line_numbers else wire
+
