@@ -181,7 +181,8 @@ def bench_throughput(tmp: Path, lines: int) -> None:
 
 
 def bench_motion_library(lines: int) -> None:
-    """The motion library alone on the same number of short moves."""
+    """The estimate alone (each line's wire bytes, then the motion library) on the same
+    number of short moves."""
     import numpy as np
     from plotbridge.motion.estimate import Estimator
     rng = np.random.default_rng(1)
@@ -196,7 +197,8 @@ def bench_motion_library(lines: int) -> None:
     e.moves(kind, xs, ys, feed, nbytes)
     e.flush()
     took = time.process_time() - t
-    print(f"    the motion library alone on {lines:,} moves of one feed: CPU {took:.2f} s "
+    print(f"    the estimate alone (wire bytes, motion library) on {lines:,} moves of one "
+          f"feed: CPU {took:.2f} s "
           f"({lines / took:,.0f} moves/s, {took / lines * 1e9:.0f} ns a move)")
 
 
