@@ -168,10 +168,11 @@ class Link:
     banner_wait_serial = 2.0   # the same for a real port: DTR reset + bootloader take ~1-2 s
     handshake_timeout = 5.0    # s for the board to answer at all
     # s without a byte from the board while polling: link lost. A pulled cable closes the
-    # port at once; this is for a hung board (a working one answers '?' within ms). 0.8 s
-    # took a virtual plotter kept off a loaded host's CPU (a process beside the server)
-    # for lost, and interrupted its job.
-    silence_timeout = 2.0
+    # port at once; this is for a hung board (a working one answers '?' within ms), and
+    # the emergency stop does not wait for it. A virtual plotter is a process beside the
+    # server, which a loaded host keeps off the CPU now and then: 0.8 s, then 2 s (a
+    # clean-clone suite beside two busy processes) took one for lost, and its job with it.
+    silence_timeout = 5.0
     silent_polls = 3           # ... and at least this many '?' sent since the last byte
     stall = 0.5                # s a poll came late by: this process stalled (silence restarts)
     reset_settle = 2.5         # s commands wait for the banner after a soft reset
