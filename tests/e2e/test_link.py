@@ -5,7 +5,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import math
-import time
 from collections.abc import AsyncIterator
 
 import pytest
@@ -114,9 +113,8 @@ async def test_link_loss_and_reconnect(plotter):
         events: list[str] = []
         link.subscribe(lambda e: events.append(e.kind))
         plotter.kill()
-        t0 = time.monotonic()
-        await settle(lambda: not link.connected, 2, "loss noticed")
-        assert time.monotonic() - t0 < 1.0
+        # the closed port tells at once: well before the silence limit could
+        await settle(lambda: not link.connected, link.silence_timeout - 1, "loss noticed")
         assert link.status.state == "Disconnected" and "disconnected" in events
         await asyncio.to_thread(plotter.restart)
         await settle(lambda: link.connected, 10, "reconnected")
