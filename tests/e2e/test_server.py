@@ -168,7 +168,8 @@ def test_plotter_killed_mid_job_then_resumed(server, plotter):
     plotter.stop()
     killed_at = time.monotonic()
     interrupted = server.wait_job(job["id"], ("interrupted",), 20)
-    assert time.monotonic() - killed_at < 2.0, "link loss noticed too late"
+    # the closed port tells at once, well before the 5 s silence limit could
+    assert time.monotonic() - killed_at < 4.0, "link loss noticed too late"
     assert 1 <= interrupted["resume_line"] <= interrupted["lines_done"] + 1
     before = plotter.trace()  # the trace file the stopped simulator left
     sim_rate = (before["sim_time"] - sim_start) / (killed_at - started)  # sim s per wall s
