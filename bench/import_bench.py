@@ -411,13 +411,14 @@ QUIET = 0.05     # a run counts when the simulator was off the CPU at most this 
 
 
 def _plot_through_server(plotsim, tmp: Path, src: Path,
-                         speed: float) -> tuple[float, float, int, float, float]:
+                         speed: float) -> tuple[float, float, int, float]:
     """One drawing through a real `plotbridge serve` on a fresh virtual plotter at (0, 0):
     uploaded, imported and estimated by the server for that board, then plotted. Returns
-    (the job's estimate_s, the simulated plot time from the start request to the last
-    stroke's end, the program's lines, the board's pen settle in s, the seconds the
-    simulator was kept off the CPU meanwhile: it then runs faster than the wall clock
-    to catch up, and the server's pace counts for less)."""
+    (the estimate and the simulated plot time, as plot_time.estimate_and_plot gives them,
+    the program's lines, the seconds the simulator was kept off the CPU meanwhile: it
+    then runs faster than the wall clock to catch up, and the server's pace counts for
+    less)."""
+    from tests.fixtures.plot_time import estimate_and_plot, idle
     from tests.fixtures.server import running_server
 
     run = Path(tempfile.mkdtemp(prefix=f"{src.stem}-", dir=tmp))
@@ -426,10 +427,7 @@ def _plot_through_server(plotsim, tmp: Path, src: Path,
     plotter.start()
     try:
         with running_server(run / "server", ["--serial", plotter.port]) as server:
-            server.wait_machine(lambda m: m["connected"], 60)
-            if server.machine()["state"] != "Idle":
-                assert server.client.post("/api/machine/unlock").status_code < 300
-                server.wait_machine(lambda m: m["state"] == "Idle", 60)
+            idle(server)
             if str(src).startswith("pattern:"):
                 r = server.client.post("/api/jobs", params={
                     "pattern": src.name.split(":")[1], "paper": "A5-landscape"})
@@ -438,24 +436,12 @@ def _plot_through_server(plotsim, tmp: Path, src: Path,
             else:
                 job = server.submit(src.read_text(), start=False)
             job = server.wait_job(job["id"], "queued", timeout=120)
-            settings = {s["id"]: s["value"] for s in
-                        server.client.get("/api/machine/settings").json()["settings"]}
-            t0 = plotter.trace()["sim_time"]
             waited = plotter.cpu_wait()
-            started = server.client.post(f"/api/jobs/{job['id']}/start")
-            assert started.status_code == 200, started.text
-            done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"),
-                                   timeout=3600)
-            if done["state"] != "done":
-                raise RuntimeError(f"the job ended {done['state']}: {done['error']}; the "
-                                   f"server's log ends:\n{server.log()[-3000:]}")
-            trace = plotter.trace()
+            predicted, plotted = estimate_and_plot(server, plotter, job["id"], timeout=3600)
             waited = plotter.cpu_wait() - waited
     finally:
         plotter.cleanup()
-    settle = MachineProfile.from_settings(settings).pen_settle_s
-    return (job["estimate_s"], trace["strokes"][-1][-1][2] - t0, job["lines_total"], settle,
-            waited)
+    return predicted, plotted, job["lines_total"], waited
 
 
 def bench_accuracy(tmp: Path, speed: float) -> None:
@@ -476,8 +462,7 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
     if not plotsim.FIRMWARE_ELF.exists():
         print(f"(c) NOT MEASURED: no firmware at {plotsim.FIRMWARE_ELF}")
         return
-    from plotbridge.motion.timing import profile_for
-    profile = profile_for({}, "1.1h.plotbridge")
+    profile = MachineProfile.for_board({}, "1.1h.plotbridge")
     rev = subprocess.run(["git", "log", "-1", "--format=%h %s", "--", "firmware/src"], cwd=REPO,
                          capture_output=True, text=True).stdout.strip()
     depth = profile.planner_blocks or library.planner_depth()
@@ -495,17 +480,14 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
         for _ in range(ATTEMPTS):
             try:
                 runs.append(_plot_through_server(plotsim, tmp, src, speed))
-            except (RuntimeError, AssertionError) as e:
+            except AssertionError as e:
                 print(f"(c) {name:14s} NOT MEASURED: {e}")
                 break
-            if runs[-1][4] <= QUIET * runs[-1][1]:
+            if runs[-1][3] <= QUIET * runs[-1][1]:
                 break
         if not runs:
             continue
-        estimate, measured, lines, settle, waited = min(runs, key=lambda r: r[4] / r[1])
-        # The program ends with the last stroke and M5: motion ends at the last vertex,
-        # and the estimate adds the final pen settle.
-        predicted = estimate - settle
+        predicted, measured, lines, waited = min(runs, key=lambda r: r[3] / r[1])
         err = (predicted - measured) / measured
         print(f"(c) {name:14s} {lines:6d} lines: predicted {predicted:8.2f} s, plotted "
               f"{measured:8.2f} s (simulated): error {err * 100:+.2f}% "

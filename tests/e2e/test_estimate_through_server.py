@@ -9,6 +9,7 @@ import math
 
 import pytest
 
+from tests.fixtures.plot_time import estimate_and_plot, idle
 from tests.fixtures.server import running_server
 
 pytestmark = pytest.mark.e2e
@@ -33,23 +34,11 @@ def test_a_dense_drawings_estimate_is_its_simulated_plot_time(plotter_factory, t
     # (the planner keeps ~0.15 s of these moves queued ahead of the stream).
     plotter = plotter_factory(speed=1)
     with running_server(tmp_path / "server-data", ["--serial", plotter.port]) as server:
-        server.wait_machine(lambda m: m["connected"], 60)
-        if server.machine()["state"] != "Idle":
-            assert server.client.post("/api/machine/unlock").status_code == 200
-            server.wait_machine(lambda m: m["state"] == "Idle", 60)
+        idle(server)
         drawing = spiral()
         job = server.submit(drawing, start=False)
-        settle = next(s["value"] for s in server.client.get("/api/machine/settings").json()[
-            "settings"] if s["id"] == 62) / 1000
-        t0 = plotter.trace()["sim_time"]
-        assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
-        done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
-        assert done["state"] == "done", done
+        predicted, plotted = estimate_and_plot(server, plotter, job["id"])
         trace = plotter.trace()
-    # the program ends with its stroke and M5: motion ends at the stroke's last point,
-    # and the estimate adds the final pen settle
-    plotted = trace["strokes"][-1][-1][2] - t0
-    predicted = job["estimate_s"] - settle
     print(f"estimate {predicted:.2f} s, simulated plot {plotted:.2f} s")
     end = [float(w[1:]) for w in drawing.splitlines()[-2].split()[1:3]]
     assert len(trace["strokes"]) == 1     # all of it drawn, to its end

@@ -8,8 +8,9 @@ from pathlib import Path
 
 import pytest
 from plotbridge.grbl import build_of
+from plotbridge.importing import MachineProfile
 from plotbridge.jobs.imports import Importer, run_import
-from plotbridge.motion.timing import GRBL_LINE_S, GRBL_PLANNER_BLOCKS, profile_for
+from plotbridge.motion.timing import GRBL_LINE_S, GRBL_PLANNER_BLOCKS
 
 SETTINGS = {110: 5000.0, 111: 5000.0, 120: 800.0, 121: 800.0, 130: 300.0, 131: 220.0}
 
@@ -27,7 +28,7 @@ def test_build_of_the_version(firmware, build):
     ("1.1h.PlotBridge", False), ("1.1h", False), (None, False),
 ])
 def test_profile_for_the_firmware(firmware, stock):
-    p = profile_for(SETTINGS, firmware)
+    p = MachineProfile.for_board(SETTINGS, firmware)
     assert p.max_rate == (5000.0, 5000.0) and p.accel == (800.0, 800.0)   # its settings
     assert (p.planner_blocks == GRBL_PLANNER_BLOCKS and p.plan_block_s == GRBL_LINE_S) is stock
 

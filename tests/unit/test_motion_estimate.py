@@ -12,7 +12,7 @@ from plotbridge.importing import MachineProfile
 from plotbridge.motion import estimate, library
 from plotbridge.motion.estimate import Estimator, thin_timeline
 from plotbridge.motion.eta import eta, share_done
-from plotbridge.motion.timing import GRBL_PLANNER_BLOCKS, stock_grbl
+from plotbridge.motion.timing import GRBL_PLANNER_BLOCKS
 from plotbridge.program.wire import compact, numbered
 
 # 1000 mm/s², 100 mm/s max rate, junction deviation 0.02 mm; lines reach the planner
@@ -105,7 +105,7 @@ def test_short_segments_are_limited_by_the_planner_depth():
 
 
 def test_stock_grbl_uses_its_planner_depth_and_line_time():
-    grbl = stock_grbl({110: 6000, 111: 6000, 120: 1000, 121: 1000})
+    grbl = MachineProfile.stock_grbl({110: 6000, 111: 6000, 120: 1000, 121: 1000})
     assert grbl.planner_blocks == GRBL_PLANNER_BLOCKS
     segs = [(0.1 * k, 0, 6000) for k in range(1, 401)]
     ours = run(segs, MachineProfile())

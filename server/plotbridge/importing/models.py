@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from ..motion.timing import LINE_S
+from ..grbl import build_of
+from ..motion.timing import GRBL_LINE_S, GRBL_PLANNER_BLOCKS, LINE_S
 
 MAX_ERRORS = 100
 
@@ -46,6 +47,23 @@ class MachineProfile:
             steps_per_mm=(get(100, d.steps_per_mm[0]), get(101, d.steps_per_mm[1])),
             corexy=bool(get(63, 0)),
         )
+
+    @classmethod
+    def stock_grbl(cls, settings: dict[int, float], baud: int = 115200) -> MachineProfile:
+        """The estimate's profile for a stock GRBL 1.1 board with these $ settings: the
+        same motion library, configured with GRBL's planner depth and line time, lines
+        sent without N words (motion/timing.py)."""
+        return replace(cls.from_settings(settings), planner_blocks=GRBL_PLANNER_BLOCKS,
+                       plan_block_s=GRBL_LINE_S, baud=baud, line_numbers=False)
+
+    @classmethod
+    def for_board(cls, settings: dict[int, float], firmware: str | None) -> MachineProfile:
+        """The estimate's profile for a board with these $ settings and this `$I` version:
+        stock GRBL's when the build is not ours, our firmware's when it is or is unknown."""
+        build = build_of(firmware)
+        if build is not None and build.lower() != "plotbridge":
+            return cls.stock_grbl(settings)
+        return cls.from_settings(settings)
 
 
 @dataclass

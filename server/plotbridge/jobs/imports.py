@@ -29,10 +29,9 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
     types: unpickling the importer's own classes would load its modules into the server.
     """
     from plotbridge import importing
-    from plotbridge.motion.timing import profile_for
 
     try:
-        profile = profile_for(settings, firmware)
+        profile = importing.MachineProfile.for_board(settings, firmware)
         opts = importing.ImportOptions(**options)
         if kind == "pattern":
             result = importing.import_pattern(source, Path(dest), opts, profile)

@@ -77,11 +77,8 @@ class _Batch:
                    self.feed[:n], self.keeps[:n], self.bytes[:n])
 
     def args(self) -> tuple:
-        """The arrays' addresses as motion_feed and motion_plan take them (`data_as`
-        would make each pointer a reference cycle with its array: an import's batches
-        stayed in memory until the collector's next full pass)."""
-        arrays = (self.kind, self.x, self.y, self.i, self.j, self.feed, self.bytes)
-        return (self.n, *(a.ctypes.data for a in arrays))
+        """The arrays as motion_feed and motion_plan take them."""
+        return (self.n, self.kind, self.x, self.y, self.i, self.j, self.feed, self.bytes)
 
 
 _ABORT = object()
@@ -132,7 +129,7 @@ class _Runner:
                     if self.error is not None:
                         continue    # the counting failed: the rest only drains
                     ack = np.empty(item.n)
-                    library.motion_feed(*item.args(), ack.ctypes.data)
+                    library.motion_feed(*item.args(), ack)
                     self.acks.append(ack)
                 if item is None and self.error is None:
                     self.time = library.motion_end()

@@ -16,6 +16,10 @@ import subprocess
 import threading
 from pathlib import Path
 
+import numpy as np
+
+from ..native import array
+
 FIRMWARE_DIR = Path(os.environ.get("PLOTBRIDGE_FIRMWARE_DIR",
                                    Path(__file__).resolve().parents[3] / "firmware"))
 DEFAULT_BOARD = "uno-cnc-shield"
@@ -76,8 +80,9 @@ def load(board: str = DEFAULT_BOARD) -> ctypes.CDLL:
             lib.motion_configure.argtypes = [ctypes.POINTER(Config)]
             lib.motion_configure.restype = None
             lib.motion_plan_size.restype = ctypes.c_int
-            # kind (uint8), x, y, i, j, feed (float), bytes (uint16), ack (double) arrays
-            lib.motion_feed.argtypes = [ctypes.c_int] + [ctypes.c_void_p] * 8
+            f32 = array(np.float32, 1)
+            lib.motion_feed.argtypes = [ctypes.c_int, array(np.uint8, 1), f32, f32, f32, f32,
+                                        f32, array(np.uint16, 1), array(np.float64, 1)]
             lib.motion_feed.restype = None
             lib.motion_end.restype = ctypes.c_double
             lib.motion_plan.argtypes = lib.motion_feed.argtypes[:7]

@@ -23,14 +23,6 @@ everything about speeds comes from the firmware code itself.
 
 from __future__ import annotations
 
-from dataclasses import replace
-from typing import TYPE_CHECKING
-
-from ..grbl import build_of
-
-if TYPE_CHECKING:   # importing/models.py takes its default line time from here
-    from ..importing.models import MachineProfile
-
 RX_SIZE = 128               # GRBL's receive buffer; both boards use it
 GRBL_LINE_S = 0.0033        # stock GRBL 1.1 on a 328P (~300 short lines/s)
 GRBL_PLANNER_BLOCKS = 15    # GRBL's BLOCK_BUFFER_SIZE 16 on a 328P, one kept free
@@ -53,23 +45,3 @@ GRBL_PLANNER_BLOCKS = 15    # GRBL's BLOCK_BUFFER_SIZE 16 on a 328P, one kept fr
 # before (measured on older firmware) made dense drawings' estimates too long.
 LINE_S = 0.00122
 
-
-def stock_grbl(settings: dict[int, float], baud: int = 115200) -> MachineProfile:
-    """The estimate's profile for a stock GRBL 1.1 board with these $ settings: the same
-    motion library, configured with GRBL's planner depth and line time, lines sent
-    without N words."""
-    from ..importing.models import MachineProfile
-
-    return replace(MachineProfile.from_settings(settings), planner_blocks=GRBL_PLANNER_BLOCKS,
-                   plan_block_s=GRBL_LINE_S, baud=baud, line_numbers=False)
-
-
-def profile_for(settings: dict[int, float], firmware: str | None) -> MachineProfile:
-    """The estimate's profile for a board with these $ settings and this `$I` version:
-    stock GRBL's when the build is not ours, our firmware's when it is or is unknown."""
-    from ..importing.models import MachineProfile
-
-    build = build_of(firmware)
-    if build is not None and build.lower() != "plotbridge":
-        return stock_grbl(settings)
-    return MachineProfile.from_settings(settings)

@@ -145,4 +145,3 @@ async def compact_async(lines: AsyncIterable[tuple[int, str]],
     async for n, text in lines:
         wire = c.line(text)
         yield n, numbered(n, wire) if line_numbers else wire
-
