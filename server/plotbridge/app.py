@@ -45,6 +45,7 @@ class Board:
     link: Link
     virtual: VirtualPlotter | None = None
     work_area: WorkArea | None = None
+    profile: str | None = None  # its board profile (firmware/src/boards/NAME.h)
 
 
 def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
@@ -59,14 +60,13 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     for leftover in config.tmp_dir.glob("upload-*"):
         leftover.unlink(missing_ok=True)
     store = JobStore(config.db_path, first_plotter=boards[0].name)
-    importer = Importer(config.jobs_dir, settings=lambda: boards[0].link.settings,
-                        limits=config.import_limits,
-                        firmware=lambda: boards[0].link.status.firmware)  # fmt: skip
+    importer = Importer(config.jobs_dir, limits=config.import_limits)
     importer.clean()
     library = PenLibrary(config.db_path, events)
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
-                     work_area=b.work_area, home_on_connect=config.home_on_connect,
-                     after_job=config.after_job, park=config.park,  # type: ignore[arg-type]
+                     work_area=b.work_area, profile=b.profile,
+                     home_on_connect=config.home_on_connect, after_job=config.after_job,
+                     park=config.park,  # type: ignore[arg-type]
                      pens=library)
              for b in boards]  # fmt: skip
     queue = JobQueue(units, store, importer, events, auto_start=config.auto_start,

@@ -300,7 +300,8 @@ async def serve(config: Config) -> int:
                 device = str(virtual.port)
                 log.info("%s: virtual plotter on %s (speed %g)", plotter.name, device,
                          config.sim_speed)  # fmt: skip
-            boards.append(Board(plotter.name, Link(device, plotter.baud), virtual, area))
+            boards.append(Board(plotter.name, Link(device, plotter.baud), virtual, area,
+                                plotter.board))
         app = create_app(config, boards, token)
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning", log_config=None,

@@ -110,11 +110,11 @@ class JobQueue:
                      pens: dict[str, Any] | None = None) -> Job:  # fmt: skip
         """Import an upload (a file already on disk) or a pattern into a new queued job;
         `pens` names pens for some of its layers (the others get their default pen)."""
-        if target is not None:
-            self.plotter(target)
-        placement, turned = self._oriented(placement)
+        plotter = self._planned_for(target)
+        placement, turned = self._oriented(placement, plotter)
         options = {**options, **placement}
-        job_id, kept, result = await self.importer.create(kind, source, filename, options)
+        job_id, kept, result = await self.importer.create(kind, source, filename, options,
+                                                          plotter.import_model())  # fmt: skip
         job = Job(id=job_id, name=name, kind=kind, source=kept, filename=filename,
                   options=options, placement=placement, target=target, after=after,
                   format=result.format, lines_total=result.lines_total,
@@ -139,10 +139,11 @@ class JobQueue:
         if job.state != "queued":
             raise Refused(409, f"job {job_id} is {job.state}; only a queued job can be changed")
         if placement is not None:
-            placement, turned = self._oriented({**job.placement, **placement})
+            plotter = self._planned_for(job.target)
+            placement, turned = self._oriented({**job.placement, **placement}, plotter)
             options = {**job.options, **placement}
             result = await self.importer.reimport(
-                job_id, job.kind, job.source, job.filename, options,
+                job_id, job.kind, job.source, job.filename, options, plotter.import_model(),
                 still_wanted=lambda: job.state == "queued",
             )  # fmt: skip
             kept = job.layers
@@ -171,14 +172,29 @@ class JobQueue:
             self.pens.assign(job.layers, wanted, kept)
         elif wanted:
             raise Refused(409, "this server has no pen library")
-    def _oriented(self, placement: dict[str, Any]) -> tuple[dict[str, Any], list[dict]]:
+    def _planned_for(self, target: str | None) -> Plotter:
+        """The plotter an import plans for (its work area, its estimate): the one the job
+        names, else the one with the largest work area (the first of equal ones), so an
+        import refuses only what no plotter can draw and the queue sends the job to a
+        plotter it fits."""
+        if target is not None:
+            return self.plotter(target)
+
+        def area(plotter: Plotter) -> float:
+            a = plotter.work_area
+            return a.width * a.height if a is not None else 0.0
+
+        return max(self.plotters.values(), key=area)
+
+    @staticmethod
+    def _oriented(placement: dict[str, Any],
+                  plotter: Plotter) -> tuple[dict[str, Any], list[dict]]:  # fmt: skip
         """A paper too large upright for the work area the import plans for, turned to
         landscape by itself; the warning that says so (the job shows it)."""
-        settings = self.importer.settings()
-        width, height, paper = settings.get(130), settings.get(131), placement.get("paper")
-        if not (paper and width and height):
+        area, paper = plotter.work_area, placement.get("paper")
+        if not (paper and area):
             return placement, []
-        name, note = orient(paper, width, height)
+        name, note = orient(paper, area.width, area.height)
         if note is None:
             return placement, []
         return {**placement, "paper": name}, [{"line": None, "message": note}]

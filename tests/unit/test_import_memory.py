@@ -45,7 +45,7 @@ def left_in_cycles(args: tuple[str, str, str], folder: str) -> list[str]:
         dest.mkdir()
         gc.collect()
         gc.set_debug(gc.DEBUG_SAVEALL if n else 0)
-        answers.append(run_import(*args, str(dest), {}, {}, None)[0])
+        answers.append(run_import(*args, str(dest), {}, {"settings": {}, "firmware": None})[0])
         gc.collect()
     gc.set_debug(0)
     left = sorted({type(o).__qualname__ for o in gc.garbage})

@@ -28,6 +28,7 @@ class MachineProfile:
     baud: int = 115200  # serial speed: bounds how fast lines reach the planner (0: no bound)
     plan_block_s: float = LINE_S  # firmware time from a line's arrival to its ok (motion/timing.py)
     line_numbers: bool = True  # lines go with an N word (the board reports `Ln:`: ours does)
+    build: str | None = None  # the board profile whose motion library runs (None: the default)
 
     @classmethod
     def from_settings(cls, settings: dict[int, float]) -> MachineProfile:
@@ -57,13 +58,23 @@ class MachineProfile:
                        plan_block_s=GRBL_LINE_S, baud=baud, line_numbers=False)
 
     @classmethod
-    def for_board(cls, settings: dict[int, float], firmware: str | None) -> MachineProfile:
-        """The estimate's profile for a board with these $ settings and this `$I` version:
-        stock GRBL's when the build is not ours, our firmware's when it is or is unknown."""
+    def for_board(cls, settings: dict[int, float], firmware: str | None,
+                  profile: str | None = None, planner_blocks: int = 0,
+                  line_numbers: bool | None = None) -> MachineProfile:  # fmt: skip
+        """The estimate's profile for a plotter (Plotter.import_model): its $ settings,
+        its `$I` version (stock GRBL's model when the build is not ours, our firmware's
+        when it is or is unknown), its board profile, and what its `$I` said once it was
+        read: the planner's depth and whether it reports `Ln:` (lines then go with N)."""
         build = build_of(firmware)
         if build is not None and build.lower() != "plotbridge":
-            return cls.stock_grbl(settings)
-        return cls.from_settings(settings)
+            board = cls.stock_grbl(settings)
+        else:
+            board = replace(cls.from_settings(settings), build=profile)
+        if planner_blocks:
+            board = replace(board, planner_blocks=planner_blocks)
+        if line_numbers is not None:
+            board = replace(board, line_numbers=line_numbers)
+        return board
 
 
 @dataclass

@@ -20,10 +20,9 @@ from plotbridge.importing.workers import ImportLimit, ImportService, Limits
 from plotbridge.jobs.model import Imported
 
 
-def run_import(kind: str, source: str, filename: str, dest: str, options: dict, settings: dict,
-               firmware: str | None = None):
-    """Worker-process entry: import one upload or pattern; never raises. The estimate
-    models the board `firmware` (its `$I` version) names: stock GRBL or ours.
+def run_import(kind: str, source: str, filename: str, dest: str, options: dict, board: dict):
+    """Worker-process entry: import one upload or pattern; never raises. It plans for
+    `board` (Plotter.import_model: the work area, and the estimate's motion model).
 
     Returns ("ok", Imported fields) or ("failed", status, errors), in plain Python
     types: unpickling the importer's own classes would load its modules into the server.
@@ -31,7 +30,7 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
     from plotbridge import importing
 
     try:
-        profile = importing.MachineProfile.for_board(settings, firmware)
+        profile = importing.MachineProfile.for_board(**board)
         opts = importing.ImportOptions(**options)
         if kind == "pattern":
             result = importing.import_pattern(source, Path(dest), opts, profile)
@@ -52,12 +51,8 @@ def patterns() -> dict[str, str]:
 
 
 class Importer:
-    def __init__(self, jobs_dir: Path, settings: Callable[[], dict[int, float]],
-                 limits: Limits | None = None,
-                 firmware: Callable[[], str | None] = lambda: None) -> None:  # fmt: skip
+    def __init__(self, jobs_dir: Path, limits: Limits | None = None) -> None:
         self.jobs_dir = jobs_dir
-        self.settings = settings  # the board settings the import plans for
-        self.firmware = firmware  # the board's `$I` version: selects the estimate's model
         self.workers = ImportService(limits)  # supervised, limited (importing/workers.py)
         self._patterns: dict[str, str] | None = None
 
@@ -69,9 +64,10 @@ class Importer:
     def close(self) -> None:
         self.workers.close()
 
-    async def create(self, kind: str, source: Path | str, filename: str,
-                     options: dict[str, Any]) -> tuple[str, str, Imported]:  # fmt: skip
-        """Import into a new job folder: (job id, the source as the job keeps it, result)."""
+    async def create(self, kind: str, source: Path | str, filename: str, options: dict[str, Any],
+                     board: dict[str, Any]) -> tuple[str, str, Imported]:  # fmt: skip
+        """Import into a new job folder, planned for `board` (Plotter.import_model):
+        (job id, the source as the job keeps it, result)."""
         job_id = uuid.uuid4().hex[:12]
         partial = self.jobs_dir / f".{job_id}.partial"
         partial.mkdir(parents=True)
@@ -81,7 +77,7 @@ class Importer:
                 original = partial / ("original" + _safe_suffix(filename))
                 await asyncio.to_thread(shutil.move, str(source), original)
                 source_arg = str(original)
-            result = await self._import(kind, source_arg, filename, partial, options)
+            result = await self._import(kind, source_arg, filename, partial, options, board)
             await asyncio.to_thread(partial.rename, self.jobs_dir / job_id)
         except BaseException:
             await asyncio.to_thread(shutil.rmtree, partial, True)
@@ -89,7 +85,8 @@ class Importer:
         return job_id, Path(source_arg).name if kind == "file" else source_arg, result
 
     async def reimport(self, job_id: str, kind: str, source: str, filename: str,
-                       options: dict[str, Any], still_wanted: Callable[[], bool]) -> Imported:
+                       options: dict[str, Any], board: dict[str, Any],
+                       still_wanted: Callable[[], bool]) -> Imported:  # fmt: skip
         """Import a job again from its original; its folder is swapped only if still wanted."""
         folder = self.jobs_dir / job_id
         partial = self.jobs_dir / f".{job_id}.reimport"
@@ -98,7 +95,7 @@ class Importer:
             if kind == "file":
                 await asyncio.to_thread(shutil.copy2, folder / source, partial / source)
                 source = str(partial / source)
-            result = await self._import(kind, source, filename, partial, options)
+            result = await self._import(kind, source, filename, partial, options, board)
             if not still_wanted():
                 raise Refused(409, f"job {job_id} started while it was being re-imported")
         except BaseException:
@@ -122,13 +119,12 @@ class Importer:
         return self._patterns
 
     async def _import(self, kind: str, source: str, filename: str, dest: Path,
-                      options: dict[str, Any]) -> Imported:  # fmt: skip
+                      options: dict[str, Any], board: dict[str, Any]) -> Imported:  # fmt: skip
         size = await asyncio.to_thread(os.path.getsize, source) if kind == "file" else 0
         try:
             await self.workers.check_room(self.jobs_dir, size)
             outcome = await self.workers.call(run_import, kind, source, filename, str(dest),
-                                              options, dict(self.settings()),
-                                              self.firmware(), size=size)  # fmt: skip
+                                              options, board, size=size)  # fmt: skip
             if outcome[0] == "ok":
                 await self.workers.check_job(dest)
         except ImportLimit as exc:

@@ -40,11 +40,16 @@ def _config(p: MachineProfile) -> lib.Config:
     c.arc_tolerance = p.arc_tolerance
     c.pen_settle_s = p.pen_settle_s
     c.corexy = int(p.corexy)
-    c.depth = p.planner_blocks or lib.planner_depth()
+    c.depth = p.planner_blocks or lib.planner_depth(_build(p))
     c.byte_s = 10.0 / p.baud if p.baud else 0.0
     c.line_cpu_s = p.plan_block_s
     c.rx_size = RX_SIZE
     return c
+
+
+def _build(p: MachineProfile) -> str:
+    """The library build that models the profile's board (its depth, its profile)."""
+    return lib.build_holding(p.build, p.planner_blocks)
 
 
 def thin_timeline(ack: np.ndarray, line: int, total: float,
@@ -121,7 +126,7 @@ class _Runner:
     def _work(self, profile: MachineProfile) -> None:
         item: object = self
         try:
-            library = lib.load()
+            library = lib.load(_build(profile))
             config = _config(profile)
             with lib.run_lock:
                 library.motion_configure(ctypes.byref(config))
@@ -263,7 +268,7 @@ class Estimator:
         RAM (the differential test compares them with the board's)."""
         if self._runner is not None:
             raise ValueError(f"planned_blocks plans at most {BATCH} lines")
-        library = lib.load()
+        library = lib.load(_build(self.profile))
         size = library.motion_block_size()
         out = ctypes.create_string_buffer(size * 256)
         with lib.run_lock:

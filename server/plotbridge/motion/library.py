@@ -23,6 +23,7 @@ from ..native import array
 FIRMWARE_DIR = Path(os.environ.get("PLOTBRIDGE_FIRMWARE_DIR",
                                    Path(__file__).resolve().parents[3] / "firmware"))
 DEFAULT_BOARD = "uno-cnc-shield"
+DEEP_BOARD = "mega-ramps14"  # a 2560 build: the deepest planner of the profiles (63 blocks)
 LIBRARY = FIRMWARE_DIR / "build" / "host" / "libmotion.so"
 
 
@@ -98,3 +99,15 @@ def planner_depth(board: str = DEFAULT_BOARD) -> int:
     """How many blocks the board's planner holds (its PLAN_SIZE - 1): the depth to
     configure the library with for that board."""
     return int(load(board).motion_plan_size())
+
+
+def build_holding(board: str | None, depth: int) -> str:
+    """The build whose library runs the estimate for a board of profile `board` (None:
+    the default) whose planner holds `depth` blocks (0: unknown): the board's own build,
+    unless the board reports a deeper planner than that build has (a Mega flashed with
+    our firmware behind a server left at the default profile), then the deepest build.
+    The motion code is the same in every build; only the ring's size differs."""
+    own = board or DEFAULT_BOARD
+    if depth > planner_depth(own):
+        return DEEP_BOARD
+    return own

@@ -38,8 +38,8 @@ GRBL_PLANNER_BLOCKS = 15    # GRBL's BLOCK_BUFFER_SIZE 16 on a 328P, one kept fr
 #     (0.2 mm at F6000), 1.23 (0.5 mm at F6000), 1.33 (0.5 mm at F12000)
 #   mega-ramps14 (2560): 1.18, 1.20, 1.30, 1.32, 1.38 (its 3-byte return addresses and
 #     larger planner)
-# The figure used is the Uno's at F6000 (the default $110/$111): the estimate runs the
-# Uno build of the motion library, and a board's `$I` does not name its profile. (On
+# The figure used is the Uno's at F6000 (the default $110/$111) for every board: a
+# board's `$I` names neither its chip nor its profile (the Mega's is ~6 % more). (On
 # the wire a numbered line takes ~1.6 ms at 115200 baud, more than either board's
 # line time, so the serial line paces dense drawings, not this figure.) The 2.2 ms
 # before (measured on older firmware) made dense drawings' estimates too long.

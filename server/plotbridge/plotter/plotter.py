@@ -20,6 +20,7 @@ from typing import Any
 from plotbridge import settings_meta
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
+from plotbridge.grbl import build_of
 from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
@@ -48,7 +49,8 @@ class WorkArea:
 class Plotter:
     def __init__(self, name: str, link: Link, events: EventHub, jobs_dir: Path, *,
                  virtual: VirtualPlotter | None = None, work_area: WorkArea | None = None,
-                 home_on_connect: bool = False, after_job: AfterJob = "none",
+                 profile: str | None = None, home_on_connect: bool = False,
+                 after_job: AfterJob = "none",
                  park: tuple[float, float] = (0.0, 0.0),
                  pens: PenLibrary | None = None) -> None:  # fmt: skip
         self.name = name
@@ -56,6 +58,7 @@ class Plotter:
         self.events = events
         self.virtual = virtual
         self.configured_area = work_area
+        self.profile = profile  # the board profile configured for it (None: the default)
         self.home_on_connect = home_on_connect
         self.on_ready: Callable[[Plotter], None] = lambda _: None
         self.on_job: Report = lambda _job, _save: None
@@ -103,6 +106,21 @@ class Plotter:
         if width and height:
             return WorkArea(width, height)
         return None
+
+    def import_model(self) -> dict[str, Any]:
+        """What an import plans for on this plotter, as MachineProfile.for_board takes it
+        (plain values: it goes to an import worker): the board's settings with the work
+        area in $130/$131, its `$I` version and profile, and, once `$I` has been read,
+        its planner's depth and whether it reports the executing line."""
+        settings = dict(self.link.settings)
+        if (area := self.work_area) is not None:
+            settings[130], settings[131] = area.width, area.height
+        firmware = self.link.status.firmware
+        told = build_of(firmware) is not None   # $I answered (the banner names no build)
+        facts = self.link.facts
+        return {"settings": settings, "firmware": firmware, "profile": self.profile,
+                "planner_blocks": facts.planner_blocks if told else 0,
+                "line_numbers": facts.line_numbers if told else None}
 
     def fits(self, job: Job) -> bool:
         area = self.work_area
