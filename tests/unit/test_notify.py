@@ -197,7 +197,7 @@ async def test_a_receiver_down_for_long_loses_the_oldest_events_only(outbox, cap
     started = time.monotonic()
     for n in range(1, 12):
         delivery.put("job_done", {"n": n})
-    assert time.monotonic() - started < 0.05  # put never waits
+    assert time.monotonic() - started < 1  # put never waits (the receiver hangs for good)
     assert delivery.queued == 5 and delivery.figures.dropped == 7
     assert "dropped the oldest" in caplog.text
     await settle(lambda: kept(outbox.path) == [(URL, n) for n in range(7, 12)])  # on disk too
