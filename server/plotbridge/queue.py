@@ -172,6 +172,7 @@ class JobQueue:
             self.pens.assign(job.layers, wanted, kept)
         elif wanted:
             raise Refused(409, "this server has no pen library")
+
     def _planned_for(self, target: str | None) -> Plotter:
         """The plotter an import plans for (its work area, its estimate): the one the job
         names, else the one with the largest work area (the first of equal ones), so an
