@@ -16,7 +16,7 @@
     `read linemerge linesort` (target: within 2x).
 
 Usage: python bench/import_bench.py [--lines N] [--skip a,b,c,d] [--sim-speed X]
-                                    [--vpype-drawings DIR]
+                                    [--board NAME] [--vpype-drawings DIR]
 """
 
 from __future__ import annotations
@@ -410,9 +410,10 @@ ATTEMPTS = 4     # runs of a drawing at most while the machine is busy
 QUIET = 0.05     # a run counts when the simulator was off the CPU at most this share
 
 
-def _plot_through_server(plotsim, tmp: Path, src: Path,
-                         speed: float) -> tuple[float, float, int, float]:
-    """One drawing through a real `plotbridge serve` on a fresh virtual plotter at (0, 0):
+def _plot_through_server(plotsim, tmp: Path, src: Path, speed: float,
+                         board: str) -> tuple[float, float, int, float]:
+    """One drawing through a real `plotbridge serve` on a fresh virtual plotter of board
+    profile `board` at (0, 0):
     uploaded, imported and estimated by the server for that board, then plotted. Returns
     (the estimate and the simulated plot time, as plot_time.estimate_and_plot gives them,
     the program's lines, the seconds the simulator was kept off the CPU meanwhile: it
@@ -422,11 +423,11 @@ def _plot_through_server(plotsim, tmp: Path, src: Path,
     from tests.fixtures.server import running_server
 
     run = Path(tempfile.mkdtemp(prefix=f"{src.stem}-", dir=tmp))
-    plotter = plotsim.Plotter(plotsim.PLOTSIM, plotsim.FIRMWARE_ELF, run / "eeprom.bin", speed,
-                              (0.0, 0.0), ())
+    plotter = plotsim.Plotter(plotsim.PLOTSIM, plotsim.board_firmware(board), run / "eeprom.bin",
+                              speed, (0.0, 0.0), ("--board", board))
     plotter.start()
     try:
-        with running_server(run / "server", ["--serial", plotter.port]) as server:
+        with running_server(run / "server", ["--serial", plotter.port, "--board", board]) as server:
             idle(server)
             if str(src).startswith("pattern:"):
                 r = server.client.post("/api/jobs", params={
@@ -444,31 +445,32 @@ def _plot_through_server(plotsim, tmp: Path, src: Path,
     return predicted, plotted, job["lines_total"], waited
 
 
-def bench_accuracy(tmp: Path, speed: float) -> None:
-    """What a user sees: each drawing uploaded to a real server on a virtual plotter at
-    sim speed `speed` (1: real time, so the server's own streaming pace counts), its
-    job's estimate against the simulated plot time from the trace."""
+def bench_accuracy(tmp: Path, speed: float, board: str) -> None:
+    """What a user sees: each drawing uploaded to a real server on a virtual plotter of
+    board profile `board` at sim speed `speed` (1: real time, so the server's own
+    streaming pace counts), its job's estimate against the simulated plot time from the
+    trace."""
     try:
+        import pytest
+
         from tests.fixtures import plotsim
     except ImportError as e:
         print(f"(c) NOT MEASURED: {e}")
         return
     try:
         plotsim._make("-C", "firmware/sim")
-        plotsim._make("-C", "firmware", "all")
-    except Exception as e:  # the build prints its own output
+        plotsim.board_firmware(board)
+    except (Exception, pytest.fail.Exception) as e:  # the build prints its own output
         print(f"(c) NOT MEASURED: firmware or simulator does not build: {e}")
         return
-    if not plotsim.FIRMWARE_ELF.exists():
-        print(f"(c) NOT MEASURED: no firmware at {plotsim.FIRMWARE_ELF}")
-        return
-    profile = MachineProfile.for_board({}, "1.1h.plotbridge")
+    profile = MachineProfile.for_board({}, "1.1h.plotbridge", board)
     rev = subprocess.run(["git", "log", "-1", "--format=%h %s", "--", "firmware/src"], cwd=REPO,
                          capture_output=True, text=True).stdout.strip()
-    depth = profile.planner_blocks or library.planner_depth()
-    print(f"(c) firmware: {rev or 'unknown'}; through `plotbridge serve` at sim speed "
-          f"{speed:g}; planner model: {depth} blocks, {profile.plan_block_s * 1000:.2f} ms to "
-          f"parse and plan a line, {profile.baud} baud, compact wire lines "
+    depth = profile.planner_blocks or library.planner_depth(board)
+    print(f"(c) firmware: {rev or 'unknown'}; board {board}; through `plotbridge serve` at "
+          f"sim speed {speed:g}; planner model: {depth} blocks, "
+          f"{profile.plan_block_s * 1000:.2f} ms to parse and plan a line, {profile.baud} "
+          f"baud, compact wire lines "
           f"{'with' if profile.line_numbers else 'without'} N words "
           f"(the firmware's own motion code via libmotion)")
     for name, src in accuracy_drawings(tmp).items():
@@ -479,7 +481,7 @@ def bench_accuracy(tmp: Path, speed: float) -> None:
         runs = []
         for _ in range(ATTEMPTS):
             try:
-                runs.append(_plot_through_server(plotsim, tmp, src, speed))
+                runs.append(_plot_through_server(plotsim, tmp, src, speed, board))
             except AssertionError as e:
                 print(f"(c) {name:14s} NOT MEASURED: {e}")
                 break
@@ -502,6 +504,8 @@ def main() -> int:
     ap.add_argument("--skip", default="")
     ap.add_argument("--sim-speed", type=float, default=1.0,
                     help="virtual plotter speed for (c); 1 keeps the sender realistic")
+    ap.add_argument("--board", default=library.DEFAULT_BOARD,
+                    help="board profile of (c)'s virtual plotter (firmware/src/boards/NAME.h)")
     ap.add_argument("--vpype-drawings", type=Path, default=None,
                     help="vpype's benchmark drawings for (d) (default: generated ones)")
     args = ap.parse_args()
@@ -513,7 +517,7 @@ def main() -> int:
         if "b" not in skip:
             bench_vs_vpype(tmp)
         if "c" not in skip:
-            bench_accuracy(tmp, args.sim_speed)
+            bench_accuracy(tmp, args.sim_speed, args.board)
         if "d" not in skip:
             bench_svg_speed(tmp, args.vpype_drawings)
     return 0
