@@ -1,7 +1,9 @@
 /* plotsim: the real firmware ELF on a simulated ATmega328P or ATmega2560 at
- * 16 MHz, wired as a board profile (--board) to a plotter model. One thread: the loop runs instructions in slices and,
- * between slices, services the pty and the control socket, paces simulated
- * time against the wall clock, and keeps the trace file and EEPROM current. */
+ * 16 MHz, wired as a board profile (--board) to a plotter model. The loop
+ * runs instructions in slices and, between slices, services the pty and the
+ * control socket, paces simulated time against the wall clock, and keeps the
+ * trace and EEPROM current; the trace file is written by a thread of its own
+ * (file_writer.h). */
 #include <elf.h>
 #include <errno.h>
 #include <poll.h>
@@ -18,6 +20,7 @@
 #include "control.h"
 #include "board_pins.h"
 #include "eeprom_file.h"
+#include "file_writer.h"
 #include "machine.h"
 #include "options.h"
 #include "peek.h"
@@ -54,6 +57,7 @@ struct sim {
 	struct pty_link pty;
 	struct control ctl;
 	struct eeprom_file ee;
+	struct file_writer trace_file;
 	double last_step_mono;
 	double trace_due, trace_interval;
 	int quit;
@@ -83,34 +87,46 @@ static void write_json(struct sim *s, FILE *f, int newline)
 	trace_write_json(f, &s->mc, &meta);
 }
 
-/* writes via a temporary file and rename, so readers never see half a file */
-static int write_atomic(struct sim *s, const char *path, int svg)
+/* the trace JSON or SVG as text in memory (malloc'd, *len bytes), or NULL */
+static char *render(struct sim *s, int svg, size_t *len)
 {
-	char tmp[1100];
-	snprintf(tmp, sizeof tmp, "%s.%d.tmp", path, (int)getpid());
-	FILE *f = fopen(tmp, "w");
+	char *buf = NULL;
+	FILE *f = open_memstream(&buf, len);
 	if (!f)
-		return -1;
+		return NULL;
 	if (svg)
 		trace_write_svg(f, &s->mc);
 	else
 		write_json(s, f, 1);
-	int ok = !ferror(f);
-	ok = (fclose(f) == 0) && ok;
-	if (!ok || rename(tmp, path) < 0) {
-		unlink(tmp);
-		return -1;
+	if (fclose(f) != 0) {
+		free(buf);
+		return NULL;
 	}
-	return 0;
+	return buf;
 }
 
+/* the SVG a control request asks for, written before the answer */
+static int write_svg(struct sim *s, const char *path)
+{
+	size_t len;
+	char *svg = render(s, 1, &len);
+	int r = svg ? file_write_atomic(path, svg, len) : -1;
+	free(svg);
+	return r;
+}
+
+/* the trace file: rendered here, written by the trace file's own thread */
 static void write_trace(struct sim *s)
 {
 	if (!s->opt.trace)
 		return;
 	double t0 = monotonic();
-	if (write_atomic(s, s->opt.trace, 0) < 0)
-		fprintf(stderr, "plotsim: cannot write trace %s: %s\n", s->opt.trace, strerror(errno));
+	size_t len;
+	char *json = render(s, 0, &len);
+	if (json)
+		file_writer_put(&s->trace_file, json, len);
+	else
+		fprintf(stderr, "plotsim: cannot render the trace: %s\n", strerror(errno));
 	/* a huge trace must not eat the simulation: at most ~10% of the time */
 	double took = monotonic() - t0;
 	s->trace_interval = took * 10 > TRACE_MIN_INTERVAL ? took * 10 : TRACE_MIN_INTERVAL;
@@ -149,7 +165,7 @@ static void handle_command(void *ctx, const char *line, FILE *reply)
 	} else if (strcmp(cmd, "svg") == 0) {
 		if (!arg[0])
 			fputs("error: svg needs a PATH\n", reply);
-		else if (write_atomic(s, arg, 1) < 0)
+		else if (write_svg(s, arg) < 0)
 			fprintf(reply, "error: cannot write %s: %s\n", arg, strerror(errno));
 		else
 			fputs("ok\n", reply);
@@ -434,6 +450,8 @@ int main(int argc, char **argv)
 		control_close(&s.ctl);
 		return 2;
 	}
+	if (s.opt.trace && file_writer_start(&s.trace_file, s.opt.trace) < 0)
+		fprintf(stderr, "plotsim: no thread for the trace file: written in the loop\n");
 	write_trace(&s);
 	fprintf(out, "plotsim: pty %s\n", s.pty.name);
 	fprintf(out, "plotsim: ready\n");
@@ -441,6 +459,7 @@ int main(int argc, char **argv)
 	r = run(&s);
 
 	write_trace(&s);
+	file_writer_stop(&s.trace_file); /* the last trace on disk before the exit */
 	if (eeprom_file_sync(&s.ee, s.avr) < 0)
 		fprintf(stderr, "plotsim: cannot save the EEPROM to %s\n", s.ee.path);
 	pty_link_close(&s.pty);
