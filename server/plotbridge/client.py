@@ -132,9 +132,18 @@ class Plotbridge:
     # ---- plumbing -------------------------------------------------------------------
 
     def request(self, method: str, path: str, what: str, **kwargs: Any) -> Any:
-        """One call; the decoded JSON answer (None for an empty one) or PlotbridgeError."""
+        """One call; the decoded JSON answer (None for an empty one) or PlotbridgeError.
+
+        A GET that meets a dropped connection is sent once more, on a new one: the
+        server closes a keep-alive connection after 5 s idle, and a request sent just
+        then is reset (a script polling every few seconds meets it now and then)."""
         try:
-            response = self._http.request(method, path, **kwargs)
+            try:
+                response = self._http.request(method, path, **kwargs)
+            except (httpx.NetworkError, httpx.RemoteProtocolError):
+                if method != "GET":
+                    raise
+                response = self._http.request(method, path, **kwargs)
         except httpx.HTTPError as exc:
             raise PlotbridgeError(f"cannot reach {self.url}: {exc}") from exc
         if response.is_error:
