@@ -410,10 +410,10 @@ ATTEMPTS = 4     # runs of a drawing at most while the machine is busy
 QUIET = 0.05     # a run counts when the simulator was off the CPU at most this share
 
 
-def _plot_through_server(plotsim, tmp: Path, src: Path, speed: float,
-                         board: str) -> tuple[float, float, int, float]:
+def _plot_through_server(plotsim, tmp: Path, src: Path, speed: float, board: str,
+                         firmware: Path) -> tuple[float, float, int, float]:
     """One drawing through a real `plotbridge serve` on a fresh virtual plotter of board
-    profile `board` at (0, 0):
+    profile `board` (its firmware build `firmware`) at (0, 0):
     uploaded, imported and estimated by the server for that board, then plotted. Returns
     (the estimate and the simulated plot time, as plot_time.estimate_and_plot gives them,
     the program's lines, the seconds the simulator was kept off the CPU meanwhile: it
@@ -423,8 +423,8 @@ def _plot_through_server(plotsim, tmp: Path, src: Path, speed: float,
     from tests.fixtures.server import running_server
 
     run = Path(tempfile.mkdtemp(prefix=f"{src.stem}-", dir=tmp))
-    plotter = plotsim.Plotter(plotsim.PLOTSIM, plotsim.board_firmware(board), run / "eeprom.bin",
-                              speed, (0.0, 0.0), ("--board", board))
+    plotter = plotsim.Plotter(plotsim.PLOTSIM, firmware, run / "eeprom.bin", speed, (0.0, 0.0),
+                              ("--board", board))
     plotter.start()
     try:
         with running_server(run / "server", ["--serial", plotter.port, "--board", board]) as server:
@@ -459,7 +459,7 @@ def bench_accuracy(tmp: Path, speed: float, board: str) -> None:
         return
     try:
         plotsim._make("-C", "firmware/sim")
-        plotsim.board_firmware(board)
+        firmware = plotsim.board_firmware(board)
     except (Exception, pytest.fail.Exception) as e:  # the build prints its own output
         print(f"(c) NOT MEASURED: firmware or simulator does not build: {e}")
         return
@@ -481,7 +481,7 @@ def bench_accuracy(tmp: Path, speed: float, board: str) -> None:
         runs = []
         for _ in range(ATTEMPTS):
             try:
-                runs.append(_plot_through_server(plotsim, tmp, src, speed, board))
+                runs.append(_plot_through_server(plotsim, tmp, src, speed, board, firmware))
             except AssertionError as e:
                 print(f"(c) {name:14s} NOT MEASURED: {e}")
                 break

@@ -1,9 +1,9 @@
 #include "eeprom_file.h"
+#include "file_writer.h"
 
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "avr_eeprom.h"
 
@@ -62,17 +62,8 @@ int eeprom_file_sync(struct eeprom_file *e, avr_t *avr)
 	const uint8_t *now = ee->eeprom;
 	if (e->written && memcmp(now, e->saved, e->size) == 0)
 		return 0;
-	char tmp[600];
-	snprintf(tmp, sizeof tmp, "%s.%d.tmp", e->path, (int)getpid());
-	FILE *f = fopen(tmp, "wb");
-	if (!f)
+	if (file_write_atomic(e->path, (const char *)now, e->size) < 0)
 		return -1;
-	int ok = fwrite(now, 1, e->size, f) == e->size;
-	ok = (fclose(f) == 0) && ok;
-	if (!ok || rename(tmp, e->path) < 0) {
-		unlink(tmp);
-		return -1;
-	}
 	memcpy(e->saved, now, e->size);
 	e->written = 1;
 	return 0;

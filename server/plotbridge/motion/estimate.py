@@ -31,7 +31,8 @@ BATCH = 1 << 14
 QUEUED = 8          # full batches waiting for the library at most (bounded memory)
 
 
-def _config(p: MachineProfile) -> lib.Config:
+def _config(p: MachineProfile, library: ctypes.CDLL) -> lib.Config:
+    """The library's configuration for the profile (`library`: the build it runs in)."""
     c = lib.Config()
     c.steps_per_mm[:] = p.steps_per_mm
     c.max_rate[:] = p.max_rate
@@ -40,16 +41,16 @@ def _config(p: MachineProfile) -> lib.Config:
     c.arc_tolerance = p.arc_tolerance
     c.pen_settle_s = p.pen_settle_s
     c.corexy = int(p.corexy)
-    c.depth = p.planner_blocks or lib.planner_depth(_build(p))
+    c.depth = p.planner_blocks or library.motion_plan_size()
     c.byte_s = 10.0 / p.baud if p.baud else 0.0
     c.line_cpu_s = p.plan_block_s
     c.rx_size = RX_SIZE
     return c
 
 
-def _build(p: MachineProfile) -> str:
+def _library(p: MachineProfile) -> ctypes.CDLL:
     """The library build that models the profile's board (its depth, its profile)."""
-    return lib.build_holding(p.build, p.planner_blocks)
+    return lib.load(lib.build_holding(p.build, p.planner_blocks))
 
 
 def thin_timeline(ack: np.ndarray, line: int, total: float,
@@ -126,8 +127,8 @@ class _Runner:
     def _work(self, profile: MachineProfile) -> None:
         item: object = self
         try:
-            library = lib.load(_build(profile))
-            config = _config(profile)
+            library = _library(profile)
+            config = _config(profile, library)
             with lib.run_lock:
                 library.motion_configure(ctypes.byref(config))
                 while isinstance(item := self._counted.get(), _Batch):
@@ -268,11 +269,11 @@ class Estimator:
         RAM (the differential test compares them with the board's)."""
         if self._runner is not None:
             raise ValueError(f"planned_blocks plans at most {BATCH} lines")
-        library = lib.load(_build(self.profile))
+        library = _library(self.profile)
         size = library.motion_block_size()
         out = ctypes.create_string_buffer(size * 256)
         with lib.run_lock:
-            library.motion_configure(ctypes.byref(_config(self.profile)))
+            library.motion_configure(ctypes.byref(_config(self.profile, library)))
             library.motion_plan(*self._batch.args()[:7])
             n = library.motion_blocks(out, 256)
         self._batch = _Batch()

@@ -34,6 +34,8 @@ class BoardFacts:
     segment_blocks: int = SEGMENT_BLOCKS
     line_numbers: bool = False
     """The board reports the executing line (`Ln:`) of lines sent with an `N` word."""
+    reported: bool = False
+    """The board's `$I` gave its options (planner depth, letters): not GRBL's defaults."""
 
     def learn_options(self, planner_blocks: int, rx_buffer: int, letters: str = "") -> bool:
         """From `$I`'s `[OPT:letters,...]`; True when the receive buffer size changed.
@@ -41,6 +43,7 @@ class BoardFacts:
         A receive buffer larger than GRBL's is not trusted (character counting
         beyond it gains nothing and risks overruns); one too small is ignored.
         """
+        self.reported = True
         self.planner_blocks = max(self.planner_blocks, planner_blocks)
         self.line_numbers = "N" in letters
         size = min(rx_buffer, RX_BUFFER_SIZE)

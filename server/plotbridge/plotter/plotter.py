@@ -20,7 +20,6 @@ from typing import Any
 from plotbridge import settings_meta
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
-from plotbridge.grbl import build_of
 from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
@@ -115,12 +114,11 @@ class Plotter:
         settings = dict(self.link.settings)
         if (area := self.work_area) is not None:
             settings[130], settings[131] = area.width, area.height
-        firmware = self.link.status.firmware
-        told = build_of(firmware) is not None   # $I answered (the banner names no build)
         facts = self.link.facts
-        return {"settings": settings, "firmware": firmware, "profile": self.profile,
-                "planner_blocks": facts.planner_blocks if told else 0,
-                "line_numbers": facts.line_numbers if told else None}
+        return {"settings": settings, "firmware": self.link.status.firmware,
+                "profile": self.profile,
+                "planner_blocks": facts.planner_blocks if facts.reported else 0,
+                "line_numbers": facts.line_numbers if facts.reported else None}
 
     def fits(self, job: Job) -> bool:
         area = self.work_area
