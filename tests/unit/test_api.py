@@ -223,8 +223,9 @@ async def test_start_waits_for_the_machine(api):
     api.link.status.connected = False
     response = await api.client.post(f"/api/jobs/{second['id']}/start")
     assert response.json()["state"] == "waiting" and "not connected" in response.json()["waiting"]
-    again = await api.client.post(f"/api/jobs/{first['id']}/start")  # still waits, new reason
-    assert again.json()["state"] == "waiting" and "not connected" in again.json()["waiting"]
+    again = await api.client.post(f"/api/jobs/{first['id']}/start")  # it waits already
+    assert again.status_code == 409 and again.json()["detail"]["state"] == "waiting"
+    assert again.json()["detail"]["actions"] == ["cancel", "frame", "move", "delete"]
     api.link.status.connected = True
     api.link.set_state("Idle", alarm=None)  # e.g. homed: the first in queue order starts
     assert api.queue.jobs[first["id"]].state == "running"
@@ -855,14 +856,12 @@ async def test_restart_runs_an_interrupted_job_from_its_first_line(api):
     jid = await interrupted_after_12_lines(api)
     kept = api.queue.jobs[jid].resume_line
     api.link.set_state("Alarm", planner_free=15)
-    refused = await api.client.post(f"/api/jobs/{jid}/restart")  # the plotter is not ready
-    assert refused.status_code == 409
-    assert kept and api.queue.jobs[jid].resume_line == kept, "a refused restart keeps it"
-    api.link.set_state("Idle", planner_free=15)
+    response = await api.client.post(f"/api/jobs/{jid}/restart")  # waits, as a start does
+    assert response.status_code == 200 and response.json()["state"] == "waiting"
+    assert kept and "Alarm" in response.json()["waiting"]
     api.link.auto_ack = True
     sent = len(api.link.streamed)
-    response = await api.client.post(f"/api/jobs/{jid}/restart")
-    assert response.status_code == 200, response.text
+    api.link.set_state("Idle", planner_free=15)  # homed: it starts by itself
     await settle(lambda: api.queue.jobs[jid].state == "done")
     again = api.link.streamed[sent:]
     assert again[0][0] == 1 and all(n != 0 for n, _ in again), "no resume preamble"

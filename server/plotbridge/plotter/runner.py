@@ -18,8 +18,9 @@ from collections.abc import AsyncIterator, Callable
 from pathlib import Path
 
 from plotbridge.errors import Refused
+from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.model import AfterJob, Job
-from plotbridge.motion.eta import eta  # numpy-free, unlike the rest of the importer
+from plotbridge.jobs.progress import follow, plan_of
 from plotbridge.pens import PenFeed, PenLibrary, servo_lines
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.program import wire
@@ -43,9 +44,9 @@ AFTER_JOB_S = 120.0  # s a park move or a homing cycle after a job may take
 JOB_POLL_HZ = 15.0  # status reports while a job runs: a lost link redraws at most 1/15 s
 EXACT_STOP_S = 2.0  # s a command after an estop waits for the report of where the steps stopped
 MARK_FILE = "resume.mark"  # in the job folder: the last report's line range and position
+ENDINGS = {"done": "done", "failed": "fail", "cancelled": "cancel", "stopped": "estop",
+           "interrupted": "lost"}  # how a run ended: the lifecycle's cause
 
-Report = Callable[[Job, bool], None]
-"""Called with the job and whether to save it (else only publish it)."""
 
 
 async def _until(lines: AsyncIterator[tuple[int, str]],
@@ -59,8 +60,8 @@ async def _until(lines: AsyncIterator[tuple[int, str]],
 
 
 class Runner:
-    def __init__(self, plotter: str, link: Link, jobs_dir: Path, report: Report,
-                 finished: Callable[[Job], None], after_job: AfterJob = "none",
+    def __init__(self, plotter: str, link: Link, jobs_dir: Path, lifecycle: Lifecycle,
+                 busy_changed: Callable[[], None], after_job: AfterJob = "none",
                  park: tuple[float, float] = (0.0, 0.0),
                  pens: PenLibrary | None = None) -> None:  # fmt: skip
         self.plotter = plotter
@@ -72,8 +73,9 @@ class Runner:
         """Why the plotter takes no job although none runs (the after-the-job action)."""
         self.link = link
         self.jobs_dir = jobs_dir
-        self.report = report
-        self.finished = finished
+        self.lifecycle = lifecycle
+        self.busy_changed = busy_changed
+        """Told when the runner takes a job, and when it is free again."""
         self.job: Job | None = None
         self._task: asyncio.Task[None] | None = None
         self._motion = bytearray()
@@ -96,24 +98,25 @@ class Runner:
 
     # ---- starting and stopping -----------------------------------------------
 
-    def begin(self, job: Job, line: int, resumed: bool = False,
+    def begin(self, job: Job, cause: str, line: int, resumed: bool = False,
               point: ResumePoint | None = None) -> None:  # fmt: skip
         """Start streaming `job` from `line` (its start, or its first plotted layer's), or
         resume it: from `point` (picked by the user), else from where the last run's mark
-        shows the pen stopped, else from `line`."""
+        shows the pen stopped, else from `line`. `cause`: the action or event (lifecycle)."""
+        if self.job is not None:
+            raise RuntimeError(f"{self.plotter} runs job {self.job.id} already")
+        fields = {} if resumed else {"lines_done": 0, "lines_acked": 0, "progress": 0.0,
+                                     "drawn_mm": 0.0, "resume_line": None}  # fmt: skip
+        self.lifecycle.move(job, cause, error=None, waiting=None, plotter=self.plotter,
+                            started_at=time.time(), finished_at=None, safe_line=line,
+                            **fields)  # fmt: skip
         self.job = job
-        job.state, job.error, job.waiting = "running", None, None
-        job.plotter = self.plotter
-        job.started_at, job.finished_at, job.safe_line = time.time(), None, line
-        if not resumed:
-            job.lines_done, job.progress, job.resume_line = 0, 0.0, None
-            job.follow_layers()
         self._floor = line
         self._motion = bytearray()
         self._mark = None
         self._stop_told()
         self.link.poll_hz = JOB_POLL_HZ
-        self.report(job, True)
+        self.busy_changed()
         log.info("job %s (%s) %s on %s at line %d", job.id, job.name,
                  "resumed" if resumed else "started", self.plotter, line)  # fmt: skip
         self._task = asyncio.create_task(self._run(job, line, resumed, point),
@@ -135,9 +138,8 @@ class Runner:
         return self._hold_or_go(b"~", "paused", "running")
 
     def _pen_loaded(self, job: Job, how: str) -> Job:
-        job.state = "running"
+        self.lifecycle.move(job, "continue" if how == "resumed" else "released")
         self._pen_done.set()
-        self.report(job, True)
         log.info("job %s: pen change done (%s)", job.id, how)
         return job
 
@@ -273,13 +275,9 @@ class Runner:
         """The board's pause and resume buttons change the job state too."""
         settled = time.monotonic() - self._control_at > SETTLE_S
         if job.state == "running" and state == "Hold" and settled:
-            job.state = "paused"
-            self.report(job, True)
-            log.info("job %s paused at the machine", job.id)
+            self.lifecycle.move(job, "held")
         elif job.state == "paused" and state == "Run" and settled:
-            job.state = "running"
-            self.report(job, True)
-            log.info("job %s resumed at the machine", job.id)
+            self.lifecycle.move(job, "released")
 
     # ---- streaming -------------------------------------------------------------------
 
@@ -337,7 +335,7 @@ class Runner:
             if self.job is job:
                 self.job = None
             self.busy = None
-            self.finished(job)
+            self.busy_changed()
 
     def _park_lines(self) -> list[str]:
         """Pen up, carriage to the park position; G4 P0 is answered once it stands."""
@@ -430,10 +428,8 @@ class Runner:
         False when the job ended meanwhile (emergency stop, cancel, link lost)."""
         for line in self._park_lines():
             await self.link.command(line, timeout=AFTER_JOB_S)
-        job.state = "pen_change"
-        job.pen_change = prompt
         self._progress(job)
-        self.report(job, True)
+        self.lifecycle.move(job, "pen_change", pen_change=prompt)
         log.info("job %s: %s", job.id, prompt["message"])
         self._pen_done.clear()
         await self._pen_done.wait()  # resumed, or the job ended (_finish)
@@ -499,7 +495,7 @@ class Runner:
             self._progress(job)
             if save:
                 self._last_save = now
-            self.report(job, save)
+            self.lifecycle.publish(job, save)
 
     def _aborted(self, job: Job, exc: StreamAborted) -> None:
         if not job.active:
@@ -537,25 +533,16 @@ class Runner:
         return max(job.safe_line or self._floor, full)
 
     def _progress(self, job: Job) -> None:
-        total = max(job.lines_total, 1)
-        job.progress = round(min(job.lines_done / total, 1.0), 4)
-        job.follow_layers()
-        try:
-            job.eta_s = round(float(eta(job.timeline, job.estimate_s, job.lines_done)), 1)
-        except Exception:
-            job.eta_s = round(job.estimate_s * (1 - job.progress), 1)
+        follow(job, None, plan_of(job, None, 0), job.lines_done + 1, None)
 
     def _finish(self, job: Job, state: str, error: str | None) -> None:
-        job.state = state  # type: ignore[assignment]
-        job.error = error
-        job.finished_at = time.time()
         self._pen_done.set()
         self._progress(job)
         if state == "done":
             job.eta_s = 0.0
         if self.job is job:
             self.job = None
-        self.report(job, True)
+        self.lifecycle.move(job, ENDINGS[state], error=error)
         at = f" at line {job.lines_done}" if state != "done" else ""
         log.info("job %s %s on %s%s%s", job.id, state, self.plotter, at,
                  f": {error}" if error else "")  # fmt: skip
@@ -574,9 +561,7 @@ class Runner:
             self.link.realtime(byte)
         except LinkDown as exc:
             raise Refused(409, "the plotter is not connected") from exc
-        job.state = after  # type: ignore[assignment]
-        self.report(job, True)
-        log.info("job %s %s", job.id, "paused" if after == "paused" else "resumed")
+        self.lifecycle.move(job, "hold" if after == "paused" else "continue")
         return job
 
     async def _quiet_command(self, line: str) -> None:
