@@ -12,6 +12,7 @@ from fastapi.responses import JSONResponse
 from plotbridge.auth import COOKIE, Auth
 from plotbridge.config import Config
 from plotbridge.events import EventHub
+from plotbridge.jobs.actions import JobActions
 from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
 from plotbridge.queue import JobQueue
@@ -24,6 +25,7 @@ class Components:
     auth: Auth
     events: EventHub
     queue: JobQueue
+    actions: JobActions  # the job verbs (jobs/actions.py)
     clients: Hub  # the WebSocket fan-out
     pens: PenLibrary
     webhooks: Webhooks
