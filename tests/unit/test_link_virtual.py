@@ -52,6 +52,8 @@ def fake_firmware(tmp_path: Path) -> Path:
     fw = tmp_path / "firmware"
     (fw / "build").mkdir(parents=True)
     (fw / "sim" / "build").mkdir(parents=True)
+    (fw / "src" / "boards").mkdir(parents=True)
+    (fw / "src" / "boards" / "uno-cnc-shield.h").write_text("/* the profile */\n")
     (fw / "Makefile").write_text(
         ".PHONY: all sim\nall:\n\ttouch made-all\nsim:\n\ttouch made-sim\n")
     (fw / "build" / "plotbridge.elf").write_bytes(b"\x7fELF")
