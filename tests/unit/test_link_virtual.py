@@ -120,7 +120,8 @@ async def test_trace_falls_back_to_file(fake_firmware, tmp_path):
 
 async def test_build_failure_without_binaries_is_a_clear_error(tmp_path):
     fw = tmp_path / "firmware"
-    fw.mkdir()
+    (fw / "src" / "boards").mkdir(parents=True)
+    (fw / "src" / "boards" / "uno-cnc-shield.h").write_text("/* the profile */\n")
     (fw / "Makefile").write_text("all:\n\t@echo 'avr-gcc: not found' && false\nsim:\n")
     vp = VirtualPlotter(tmp_path / "data", firmware=fw)
     with pytest.raises(RuntimeError, match="avr-gcc: not found"):
