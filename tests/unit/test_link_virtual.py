@@ -129,6 +129,6 @@ async def test_build_failure_without_binaries_is_a_clear_error(tmp_path):
 
 
 def test_long_data_dir_gets_a_short_control_socket(tmp_path):
-    vp = VirtualPlotter(tmp_path / ("d" * 120), firmware=tmp_path)
+    vp = VirtualPlotter(tmp_path / ("d" * 120), firmware=firmware_dir())
     assert len(str(vp.control_path)) < 100
     vp.control_path.parent.rmdir()
