@@ -342,7 +342,7 @@ async def serve(config: Config) -> int:
         )  # fmt: skip
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
-        server = uvicorn.Server(settings)
+        server = connections.GuardedServer(settings)
         if generated:  # later starts keep it out of logs: `plotbridge token` prints it
             print_login(config.host, config.port, token)
         log.info(
