@@ -95,6 +95,16 @@ async def test_a_killed_worker_is_replaced_and_its_upload_told(service):
     assert await service.call(echo, 7) == 7
 
 
+async def test_an_idle_worker_killed_is_replaced_before_the_next_call(service):
+    """Killed while it waited (as the OOM killer may pick it): the next call gets a
+    fresh worker, not the news of the death."""
+    first = await service.call(pid)
+    os.kill(first, signal.SIGKILL)
+    await settle(lambda: not alive(first), 10)
+    assert await service.call(echo, 5) == 5
+    assert first not in [w.process.pid for w in service.workers]
+
+
 async def test_time_and_memory_limits_answer_what_was_too_big(service):
     service.limits.time_limit = 1.0
     with pytest.raises(ImportLimit, match="longer than the 1 s limit") as slow:
@@ -156,3 +166,17 @@ def test_workers_die_with_the_server(tmp_path):
     finally:
         server.kill()
         server.wait()
+
+
+def test_an_import_out_of_memory_reaches_the_worker_to_name_the_limit(monkeypatch, tmp_path):
+    """run_import turns an importer's failures into answers, but not a MemoryError: the
+    worker answers that one with the memory limit it hit (not "import failed:")."""
+    from plotbridge import importing
+    from plotbridge.jobs.imports import run_import
+
+    def out_of_memory(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(importing.MachineProfile, "for_board", out_of_memory)
+    with pytest.raises(MemoryError):
+        run_import("file", str(tmp_path / "a.gcode"), "a.gcode", str(tmp_path / "job"), {}, {})

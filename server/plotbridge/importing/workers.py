@@ -125,6 +125,10 @@ class Worker:
         self.busy = False
         self.started = False
 
+    def alive(self) -> bool:
+        """False once the process has exited (killed while idle, say); never blocks."""
+        return self.process.exitcode is None
+
     def kill(self) -> None:
         with contextlib.suppress(Exception):
             self.process.kill()
@@ -209,6 +213,11 @@ class ImportService:
             entry.ready.set_result(worker)
 
     def _free_worker(self) -> Worker | None:
+        for worker in [w for w in self.workers if not w.busy and not w.alive()]:
+            log.warning("idle import worker %d died (exit %s); replaced before its next import",
+                        worker.process.pid, worker.process.exitcode)  # fmt: skip
+            worker.kill()
+            self.workers.remove(worker)
         for worker in self.workers:
             if not worker.busy:
                 return worker

@@ -39,6 +39,8 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
         return ("ok", Imported.of(result).model_dump())
     except importing.ImportFailed as exc:
         return ("failed", exc.status, list(exc.errors)[:100])
+    except MemoryError:
+        raise  # the worker answers it naming the memory limit (importing/workers.py)
     except Exception as exc:  # an importer bug must still answer as a refused upload
         return ("failed", 422, [{"line": None, "message": f"import failed: {exc}"}])
 
