@@ -13,7 +13,7 @@ import threading
 import time
 
 import pytest
-from plotbridge.importing.workers import ImportLimit, ImportService, Limits
+from plotbridge.importing.workers import ImportLimit, ImportService, Limits, jobs_size
 
 from tests.fixtures.waits import settle
 
@@ -180,3 +180,40 @@ def test_an_import_out_of_memory_reaches_the_worker_to_name_the_limit(monkeypatc
     monkeypatch.setattr(importing.MachineProfile, "for_board", out_of_memory)
     with pytest.raises(MemoryError):
         run_import("file", str(tmp_path / "a.gcode"), "a.gcode", str(tmp_path / "job"), {}, {})
+
+
+async def test_quota_room_is_reserved_before_writing_and_settled_atomically(tmp_path):
+    """Two uploads that each fit alone but not together: the second is refused before a
+    byte of it is written, and an import that outgrows its reservation is refused when
+    settled, so the jobs never take more than the quota."""
+    service = ImportService(Limits(workers=1, total_quota_mb=1.0, job_quota_mb=1.0))
+    jobs = tmp_path / "jobs"
+    (jobs / "old").mkdir(parents=True)
+    (jobs / "old" / "program.gcode").write_bytes(b"x" * 400_000)
+    entered = asyncio.Event()
+
+    async def upload(name: str, size: int, written: int) -> str:
+        try:
+            async with service.reservation(jobs, size):
+                entered.set()
+                await asyncio.sleep(0.2)  # the upload streams in meanwhile
+                folder = jobs / f".{name}.partial"
+                folder.mkdir()
+                (folder / "program.gcode").write_bytes(b"x" * written)
+                await service.settle(jobs, folder)
+                folder.rename(jobs / name)
+        except ImportLimit as exc:
+            assert exc.status == 507 and "1 MB quota" in str(exc), exc
+            return "refused"
+        return "stored"
+
+    first = asyncio.create_task(upload("a", 400_000, 400_000))
+    await entered.wait()
+    assert await upload("b", 400_000, 400_000) == "refused"  # reserved room is taken
+    assert await first == "stored"
+    assert service.reserved == {}
+    # a small declared upload whose import grows past the room left, beside another
+    results = await asyncio.gather(upload("c", 10_000, 150_000), upload("d", 10_000, 150_000))
+    assert sorted(results) == ["refused", "stored"]
+    assert jobs_size(jobs) <= 1024 * 1024
+    service.close()
