@@ -107,7 +107,7 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
 
     @routes.post("/machine/command")
     async def command(body: CommandBody, plotter: Board) -> dict[str, Any]:
-        return {"responses": await plotter.console(body.line)}
+        return {"responses": await plotter.console(body.line, body.confirm)}
 
     @routes.get("/machine/settings")
     async def settings(plotter: Board) -> dict[str, Any]:
