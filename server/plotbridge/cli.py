@@ -336,6 +336,8 @@ async def serve(config: Config) -> int:
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning", log_config=None,
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
+            ws_per_message_deflate=False,  # a 64 KiB frame of one byte repeated comes in as 100
+            # bytes and cost the loop its decompression; the compression of every event too
             http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
             timeout_keep_alive=5, backlog=connections.BACKLOG,
             timeout_graceful_shutdown=SHUTDOWN_GRACE_S,
