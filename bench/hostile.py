@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import math
 import os
 import signal
 import sys
@@ -27,6 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from websockets.sync.client import connect
 
 from tests.fixtures import attacks
+from tests.fixtures.drawings import short_moves
 from tests.fixtures.server import ServerProcess
 
 STOP_GOAL = 0.020  # s, p99
@@ -38,15 +38,6 @@ class LimitedServer(ServerProcess):
 
     def command(self) -> list[str]:
         return ["prlimit", "--nofile=1024:1024", "--", *super().command()]
-
-
-def short_moves(lines: int) -> str:
-    """0.5 mm chords around 40 mm circles: nearly straight junctions, so the board
-    keeps its speed and the rate measures the streaming, not zigzag braking."""
-    step = 0.5 / 40.0  # rad per chord
-    moves = [f"G1 X{100 + 40 * math.cos(i * step):.3f} Y{100 + 40 * math.sin(i * step):.3f} F6000"
-             for i in range(lines)]  # fmt: skip
-    return "\n".join(["G21", "G90", "G0 X140 Y100", "M3", *moves, "M5"]) + "\n"
 
 
 class Peak:
