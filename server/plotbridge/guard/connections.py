@@ -74,12 +74,30 @@ class Census:
             held.discard(old)
             self.total -= 1
         pending = self.pending.get(client, 0)
-        if len(held) + pending >= self.client_cap or self.total >= self.total_cap:
+        mine = len(held) + pending
+        full = self.total >= self.total_cap
+        if mine >= self.client_cap or (full and not self._displace(client, mine)):
             if not held:
                 del self.by_client[client]
             return False
         self.pending[client] = pending + 1
         self.total += 1
+        return True
+
+    def _displace(self, client: str, mine: int) -> bool:
+        """When full, an address holding less than its share (the cap over the addresses
+        holding connections) gets a connection of the address holding the most, which
+        is closed: a crowd cannot keep a newcomer (the page that would stop) out."""
+        share = self.total_cap // max(1, len(self.by_client))
+        biggest = max(self.by_client, key=lambda c: len(self.by_client[c]))
+        if mine >= share or len(self.by_client[biggest]) <= mine + 1:
+            return False
+        victim = self.by_client[biggest].pop()
+        self.total -= 1
+        if not self.by_client[biggest]:
+            del self.by_client[biggest]
+        log.warning("server full: closed a connection of %s for one of %s", biggest, client)
+        victim.close()
         return True
 
     def arrived(self, client: str, transport: Any) -> None:
