@@ -1,11 +1,15 @@
 """Hostile-LAN benchmark: the emergency stop and streaming beside full-size attacks.
 
-A real `plotbridge serve --virtual` (real firmware in the simulator, real time)
-runs under a 1,024 open-file limit. For idle and for each attack (from
-127.0.0.2, another LAN device): the streaming rate of a job of short moves,
-then the REST and WebSocket stop latencies (a fresh connection per REST stop),
-and the server's peak memory. Prints each figure, its ratio to idle and MET /
-NOT MET against the goals: stop p99 <= 20 ms, streaming >= 90 % of idle.
+A real `plotbridge serve --virtual 4` (four plotters: real firmware in the
+simulator, real time) runs under a 1,024 open-file limit. For idle and for each
+attack (from 127.0.0.2, or a crowd of addresses 127.0.1.x): plotters 2-4 stream
+long jobs throughout; plotter1's streaming rate of a job of short moves, then
+its REST and WebSocket stop latencies (a fresh connection per REST stop, the
+answer comes after the reset byte is written), and the server's peak memory.
+Prints each figure, its ratio to idle and MET / NOT MET against the goals: stop
+p99 <= 20 ms, streaming >= 90 % of idle. Full size: a crowd of 60 addresses
+holding 1,100 sockets, a token-holding flood from 60 addresses with 200
+WebSockets that never read, 100 MB no-token bodies.
 """
 
 from __future__ import annotations
@@ -13,7 +17,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import math
 import os
 import signal
 import sys
@@ -27,26 +30,11 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from websockets.sync.client import connect
 
 from tests.fixtures import attacks
-from tests.fixtures.server import ServerProcess
+from tests.fixtures.drawings import short_moves
+from tests.fixtures.server import LimitedServer, ServerProcess
 
 STOP_GOAL = 0.020  # s, p99
 STREAM_GOAL = 0.90  # of the idle rate
-
-
-class LimitedServer(ServerProcess):
-    """The server under a 1,024 open-file limit (soft and hard: it cannot raise it)."""
-
-    def command(self) -> list[str]:
-        return ["prlimit", "--nofile=1024:1024", "--", *super().command()]
-
-
-def short_moves(lines: int) -> str:
-    """0.5 mm chords around 40 mm circles: nearly straight junctions, so the board
-    keeps its speed and the rate measures the streaming, not zigzag braking."""
-    step = 0.5 / 40.0  # rad per chord
-    moves = [f"G1 X{100 + 40 * math.cos(i * step):.3f} Y{100 + 40 * math.sin(i * step):.3f} F6000"
-             for i in range(lines)]  # fmt: skip
-    return "\n".join(["G21", "G90", "G0 X140 Y100", "M3", *moves, "M5"]) + "\n"
 
 
 class Peak:
@@ -67,11 +55,39 @@ class Peak:
         return self.peak
 
 
-def upload_moves(server: ServerProcess) -> dict:
+OTHERS = ("plotter2", "plotter3", "plotter4")  # stream throughout every measurement
+
+
+def upload_moves(server: ServerProcess, plotter: str = "plotter1", lines: int = 4000,
+                 start: bool = False) -> dict:  # fmt: skip
     """Uploaded before an attack starts: the killed-worker attack kills every import."""
-    return server.client.post(
-        "/api/jobs", files={"file": ("moves.gcode", short_moves(4000))}, timeout=300
-    ).json()
+    answer = server.client.post(
+        "/api/jobs", files={"file": ("moves.gcode", short_moves(lines))}, timeout=300,
+        params={"plotter": plotter, "start": "true" if start else "false"},
+    )  # fmt: skip
+    assert answer.status_code == 201, answer.text
+    return answer.json()
+
+
+def others_streaming(server: ServerProcess) -> list[str]:
+    """Plotters 2-4 each start a long job (cancelled by `others_done`)."""
+    jobs = []
+    for name in OTHERS:
+        server.client.post(f"/api/plotters/{name}/machine/unlock")
+        server.wait_plotter(name, lambda m: m["state"] == "Idle", 30)
+        jobs.append(upload_moves(server, name, 12000, start=True)["id"])
+    return jobs
+
+
+def others_done(server: ServerProcess, jobs: list[str]) -> int:
+    """Cancels the others' jobs; how many were still running (all should be)."""
+    running = 0
+    for job_id in jobs:
+        running += server.job(job_id)["state"] == "running"
+        server.client.post(f"/api/jobs/{job_id}/cancel")
+        server.wait_job(job_id, ("cancelled", "done", "stopped", "failed"), 30)
+        server.client.delete(f"/api/jobs/{job_id}")
+    return running
 
 
 def streaming_rate(server: ServerProcess, job: dict, seconds: float) -> float:
@@ -82,8 +98,9 @@ def streaming_rate(server: ServerProcess, job: dict, seconds: float) -> float:
     while server.job(job["id"])["lines_done"] < 100 and time.monotonic() < deadline:
         time.sleep(0.05)
     start_lines, started = server.job(job["id"])["lines_done"], time.monotonic()
-    time.sleep(seconds)
-    done = server.job(job["id"])
+    while time.monotonic() - started < seconds:  # polled: the connection stays open (a new
+        time.sleep(1.0)  # one would be refused while a crowd fills the server)
+        done = server.job(job["id"])
     rate = (done["lines_done"] - start_lines) / (time.monotonic() - started)
     server.client.post(f"/api/jobs/{job['id']}/cancel")
     server.wait_job(job["id"], ("cancelled", "done", "stopped", "failed"), 30)
@@ -91,31 +108,41 @@ def streaming_rate(server: ServerProcess, job: dict, seconds: float) -> float:
     return rate
 
 
-def stop_latencies(server: ServerProcess, samples: int) -> tuple[list[float], list[float]]:
-    """REST stops on fresh connections; WebSocket stops on one open socket whose
-    every message is read by a thread (as a browser does), acks timed."""
+class Page:
+    """A WebSocket opened before the attack (as a page's is), every message read by a
+    thread as a browser does; `stop()` times a stop of plotter1 to its ack."""
+
+    def __init__(self, server: ServerProcess) -> None:
+        url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
+        self.ws = connect(url, max_size=None)
+        self.acked = threading.Event()
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        with contextlib.suppress(Exception):
+            for text in self.ws:
+                if json.loads(text) == {"type": "ack", "command": "estop"}:
+                    self.acked.set()
+
+    def stop(self) -> float:
+        self.acked.clear()
+        started = time.perf_counter()
+        self.ws.send(json.dumps({"type": "estop", "plotter": "plotter1"}))
+        if not self.acked.wait(30):
+            raise RuntimeError("no WebSocket stop acknowledgement within 30 s")
+        return time.perf_counter() - started
+
+    def close(self) -> None:
+        self.ws.close()
+
+
+def stop_latencies(server: ServerProcess, page: Page, samples: int) -> tuple[list, list]:
+    """REST stops of plotter1 on fresh connections; WebSocket stops on the page's."""
     rest, ws_times = [], []
-    url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
-    acked = threading.Event()
-    with connect(url, max_size=None) as ws:
-
-        def reader() -> None:
-            with contextlib.suppress(Exception):
-                for text in ws:
-                    if json.loads(text) == {"type": "ack", "command": "estop"}:
-                        acked.set()
-
-        thread = threading.Thread(target=reader, daemon=True)
-        thread.start()
-        for _ in range(samples):
-            rest.append(attacks.rest_stop(server.url, server.token))
-            acked.clear()
-            started = time.perf_counter()
-            ws.send(json.dumps({"type": "estop"}))
-            if not acked.wait(30):
-                raise RuntimeError("no WebSocket stop acknowledgement within 30 s")
-            ws_times.append(time.perf_counter() - started)
-            time.sleep(0.02)
+    for _ in range(samples):
+        rest.append(attacks.rest_stop(server.url, server.token))
+        ws_times.append(page.stop())
+        time.sleep(0.02)
     return rest, ws_times
 
 
@@ -126,15 +153,19 @@ def verdict(ok: bool) -> str:
 def measure(server: ServerProcess, name: str, attack, args, idle: dict | None) -> dict:
     peak = Peak(server.proc.pid)
     job = upload_moves(server)
+    others = others_streaming(server)
+    page = Page(server)
     if attack is not None:
         attack.start()
         time.sleep(args.warmup)
     try:
         rate = streaming_rate(server, job, args.stream_seconds)
-        rest, ws_times = stop_latencies(server, args.samples)
+        rest, ws_times = stop_latencies(server, page, args.samples)
     finally:
         if attack is not None:
             attack.stop()
+        page.close()
+    streaming = others_done(server, others)
     result = {
         "rate": rate, "rest": attacks.summary(rest), "ws": attacks.summary(ws_times),
         "peak_mb": peak.stop(), "errors": attack.server_errors() if attack else 0,
@@ -151,6 +182,7 @@ def measure(server: ServerProcess, name: str, attack, args, idle: dict | None) -
     ratio = rate / base["rate"]
     print(f"  streaming {rate:6.1f} lines/s ({ratio * 100:5.1f} % of idle)  "
           f">= 90 %: {verdict(ratio >= STREAM_GOAL)}")
+    print(f"  plotters 2-4 still streaming after it: {streaming} of 3")
     print(f"  peak memory {result['peak_mb']:.0f} MB; 5xx answers: {result['errors']}; "
           f"attacker saw {result['statuses']}")
     return result
@@ -164,10 +196,14 @@ def main() -> int:
     parser.add_argument("--only", help="run only attacks whose name contains this")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        server = LimitedServer(Path(tmp) / "data", ["--virtual", "--sim-speed", "1"])
+        server = LimitedServer(Path(tmp) / "data", ["--virtual", "4", "--sim-speed", "1"])
         server.start()
         try:
-            server.home()
+            for name in ("plotter1", *OTHERS):
+                server.wait_plotter(name, lambda m: m["connected"], 60)
+                server.client.post(f"/api/plotters/{name}/machine/home")
+            for name in ("plotter1", *OTHERS):
+                server.wait_plotter(name, lambda m: m["state"] == "Idle", 60)
             idle = measure(server, "idle", None, args, None)
             svg = attacks.identical_paths_svg(100_000)
 
@@ -187,6 +223,12 @@ def main() -> int:
                 attack.got(answer_box[0].status_code if answer_box else 0)
 
             suite = {
+                "crowd: 60 addresses holding 1,100 sockets (1,024 file limit)": lambda: (
+                    attacks.crowd(server.url, addresses=60, sockets=1100)),
+                "token-holding flood: 60 addresses, 60 KB frames, console, bad JSON, "
+                "200 never reading": lambda: attacks.authenticated_flood(
+                    server.url, server.token, addresses=60, silent=200),
+                "100 MB no-token bodies": lambda: attacks.huge_bodies(server.url, 100),
                 "1M-key bodies, no token": lambda: attacks.big_bodies(
                     server.url, megabytes=250, keys=1_000_000, threads=4),
                 "1,100 half-sent headers (1,024 file limit)": lambda: attacks.slow_headers(

@@ -6,6 +6,7 @@ import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
+from functools import partial
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -15,12 +16,14 @@ from fastapi.staticfiles import StaticFiles
 from plotbridge import __version__
 from plotbridge.api import jobs, notify, pens, plotters, session, ws
 from plotbridge.api.deps import Components, error
+from plotbridge.api.plotters import emergency_stop
 from plotbridge.apidocs import mount_docs
 from plotbridge.auth import Auth
 from plotbridge.config import Config
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
-from plotbridge.guard.middleware import Guard
+from plotbridge.guard.middleware import Checks, Guard
+from plotbridge.guard.stoplane import LANE
 from plotbridge.jobs.actions import JobActions
 from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.lifecycle import Lifecycle
@@ -98,9 +101,9 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     )  # fmt: skip
     mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
     auth = Auth(token, config.token_file, config.data_dir / "sessions.json")
-    app.add_middleware(
-        Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
-    )
+    checks = Checks(auth, config.allowed_hosts)
+    app.add_middleware(Guard, checks=checks, upload_limit=config.upload_limit)
+    LANE.bind(checks, partial(emergency_stop, queue))  # the real server's stop lane
     app.state.components = Components(config, auth, events, queue, actions, clients, library,
                                       webhooks)
 

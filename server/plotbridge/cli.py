@@ -53,6 +53,32 @@ def _point(text: str) -> tuple[float, float]:
     return x, y
 
 
+def _ranged(kind: type, low: float, high: float) -> Any:
+    """An argparse type: a finite `kind` number from `low` to `high`."""
+
+    def parse(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+        if not (math.isfinite(value) and low <= value <= high):
+            raise argparse.ArgumentTypeError(f"{text!r}: a finite number from {low:g} to {high:g}")
+        return value
+
+    parse.__name__ = kind.__name__  # argparse names the type in its messages
+    return parse
+
+
+def _board(text: str) -> str:
+    """A board profile's name (firmware/src/boards/NAME.h), checked before anything runs."""
+    from plotbridge.profiles import UnknownBoard, check_board
+
+    try:
+        return check_board(text)
+    except UnknownBoard as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def _webhook_url(text: str) -> str:
     """An http(s) URL to post events to."""
     from plotbridge.notify import check_url
@@ -65,7 +91,8 @@ def _webhook_url(text: str) -> str:
 
 def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--host", default=_env("HOST", "0.0.0.0"), help="address to listen on")
-    parser.add_argument("--port", type=int, default=int(_env("PORT", 8000)), help="TCP port")
+    parser.add_argument("--port", type=_ranged(int, 1, 65535), default=_env("PORT", "8000"),
+                        help="TCP port")
     parser.add_argument(
         "--data-dir", type=Path, default=Path(_env("DATA_DIR", default_data_dir())),
         help="jobs, database and token (default ~/.local/share/plotbridge)",
@@ -79,13 +106,14 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--virtual", nargs="?", type=int, const=1, default=None, metavar="N",
         help="drive N simulated plotters (default: 1; the default without --serial)",
     )  # fmt: skip
-    parser.add_argument("--baud", type=int, default=int(_env("BAUD", 115200)), help="serial baud")
+    parser.add_argument("--baud", type=_ranged(int, 300, 4_000_000), default=_env("BAUD", "115200"),
+                        help="serial baud")
     parser.add_argument(
-        "--sim-speed", type=float, default=float(_env("SIM_SPEED", 1.0)),
+        "--sim-speed", type=_ranged(float, 0, 1000), default=_env("SIM_SPEED", "1"),
         help="virtual plotter speed, times real time (0: unthrottled)",
     )  # fmt: skip
     parser.add_argument(
-        "--board", default=_env("BOARD", "uno-cnc-shield"),
+        "--board", type=_board, default=_env("BOARD", "uno-cnc-shield"),
         help="board profile of the plotters (firmware/src/boards/NAME.h); "
              "a virtual plotter runs that board's firmware build",
     )  # fmt: skip
@@ -103,18 +131,20 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         ], help="a further Host name to serve (beside this machine's names and addresses)",
     )  # fmt: skip
     parser.add_argument(
-        "--client-connections", type=int, default=int(_env("CLIENT_CONNECTIONS", 32)),
+        "--client-connections", type=_ranged(int, 1, 10_000),
+        default=_env("CLIENT_CONNECTIONS", "32"),
         help="open connections one client address may hold (503 beyond)",
     )  # fmt: skip
     parser.add_argument(
-        "--max-upload-mb", type=float, default=float(_env("MAX_UPLOAD_MB", 50)),
+        "--max-upload-mb", type=_ranged(float, 0.001, 100_000),
+        default=_env("MAX_UPLOAD_MB", "50"),
         help="largest accepted upload, MB",
     )  # fmt: skip
     imports = parser.add_argument_group("import limits")
-    for flag, kind, default, what in IMPORT_LIMITS:
+    for flag, kind, default, high, what in IMPORT_LIMITS:
         imports.add_argument(
-            f"--{flag}", type=kind, default=kind(_env(flag.upper().replace("-", "_"), default)),
-            help=what,
+            f"--{flag}", type=_ranged(kind, 1, high),
+            default=str(_env(flag.upper().replace("-", "_"), default)), help=what,
         )  # fmt: skip
     parser.add_argument(
         "--auto-start", action="store_true", default=_env_flag("AUTO_START"),
@@ -150,12 +180,12 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
     )  # fmt: skip
 
 
-IMPORT_LIMITS = (  # flag, type, default, help: the defaults keep a 2 GB Raspberry Pi 4 responsive
-    ("import-workers", int, 2, "import worker processes (one stays free for small uploads)"),
-    ("import-time-limit", float, 120.0, "seconds one import may take"),
-    ("import-memory-mb", int, 512, "memory (address space) one import may use, MB"),
-    ("job-quota-mb", float, 200.0, "disk space one job's files may take, MB"),
-    ("total-quota-mb", float, 2048.0, "disk space all jobs' files may take, MB"),
+IMPORT_LIMITS = (  # flag, type, default, most, help: the defaults keep a 2 GB Pi 4 responsive
+    ("import-workers", int, 2, 64, "import worker processes (one stays free for small uploads)"),
+    ("import-time-limit", float, 120.0, 86_400, "seconds one import may take"),
+    ("import-memory-mb", int, 512, 1 << 20, "memory (address space) one import may use, MB"),
+    ("job-quota-mb", float, 200.0, 1 << 30, "disk space one job's files may take, MB"),
+    ("total-quota-mb", float, 2048.0, 1 << 30, "disk space all jobs' files may take, MB"),
 )
 
 
@@ -306,13 +336,15 @@ async def serve(config: Config) -> int:
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning", log_config=None,
             ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
+            ws_per_message_deflate=False,  # a 64 KiB frame of one byte repeated comes in as 100
+            # bytes and cost the loop its decompression; the compression of every event too
             http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,
             timeout_keep_alive=5, backlog=connections.BACKLOG,
             timeout_graceful_shutdown=SHUTDOWN_GRACE_S,
         )  # fmt: skip
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
-        server = uvicorn.Server(settings)
+        server = connections.GuardedServer(settings)
         if generated:  # later starts keep it out of logs: `plotbridge token` prints it
             print_login(config.host, config.port, token)
         log.info(

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import math
 import os
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from plotbridge.importing.workers import Limits
+from plotbridge.profiles import UnknownBoard, check_board
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 
@@ -51,10 +54,39 @@ class PlotterConfig:
         return self.device is None
 
 
+BAUD_RANGE = (300, 4_000_000)
+AREA_RANGE_MM = (1.0, 10_000.0)  # a work area's width and height
+_TABLE = re.compile(r"\s*\[\[\s*plotter\s*\]\]")
+
+
+def _key_line(text: str, table: int, key: str) -> int | None:
+    """The line (from 1) giving `key` in the `table`-th [[plotter]] table, if found."""
+    seen = 0
+    assign = re.compile(rf"\s*(?:{re.escape(key)}|\"{re.escape(key)}\")\s*=")
+    for number, line in enumerate(text.splitlines(), 1):
+        if _TABLE.match(line):
+            seen += 1
+        elif seen == table and assign.match(line):
+            return number
+    return None
+
+
+def _number(value: object, low: float, high: float, integer: bool = False) -> float | None:
+    """`value` when it is a finite number in [low, high] (an integer if asked), else None."""
+    kinds = int if integer else int | float
+    if isinstance(value, bool) or not isinstance(value, kinds):
+        return None
+    if not math.isfinite(value) or not low <= value <= high:
+        return None
+    return value
+
+
 def read_plotters_file(path: Path) -> list[PlotterConfig]:
-    """`[[plotter]]` tables: name, device or virtual = true, board, baud, width, height."""
+    """`[[plotter]]` tables: name, device or virtual = true, board, baud, width, height.
+    Every refusal names the file, the line and the key."""
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_text()
+        data = tomllib.loads(text)
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise ConfigError(f"{path}: {exc}") from exc
     tables = data.get("plotter")
@@ -62,31 +94,43 @@ def read_plotters_file(path: Path) -> list[PlotterConfig]:
         raise ConfigError(f"{path}: no [[plotter]] tables")
     plotters = []
     for index, table in enumerate(tables, 1):
-        where = f"{path}: plotter {index}"
+
+        def refuse(key: str | None, message: str, index: int = index) -> ConfigError:
+            line = _key_line(text, index, key) if key else None
+            where = f"{path}:{line}" if line else str(path)
+            return ConfigError(f"{where}: plotter {index}: {key + ': ' if key else ''}{message}")
+
         if not isinstance(table, dict):
-            raise ConfigError(f"{where}: not a table")
+            raise refuse(None, "not a table")
         unknown = set(table) - {"name", "device", "virtual", "board", "baud", "width", "height"}
         if unknown:
-            raise ConfigError(f"{where}: unknown keys {', '.join(sorted(unknown))}")
+            raise refuse(sorted(unknown)[0], f"unknown keys {', '.join(sorted(unknown))}")
         name = table.get("name", f"plotter{index}")
         device = table.get("device")
         if table.get("virtual") is True:
             if device is not None:
-                raise ConfigError(f"{where}: give either device or virtual = true")
+                raise refuse("device", "give either device or virtual = true")
         elif not isinstance(device, str) or not device:
-            raise ConfigError(f"{where}: needs device = \"/dev/...\" or virtual = true")
+            raise refuse("device", 'needs device = "/dev/..." or virtual = true')
         baud = table.get("baud", 115200)
-        if not isinstance(baud, int) or baud <= 0:
-            raise ConfigError(f"{where}: baud must be a positive integer")
+        if _number(baud, *BAUD_RANGE, integer=True) is None:
+            raise refuse("baud", f"an integer from {BAUD_RANGE[0]} to {BAUD_RANGE[1]}, "
+                                 f"got {baud!r}")
         area = None
         if "width" in table or "height" in table:
-            width, height = table.get("width"), table.get("height")
-            if not all(isinstance(v, int | float) and v > 0 for v in (width, height)):
-                raise ConfigError(f"{where}: width and height must both be positive numbers (mm)")
-            area = (float(width), float(height))
+            for key in ("width", "height"):
+                if _number(table.get(key), *AREA_RANGE_MM) is None:
+                    raise refuse(key if key in table else None,
+                                 f"width and height must both be finite numbers from "
+                                 f"{AREA_RANGE_MM[0]:g} to {AREA_RANGE_MM[1]:g} mm, "
+                                 f"got {key} = {table.get(key)!r}")
+            area = (float(table["width"]), float(table["height"]))
         board = table.get("board")
-        if board is not None and not isinstance(board, str):
-            raise ConfigError(f"{where}: board must be a profile name")
+        if board is not None:
+            try:
+                check_board(board)
+            except UnknownBoard as exc:
+                raise refuse("board", str(exc)) from None
         plotters.append(PlotterConfig(str(name), device, board, baud, area))
     return check_names(plotters, str(path))
 

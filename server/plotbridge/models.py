@@ -52,6 +52,8 @@ class MoveBody(Strict):
 
 class CommandBody(Strict):
     line: str = Field(min_length=1, max_length=120)
+    confirm: bool = Field(False, description="send a line that wedges or wipes the board "
+                          "($SLP, $RST=...): without it such a line is refused with 428")
 
 
 class SettingsBody(Strict):
@@ -194,8 +196,9 @@ ERROR_RESPONSES: dict[int | str, dict[str, Any]] = {
         413: "request body or upload too large, or an import limit reached",
         415: "file format not accepted",
         422: "invalid request or invalid drawing (errors with line numbers)",
+        428: "a console line that wedges or wipes the board needs confirm: true",
         429: "too many failed logins from this client; try again later",
-        503: "too many connections from this client",
+        503: "too many open connections (only an emergency stop gets through)",
         507: "disk quota for jobs reached",
     }.items()
 }

@@ -1,9 +1,10 @@
 """The virtual plotter: the real firmware in `plotsim` (simavr), run as a child process.
 
 `VirtualPlotter` builds firmware and simulator with make (make decides what
-is stale), starts plotsim with its pty, trace, control socket and EEPROM in
-the data directory, restarts it with backoff if it dies, and stops it on
-shutdown. The serial link opens `.port` like any other serial device.
+is stale) for a board that is one of the profiles (checked before make runs),
+starts plotsim with its pty, trace, control socket and EEPROM in the data
+directory, restarts it with backoff if it dies, and stops it on shutdown. The
+serial link opens `.port` like any other serial device.
 """
 
 from __future__ import annotations
@@ -13,7 +14,6 @@ import contextlib
 import ctypes
 import json
 import logging
-import os
 import signal
 import socket
 import tempfile
@@ -21,15 +21,11 @@ import time
 from pathlib import Path
 from typing import Any
 
+from plotbridge.profiles import DEFAULT_BOARD, check_board, firmware_dir
+
+__all__ = ["VirtualPlotter", "control_request", "die_with_parent", "firmware_dir"]
+
 log = logging.getLogger("plotbridge.virtual")
-
-
-def firmware_dir() -> Path:
-    """The repository's firmware/ (or PLOTBRIDGE_FIRMWARE_DIR)."""
-    override = os.environ.get("PLOTBRIDGE_FIRMWARE_DIR")
-    if override:
-        return Path(override).resolve()
-    return Path(__file__).resolve().parents[2] / "firmware"
 
 
 def control_request(path: Path, command: str, limit_s: float) -> str:
@@ -59,10 +55,11 @@ class VirtualPlotter:
     backoff_max = 5.0
 
     def __init__(self, data_dir: Path, speed: float = 1.0, firmware: Path | None = None,
-                 extra_args: list[str] | None = None, board: str = "uno-cnc-shield") -> None:
+                 extra_args: list[str] | None = None, board: str = DEFAULT_BOARD) -> None:
+        self.firmware_dir = firmware or firmware_dir()
+        self.board = check_board(board, self.firmware_dir)  # UnknownBoard before any make
         self.data_dir = Path(data_dir)
         self.speed = speed
-        self.firmware_dir = firmware or firmware_dir()
         self.extra_args = list(extra_args or [])
         self.port = self.data_dir / "plotter.pty"
         self.trace_path = self.data_dir / "trace.json"
@@ -70,8 +67,7 @@ class VirtualPlotter:
         if len(str(self.control_path)) > 100:  # Unix socket paths are limited to 107 bytes
             self.control_path = Path(tempfile.mkdtemp(prefix="plotbridge-")) / "control.sock"
         self.eeprom_path = self.data_dir / "eeprom.bin"
-        self.board = board
-        build = "build" if board == "uno-cnc-shield" else f"build/{board}"  # firmware/Makefile
+        build = "build" if board == DEFAULT_BOARD else f"build/{board}"  # firmware/Makefile
         self.elf = self.firmware_dir / build / "plotbridge.elf"
         self.plotsim = self.firmware_dir / "sim" / "build" / "plotsim"
         self._proc: asyncio.subprocess.Process | None = None

@@ -469,6 +469,27 @@ async def test_machine_endpoints_send_commands(api):
     assert api.link.commands[-1] == "G0 X1"
 
 
+@pytest.mark.parametrize("line", ["$SLP", "$rst=$", "$ RST = *", "$RST=#"])
+async def test_console_lines_that_wedge_or_wipe_the_board_need_a_confirmation(api, line):
+    refused = await api.client.post("/api/machine/command", json={"line": line})
+    assert refused.status_code == 428, refused.text
+    assert "send it again confirmed" in refused.json()["detail"]
+    assert line not in api.link.commands
+    sent = await api.client.post("/api/machine/command", json={"line": line, "confirm": True})
+    assert sent.status_code == 200 and api.link.commands[-1] == line.strip()
+
+
+def test_ws_console_confirmation(sync_client):
+    with sync_client.websocket_connect(f"/api/ws?token={TOKEN}") as ws:
+        ws.send_json({"type": "command", "line": "$SLP"})
+        refused = _next_of(ws, "error")
+        assert refused["confirm"] is True and refused["line"] == "$SLP"
+        assert "sleep" in refused["detail"] and "$SLP" not in sync_client.link.commands
+        ws.send_json({"type": "command", "line": "$SLP", "confirm": True})
+        assert _next_of(ws, "ack")["command"] == "command"
+        assert sync_client.link.commands[-1] == "$SLP"
+
+
 async def test_settings_have_metadata(api):
     settings = (await api.client.get("/api/machine/settings")).json()["settings"]
     by_id = {s["id"]: s for s in settings}

@@ -53,3 +53,50 @@ def test_bad_plotters_file_says_what_and_where(tmp_path, text, message):
     with pytest.raises(ConfigError, match=r"plotters\.toml") as info:
         read_plotters_file(path)
     assert message in str(info.value)
+
+
+SHELL = "$(shell touch {marker})"
+
+
+@pytest.mark.parametrize("text, key, message", [
+    ("[[plotter]]\nvirtual = true\nboard = '{shell}'\n", "board", "unknown board"),
+    ("[[plotter]]\nvirtual = true\nwidth = inf\nheight = 100\n", "width", "finite"),
+    ("[[plotter]]\nvirtual = true\nwidth = 100\nheight = nan\n", "height", "finite"),
+    ("[[plotter]]\nvirtual = true\nwidth = -inf\nheight = 100\n", "width", "finite"),
+    ("[[plotter]]\ndevice = '/dev/a'\nbaud = 0\n", "baud", "from 300"),
+    ("[[plotter]]\ndevice = '/dev/a'\nbaud = 1e9\n", "baud", "an integer"),
+])  # fmt: skip
+def test_plotters_file_numbers_and_boards_name_file_line_and_key(tmp_path, text, key, message):
+    """A shell string, inf or nan is refused naming the file, the line and the key; no
+    board name that is not a profile reaches make."""
+    marker = tmp_path / "ran"
+    path = tmp_path / "plotters.toml"
+    path.write_text("# two plotters\n[[plotter]]\nvirtual = true\n\n"
+                    + text.format(shell=SHELL.format(marker=marker)))
+    line = next(n for n, row in enumerate(path.read_text().splitlines(), 1)
+                if row.startswith(key))
+    with pytest.raises(ConfigError) as info:
+        read_plotters_file(path)
+    assert str(info.value).startswith(f"{path}:{line}: plotter 2: {key}: "), info.value
+    assert message in str(info.value)
+    assert not marker.exists()
+
+
+def test_command_line_board_and_numbers_are_checked_before_anything_runs(tmp_path, capsys):
+    marker = tmp_path / "ran"
+    for argv in (["--board", SHELL.format(marker=marker)], ["--max-upload-mb", "inf"],
+                 ["--sim-speed", "nan"], ["--import-time-limit", "-1"], ["--port", "0"]):
+        with pytest.raises(SystemExit):
+            serve_args(*argv)
+        assert argv[0] in capsys.readouterr().err
+    assert not marker.exists()
+
+
+def test_a_virtual_plotter_refuses_an_unknown_board_before_make(tmp_path):
+    from plotbridge.profiles import UnknownBoard, board_profiles
+    from plotbridge.virtual import VirtualPlotter
+
+    assert "uno-cnc-shield" in board_profiles() and "mega-ramps14" in board_profiles()
+    with pytest.raises(UnknownBoard, match="one of mega-l298n"):
+        VirtualPlotter(tmp_path, board=SHELL.format(marker=tmp_path / "ran"))
+    assert not (tmp_path / "ran").exists()

@@ -13,7 +13,7 @@ import threading
 import time
 
 import pytest
-from plotbridge.importing.workers import ImportLimit, ImportService, Limits
+from plotbridge.importing.workers import ImportLimit, ImportService, Limits, jobs_size
 
 from tests.fixtures.waits import settle
 
@@ -95,6 +95,16 @@ async def test_a_killed_worker_is_replaced_and_its_upload_told(service):
     assert await service.call(echo, 7) == 7
 
 
+async def test_an_idle_worker_killed_is_replaced_before_the_next_call(service):
+    """Killed while it waited (as the OOM killer may pick it): the next call gets a
+    fresh worker, not the news of the death."""
+    first = await service.call(pid)
+    os.kill(first, signal.SIGKILL)
+    await settle(lambda: not alive(first), 10)
+    assert await service.call(echo, 5) == 5
+    assert first not in [w.process.pid for w in service.workers]
+
+
 async def test_time_and_memory_limits_answer_what_was_too_big(service):
     service.limits.time_limit = 1.0
     with pytest.raises(ImportLimit, match="longer than the 1 s limit") as slow:
@@ -156,3 +166,54 @@ def test_workers_die_with_the_server(tmp_path):
     finally:
         server.kill()
         server.wait()
+
+
+def test_an_import_out_of_memory_reaches_the_worker_to_name_the_limit(monkeypatch, tmp_path):
+    """run_import turns an importer's failures into answers, but not a MemoryError: the
+    worker answers that one with the memory limit it hit (not "import failed:")."""
+    from plotbridge import importing
+    from plotbridge.jobs.imports import run_import
+
+    def out_of_memory(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(importing.MachineProfile, "for_board", out_of_memory)
+    with pytest.raises(MemoryError):
+        run_import("file", str(tmp_path / "a.gcode"), "a.gcode", str(tmp_path / "job"), {}, {})
+
+
+async def test_quota_room_is_reserved_before_writing_and_settled_atomically(tmp_path):
+    """Two uploads that each fit alone but not together: the second is refused before a
+    byte of it is written, and an import that outgrows its reservation is refused when
+    settled, so the jobs never take more than the quota."""
+    service = ImportService(Limits(workers=1, total_quota_mb=1.0, job_quota_mb=1.0))
+    jobs = tmp_path / "jobs"
+    (jobs / "old").mkdir(parents=True)
+    (jobs / "old" / "program.gcode").write_bytes(b"x" * 400_000)
+    entered = asyncio.Event()
+
+    async def upload(name: str, size: int, written: int) -> str:
+        try:
+            async with service.reservation(jobs, size):
+                entered.set()
+                await asyncio.sleep(0.2)  # the upload streams in meanwhile
+                folder = jobs / f".{name}.partial"
+                folder.mkdir()
+                (folder / "program.gcode").write_bytes(b"x" * written)
+                await service.settle(jobs, folder)
+                folder.rename(jobs / name)
+        except ImportLimit as exc:
+            assert exc.status == 507 and "1 MB quota" in str(exc), exc
+            return "refused"
+        return "stored"
+
+    first = asyncio.create_task(upload("a", 400_000, 400_000))
+    await entered.wait()
+    assert await upload("b", 400_000, 400_000) == "refused"  # reserved room is taken
+    assert await first == "stored"
+    assert service.reserved == {}
+    # a small declared upload whose import grows past the room left, beside another
+    results = await asyncio.gather(upload("c", 10_000, 150_000), upload("d", 10_000, 150_000))
+    assert sorted(results) == ["refused", "stored"]
+    assert jobs_size(jobs) <= 1024 * 1024
+    service.close()

@@ -52,6 +52,8 @@ def fake_firmware(tmp_path: Path) -> Path:
     fw = tmp_path / "firmware"
     (fw / "build").mkdir(parents=True)
     (fw / "sim" / "build").mkdir(parents=True)
+    (fw / "src" / "boards").mkdir(parents=True)
+    (fw / "src" / "boards" / "uno-cnc-shield.h").write_text("/* the profile */\n")
     (fw / "Makefile").write_text(
         ".PHONY: all sim\nall:\n\ttouch made-all\nsim:\n\ttouch made-sim\n")
     (fw / "build" / "plotbridge.elf").write_bytes(b"\x7fELF")
@@ -118,7 +120,8 @@ async def test_trace_falls_back_to_file(fake_firmware, tmp_path):
 
 async def test_build_failure_without_binaries_is_a_clear_error(tmp_path):
     fw = tmp_path / "firmware"
-    fw.mkdir()
+    (fw / "src" / "boards").mkdir(parents=True)
+    (fw / "src" / "boards" / "uno-cnc-shield.h").write_text("/* the profile */\n")
     (fw / "Makefile").write_text("all:\n\t@echo 'avr-gcc: not found' && false\nsim:\n")
     vp = VirtualPlotter(tmp_path / "data", firmware=fw)
     with pytest.raises(RuntimeError, match="avr-gcc: not found"):
@@ -126,6 +129,6 @@ async def test_build_failure_without_binaries_is_a_clear_error(tmp_path):
 
 
 def test_long_data_dir_gets_a_short_control_socket(tmp_path):
-    vp = VirtualPlotter(tmp_path / ("d" * 120), firmware=tmp_path)
+    vp = VirtualPlotter(tmp_path / ("d" * 120), firmware=firmware_dir())
     assert len(str(vp.control_path)) < 100
     vp.control_path.parent.rmdir()

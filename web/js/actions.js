@@ -314,7 +314,9 @@ export function createActions(store, socket, estop) {
         ensurePreview();
       } else if (msg.type === "log") actions.appendLog(msg.direction || "rx", msg.line ?? "");
       else if (msg.type === "ack" && msg.command === "estop") estop.onSocketAck();
-      else if (msg.type === "error") {
+      else if (msg.type === "error" && msg.command === "command" && msg.confirm) {
+        actions.confirmCommand(msg.line, msg.detail);
+      } else if (msg.type === "error") {
         store.update((st) => {
           const detail = msg.detail ?? msg.message ?? "error from the server";
           const text = typeof detail === "string" ? detail : new ApiError(0, detail).message;
@@ -687,16 +689,23 @@ export function createActions(store, socket, estop) {
 
     // ---- console ----
 
-    async sendCommand(line) {
+    async sendCommand(line, confirm = false) {
       clear("commandError");
-      if (socket.send({ type: "command", line, plotter: s.plotter })) return; // the log shows tx and the answer
+      if (socket.send({ type: "command", line, plotter: s.plotter, confirm })) return; // the log shows tx and the answer
       actions.appendLog("tx", line);
       try {
-        const data = await api.post(machinePath("command"), { line });
+        const data = await api.post(machinePath("command"), { line, confirm });
         for (const r of asList(data, "responses")) actions.appendLog("rx", r);
       } catch (err) {
-        fail("commandError")(err);
+        if (err.status === 428 && !confirm) actions.confirmCommand(line, err.message);
+        else fail("commandError")(err);
       }
+    },
+
+    // A line that wedges or wipes the board ($SLP, $RST=): the server said what it does.
+    confirmCommand(line, what) {
+      if (window.confirm(`${what}\n\nSend ${line}?`)) actions.sendCommand(line, true);
+      else store.update((st) => { st.commandError = `${line} not sent`; });
     },
   };
   return actions;

@@ -29,6 +29,14 @@ async def list_jobs(c: Parts) -> list[dict[str, Any]]:
 
 @router.post("/jobs", status_code=201, response_model=Job, openapi_extra=upload_openapi())
 async def upload(request: Request, c: Parts) -> Any:
+    # the quota's room is reserved before a byte is written: the declared size, else the limit
+    declared = request.headers.get("content-length", "")
+    size = int(declared) if declared.isdigit() else c.config.upload_limit
+    async with c.queue.importer.reserve(min(size, c.config.upload_limit)):
+        return await _upload(request, c)
+
+
+async def _upload(request: Request, c: Parts) -> Any:
     config = c.config
     try:
         path, filename, fields = await receive(request, config.tmp_dir, config.upload_limit)

@@ -16,6 +16,7 @@ from fastapi import APIRouter, Depends, Path, Request
 from plotbridge.api.deps import GUARD, PAGE_HEADER, Parts, page_id
 from plotbridge.models import CommandBody, JogBody, Machine, MotorsBody, PenBody, SettingsBody
 from plotbridge.plotter.plotter import Plotter
+from plotbridge.queue import JobQueue
 
 log = logging.getLogger("plotbridge.api")
 
@@ -35,8 +36,7 @@ async def estop_named(name: Annotated[str, Path(max_length=64)], c: Parts,
                       request: Request) -> dict[str, Any]:  # fmt: skip
     """Stop one plotter at once; an unknown name stops nothing: 404 naming the plotters
     there are (the WebSocket's stop answers the same)."""
-    plotter = c.queue.estop(name, "REST", page_id(request.headers.get(PAGE_HEADER)))
-    return {"status": "stopped", "machine": plotter.machine()}
+    return emergency_stop(c.queue, name, False, "REST", page_id(request.headers.get(PAGE_HEADER)))
 
 
 @router.get("/api/plotters")
@@ -44,11 +44,22 @@ async def plotters(c: Parts) -> list[dict[str, Any]]:
     return [plotter.describe() for plotter in c.queue.plotters.values()]
 
 
+def emergency_stop(queue: JobQueue, name: str | None, every: bool, source: str,
+                   origin: str | None) -> dict[str, Any]:
+    """The REST stop (the routes below, and the stop lane that answers them first in
+    the real server, guard/stoplane.py): every plotter's, or the named (else the first)
+    plotter's reset byte, then the answer. Synchronous: nothing waits before the stop.
+    An unknown name stops nothing: Refused 404 naming the plotters there are."""
+    if every:
+        queue.estop_all(f"{source}, all plotters", origin)
+        return {"status": "stopped", "plotters": list(queue.plotters)}
+    plotter = queue.estop(name, source, origin)
+    return {"status": "stopped", "machine": plotter.machine()}
+
+
 @router.post("/api/estop", status_code=202)
 async def estop_all(c: Parts, request: Request) -> dict[str, Any]:
-    # synchronous, before any await
-    c.queue.estop_all("REST, all plotters", page_id(request.headers.get(PAGE_HEADER)))
-    return {"status": "stopped", "plotters": list(c.queue.plotters)}
+    return emergency_stop(c.queue, None, True, "REST", page_id(request.headers.get(PAGE_HEADER)))
 
 
 def machine_routes(prefix: str, pick: Callable[..., Plotter], estop: bool) -> APIRouter:
@@ -63,9 +74,9 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter], estop: bool) -> AP
 
     if estop:
         @routes.post("/machine/estop", status_code=202)
-        async def stop(plotter: Board, request: Request) -> dict[str, Any]:
-            plotter.estop("REST", page_id(request.headers.get(PAGE_HEADER)))  # before awaits
-            return {"status": "stopped", "machine": plotter.machine()}
+        async def stop(plotter: Board, request: Request, c: Parts) -> dict[str, Any]:
+            return emergency_stop(c.queue, plotter.name, False, "REST",
+                                  page_id(request.headers.get(PAGE_HEADER)))
 
     @routes.post("/machine/hold")
     async def hold(plotter: Board, c: Parts) -> dict[str, Any]:
@@ -106,7 +117,7 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter], estop: bool) -> AP
 
     @routes.post("/machine/command")
     async def command(body: CommandBody, plotter: Board) -> dict[str, Any]:
-        return {"responses": await plotter.console(body.line)}
+        return {"responses": await plotter.console(body.line, body.confirm)}
 
     @routes.get("/machine/settings")
     async def settings(plotter: Board) -> dict[str, Any]:

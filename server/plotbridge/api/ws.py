@@ -141,7 +141,15 @@ async def _command(c: Components, kind: Any, message: dict[str, Any]) -> dict[st
             body = JogBody(**{k: v for k, v in message.items() if k not in ("type", "plotter")})
             await c.queue.plotter(target).jog(body.dx, body.dy, body.feed)
         elif kind == "command":
-            responses = await c.queue.plotter(target).console(str(message.get("line", "")))
+            line = str(message.get("line", ""))
+            try:
+                responses = await c.queue.plotter(target).console(
+                    line, message.get("confirm") is True)
+            except Refused as exc:
+                if exc.status != 428:
+                    raise
+                return {"type": "error", "command": kind, "detail": exc.detail, "confirm": True,
+                        "line": line}  # fmt: skip
             return {"type": "ack", "command": kind, "responses": responses}
         else:
             return {"type": "error", "command": kind, "detail": f"unknown type {kind!r}"}

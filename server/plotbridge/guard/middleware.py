@@ -71,14 +71,49 @@ async def _answer(send: Send, status: int, detail: str, extra: list | None = Non
     await send({"type": "http.response.body", "body": body})
 
 
-class Guard:
-    def __init__(
-        self, app: ASGIApp, *, auth: Any, upload_limit: int, allowed_hosts: tuple[str, ...] = ()
-    ) -> None:
-        self.app = app
+class Checks:
+    """The questions asked of every request's headers: the guard's, and the stop
+    lane's (guard/stoplane.py), which asks them before the app sees the request."""
+
+    def __init__(self, auth: Any, allowed_hosts: tuple[str, ...] = ()) -> None:
         self.auth = auth
-        self.upload_limit = upload_limit
         self.names = own_names(allowed_hosts)
+
+    def host_ok(self, headers: dict[bytes, bytes]) -> bool:
+        return host_allowed(headers.get(b"host", b"").decode("latin-1"), self.names)
+
+    def authenticated(self, headers: dict[bytes, bytes], query_token: str | None) -> str | None:
+        """'bearer', 'cookie', 'query', or None."""
+        if self.auth.check_header(headers.get(b"authorization", b"").decode("latin-1")):
+            return "bearer"
+        if self.auth.check_session(_cookie(headers, COOKIE)):
+            return "cookie"
+        if query_token is not None and self.auth.check_token(query_token):
+            return "query"
+        return None
+
+    def own_origin(self, headers: dict[bytes, bytes]) -> bool | None:
+        """True/False: the Origin is/is not this server's; None: no Origin sent."""
+        origin = headers.get(b"origin")
+        if origin is None:
+            return None
+        return origin_allowed(origin.decode("latin-1"), headers.get(b"host", b"").decode("latin-1"))
+
+    def cross_site(self, method: str, headers: dict[bytes, bytes], via: str | None) -> bool:
+        """A change not authenticated by a bearer token that another site's page may
+        have sent: a foreign Origin, or a cookie without Origin nor our page's header."""
+        if method not in UNSAFE or via == "bearer":
+            return False
+        origin = self.own_origin(headers)
+        unmarked = origin is None and CSRF_HEADER not in headers
+        return origin is False or (via == "cookie" and unmarked)
+
+
+class Guard:
+    def __init__(self, app: ASGIApp, *, checks: Checks, upload_limit: int) -> None:
+        self.app = app
+        self.checks = checks
+        self.upload_limit = upload_limit
         self.logins = LoginLimiter()
         self.websockets: dict[str, int] = {}
 
@@ -90,50 +125,28 @@ class Guard:
         else:
             await self.app(scope, receive, send)
 
-    # ---- checks shared by HTTP and WebSocket ---------------------------------
-
-    def _authenticated(self, headers: dict[bytes, bytes], query_token: str | None) -> str | None:
-        """'bearer', 'cookie', 'query', or None."""
-        if self.auth.check_header(headers.get(b"authorization", b"").decode("latin-1")):
-            return "bearer"
-        if self.auth.check_session(_cookie(headers, COOKIE)):
-            return "cookie"
-        if query_token is not None and self.auth.check_token(query_token):
-            return "query"
-        return None
-
-    def _own_origin(self, headers: dict[bytes, bytes]) -> bool | None:
-        """True/False: the Origin is/is not this server's; None: no Origin sent."""
-        origin = headers.get(b"origin")
-        if origin is None:
-            return None
-        return origin_allowed(origin.decode("latin-1"), headers.get(b"host", b"").decode("latin-1"))
-
     # ---- HTTP ------------------------------------------------------------------
 
     async def _http(self, scope: Scope, receive: Receive, send: Send) -> None:
         headers = _headers(scope)
         method, path = scope["method"], scope["path"]
         client = _client(scope)
-        if not host_allowed(headers.get(b"host", b"").decode("latin-1"), self.names):
+        if not self.checks.host_ok(headers):
             return await _answer(send, 400, "the Host header names no address of this server")
         limit = body_limit(method, path, self.upload_limit)
         length = headers.get(b"content-length", b"")
         if length and (not length.isdigit() or int(length) > limit):
             return await _answer(send, 413, f"request body larger than {limit} bytes")
         api = path.startswith("/api/")
-        via = self._authenticated(headers, None)
+        via = self.checks.authenticated(headers, None)
         if api and path not in PUBLIC and via is None:
             return await _answer(
                 send, 401, "missing or wrong token: send 'Authorization: Bearer TOKEN' or log in",
                 [(b"www-authenticate", b"Bearer")],
             )  # fmt: skip
-        if method in UNSAFE and via != "bearer":
-            origin = self._own_origin(headers)
-            unmarked = origin is None and CSRF_HEADER not in headers
-            if origin is False or (via == "cookie" and unmarked):
-                log.warning("refused cross-site %s %s from %s", method, escape(path), client)
-                return await _answer(send, 403, "cross-site request refused (Origin)")
+        if self.checks.cross_site(method, headers, via):
+            log.warning("refused cross-site %s %s from %s", method, escape(path), client)
+            return await _answer(send, 403, "cross-site request refused (Origin)")
         login = path in LOGIN_PATHS
         if login:
             wait = self.logins.wait(client)
@@ -202,13 +215,13 @@ class Guard:
         for an HTTP refusal): 4401 not logged in, 4403 foreign origin, 1013 too many."""
         headers = _headers(scope)
         client = _client(scope)
-        if not host_allowed(headers.get(b"host", b"").decode("latin-1"), self.names):
+        if not self.checks.host_ok(headers):
             return await self._ws_refuse(receive, send, 4403, "host not allowed")
         query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
         token = query.get("token", [None])[0]
-        if self._authenticated(headers, token) is None:
+        if self.checks.authenticated(headers, token) is None:
             return await self._ws_refuse(receive, send, 4401, "missing or wrong token")
-        if self._own_origin(headers) is False:
+        if self.checks.own_origin(headers) is False:
             return await self._ws_refuse(receive, send, 4403, "origin not allowed")
         if self.websockets.get(client, 0) >= WS_PER_CLIENT:
             log.warning("refused a WebSocket from %s: %d open", client, WS_PER_CLIENT)

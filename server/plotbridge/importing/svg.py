@@ -202,7 +202,7 @@ class SvgReader:
             return
         try:
             self._element(elem, tag, ctx)
-        except ImportFailed:
+        except (ImportFailed, MemoryError):  # a MemoryError names the worker's limit
             raise
         except RecursionError:
             self.errors.warn(None, f"{_where(elem, tag)} skipped: nested too deeply")

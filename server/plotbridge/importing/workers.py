@@ -10,7 +10,8 @@ Limits, answered with what was too big:
 - memory: RLIMIT_AS in the worker; a MemoryError is answered, and a worker the
   kernel kills (OOM) is replaced and the upload that killed it told so;
 - time: a call past `time_limit` has its worker killed and replaced;
-- disk: the jobs directory's total before an import, each job's files after.
+- disk: room reserved before an upload is written (`reservation`), the files'
+  true size settled against both quotas under one lock after the import (`settle`).
 
 Fairness: calls wait in order of size class (small first), then arrival, and a
 large call never takes the last free worker, so small uploads never queue
@@ -29,7 +30,8 @@ import os
 import resource
 import signal
 import time
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -39,6 +41,7 @@ log = logging.getLogger("plotbridge.importing.workers")
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 STARTUP_LIMIT = 60.0  # s for a new worker's interpreter to start (slow on a busy Pi)
+_HELD: ContextVar[int | None] = ContextVar("quota_reservation", default=None)  # this request's
 
 
 @dataclass
@@ -125,6 +128,10 @@ class Worker:
         self.busy = False
         self.started = False
 
+    def alive(self) -> bool:
+        """False once the process has exited (killed while idle, say); never blocks."""
+        return self.process.exitcode is None
+
     def kill(self) -> None:
         with contextlib.suppress(Exception):
             self.process.kill()
@@ -186,6 +193,8 @@ class ImportService:
         self.waiting: list[_Waiting] = []
         self._seq = itertools.count()
         self._closed = False
+        self.reserved: dict[int, int] = {}  # quota reservations' bytes, by key
+        self._quota_lock = asyncio.Lock()
 
     # ---- scheduling ------------------------------------------------------------
 
@@ -209,6 +218,11 @@ class ImportService:
             entry.ready.set_result(worker)
 
     def _free_worker(self) -> Worker | None:
+        for worker in [w for w in self.workers if not w.busy and not w.alive()]:
+            log.warning("idle import worker %d died (exit %s); replaced before its next import",
+                        worker.process.pid, worker.process.exitcode)  # fmt: skip
+            worker.kill()
+            self.workers.remove(worker)
         for worker in self.workers:
             if not worker.busy:
                 return worker
@@ -273,18 +287,49 @@ class ImportService:
 
     # ---- disk quotas --------------------------------------------------------------
 
-    async def check_room(self, jobs_dir: Path, incoming: int) -> None:
-        used = await asyncio.to_thread(tree_size, jobs_dir)
-        total = self.limits.total_quota_mb * 1024 * 1024
-        if used + incoming > total:
-            raise ImportLimit(507, f"the jobs take {used / 2**20:.0f} MB of the "
-                              f"{self.limits.total_quota_mb:g} MB quota; delete finished jobs")
+    @contextlib.asynccontextmanager
+    async def reservation(self, jobs_dir: Path, size: int) -> AsyncIterator[None]:
+        """Room for `size` bytes in the jobs' quota, reserved before an upload is
+        written and held until its job is in place; nested, the outer one holds."""
+        if _HELD.get() is not None:
+            yield
+            return
+        async with self._quota_lock:
+            used = await asyncio.to_thread(jobs_size, jobs_dir)
+            self._check_total(used, size, None)
+            key = next(self._seq)
+            self.reserved[key] = size
+        held = _HELD.set(key)
+        try:
+            yield
+        finally:
+            _HELD.reset(held)
+            del self.reserved[key]
 
-    async def check_job(self, folder: Path) -> None:
-        used = await asyncio.to_thread(tree_size, folder)
-        if used > self.limits.job_quota_mb * 1024 * 1024:
-            raise ImportLimit(507, f"this job's files would take {used / 2**20:.0f} MB, more "
-                              f"than the {self.limits.job_quota_mb:g} MB per-job quota")
+    async def settle(self, jobs_dir: Path, folder: Path) -> None:
+        """After an import into `folder` (hidden: not yet a job): its files against the
+        per-job quota, and with the jobs and the other reservations against the total.
+        Under the lock, so two imports never both take the last room; the reservation
+        then holds the files' true size until the folder is renamed into a job."""
+        async with self._quota_lock:
+            mine = await asyncio.to_thread(tree_size, folder)
+            if mine > self.limits.job_quota_mb * 1024 * 1024:
+                raise ImportLimit(507, f"this job's files would take {mine / 2**20:.0f} MB, more "
+                                  f"than the {self.limits.job_quota_mb:g} MB per-job quota")
+            used = await asyncio.to_thread(jobs_size, jobs_dir)
+            key = _HELD.get()
+            self._check_total(used, mine, key)
+            if key is not None:
+                self.reserved[key] = mine
+
+    def _check_total(self, used: int, size: int, own: int | None) -> None:
+        others = sum(held for key, held in self.reserved.items() if key != own)
+        total = self.limits.total_quota_mb * 1024 * 1024
+        if used + others + size > total:
+            pending = f" ({others / 2**20:.0f} MB more on the way)" if others else ""
+            raise ImportLimit(507, f"the jobs take {used / 2**20:.0f} MB of the "
+                              f"{self.limits.total_quota_mb:g} MB quota{pending}, too little "
+                              f"room for {size / 2**20:.1f} MB more; delete finished jobs")
 
     def close(self) -> None:
         self._closed = True
@@ -294,6 +339,13 @@ class ImportService:
         for worker in self.workers:
             worker.kill()
         self.workers.clear()
+
+
+def jobs_size(jobs_dir: Path) -> int:
+    """The jobs' files: every folder but the hidden ones imports are writing (their
+    room is reserved)."""
+    return sum(tree_size(entry) for entry in jobs_dir.iterdir()
+               if entry.is_dir() and not entry.name.startswith("."))  # fmt: skip
 
 
 def tree_size(path: Path) -> int:

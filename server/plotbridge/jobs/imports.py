@@ -8,10 +8,11 @@ the import writes into a hidden `.ID.partial` folder renamed at the end.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import shutil
 import uuid
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Callable
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +40,8 @@ def run_import(kind: str, source: str, filename: str, dest: str, options: dict, 
         return ("ok", Imported.of(result).model_dump())
     except importing.ImportFailed as exc:
         return ("failed", exc.status, list(exc.errors)[:100])
+    except MemoryError:
+        raise  # the worker answers it naming the memory limit (importing/workers.py)
     except Exception as exc:  # an importer bug must still answer as a refused upload
         return ("failed", 422, [{"line": None, "message": f"import failed: {exc}"}])
 
@@ -56,6 +59,16 @@ class Importer:
         self.workers = ImportService(limits)  # supervised, limited (importing/workers.py)
         self._patterns: dict[str, str] | None = None
 
+    @contextlib.asynccontextmanager
+    async def reserve(self, size: int) -> AsyncIterator[None]:
+        """Room for an upload of `size` bytes (the jobs' quota), from before it is
+        written until its job is in place; 507 when there is none."""
+        try:
+            async with self.workers.reservation(self.jobs_dir, size):
+                yield
+        except ImportLimit as exc:
+            raise Refused(exc.status, {"errors": [{"line": None, "message": str(exc)}]}) from exc
+
     def clean(self) -> None:
         """Remove what a crash left half-done (blocking; at start-up)."""
         for leftover in self.jobs_dir.glob(".*"):
@@ -70,18 +83,20 @@ class Importer:
         (job id, the source as the job keeps it, result)."""
         job_id = uuid.uuid4().hex[:12]
         partial = self.jobs_dir / f".{job_id}.partial"
-        partial.mkdir(parents=True)
-        try:
-            source_arg = str(source)
-            if kind == "file":
-                original = partial / ("original" + _safe_suffix(filename))
-                await asyncio.to_thread(shutil.move, str(source), original)
-                source_arg = str(original)
-            result = await self._import(kind, source_arg, filename, partial, options, board)
-            await asyncio.to_thread(partial.rename, self.jobs_dir / job_id)
-        except BaseException:
-            await asyncio.to_thread(shutil.rmtree, partial, True)
-            raise
+        size = await asyncio.to_thread(os.path.getsize, source) if kind == "file" else 0
+        async with self.reserve(size):
+            partial.mkdir(parents=True)
+            try:
+                source_arg = str(source)
+                if kind == "file":
+                    original = partial / ("original" + _safe_suffix(filename))
+                    await asyncio.to_thread(shutil.move, str(source), original)
+                    source_arg = str(original)
+                result = await self._import(kind, source_arg, filename, partial, options, board)
+                await asyncio.to_thread(partial.rename, self.jobs_dir / job_id)
+            except BaseException:
+                await asyncio.to_thread(shutil.rmtree, partial, True)
+                raise
         return job_id, Path(source_arg).name if kind == "file" else source_arg, result
 
     async def reimport(self, job_id: str, kind: str, source: str, filename: str,
@@ -90,18 +105,19 @@ class Importer:
         """Import a job again from its original; its folder is swapped only if still wanted."""
         folder = self.jobs_dir / job_id
         partial = self.jobs_dir / f".{job_id}.reimport"
-        partial.mkdir(parents=True)
-        try:
-            if kind == "file":
-                await asyncio.to_thread(shutil.copy2, folder / source, partial / source)
-                source = str(partial / source)
-            result = await self._import(kind, source, filename, partial, options, board)
-            if not still_wanted():
-                raise Refused(409, f"job {job_id} started while it was being re-imported")
-        except BaseException:
-            await asyncio.to_thread(shutil.rmtree, partial, True)
-            raise
-        await asyncio.to_thread(_swap_dirs, partial, folder)
+        async with self.reserve(0):
+            partial.mkdir(parents=True)
+            try:
+                if kind == "file":
+                    await asyncio.to_thread(shutil.copy2, folder / source, partial / source)
+                    source = str(partial / source)
+                result = await self._import(kind, source, filename, partial, options, board)
+                if not still_wanted():
+                    raise Refused(409, f"job {job_id} started while it was being re-imported")
+            except BaseException:
+                await asyncio.to_thread(shutil.rmtree, partial, True)
+                raise
+            await asyncio.to_thread(_swap_dirs, partial, folder)
         return result
 
     async def delete(self, job_id: str) -> None:
@@ -122,11 +138,10 @@ class Importer:
                       options: dict[str, Any], board: dict[str, Any]) -> Imported:  # fmt: skip
         size = await asyncio.to_thread(os.path.getsize, source) if kind == "file" else 0
         try:
-            await self.workers.check_room(self.jobs_dir, size)
             outcome = await self.workers.call(run_import, kind, source, filename, str(dest),
                                               options, board, size=size)  # fmt: skip
             if outcome[0] == "ok":
-                await self.workers.check_job(dest)
+                await self.workers.settle(self.jobs_dir, dest)
         except ImportLimit as exc:
             raise Refused(exc.status, {"errors": [{"line": None, "message": str(exc)}]}) from exc
         if outcome[0] != "ok":

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ..native import array
+from ..profiles import check_board
 
 FIRMWARE_DIR = Path(os.environ.get("PLOTBRIDGE_FIRMWARE_DIR",
                                    Path(__file__).resolve().parents[3] / "firmware"))
@@ -70,6 +71,7 @@ def load(board: str = DEFAULT_BOARD) -> ctypes.CDLL:
     """The board's build of the library, made first with make when it is missing."""
     with _load_lock:
         if board not in _libs:
+            check_board(board, FIRMWARE_DIR)  # a profile name, never any string, reaches make
             path = library_file(board)
             if not path.exists():
                 r = subprocess.run(["make", "-s", "-C", str(FIRMWARE_DIR), f"BOARD={board}",

@@ -36,6 +36,16 @@ HOMING_S = 120.0  # s a homing cycle may take on the largest work area
 CONSOLE_FORBIDDEN = "?!~\x18\r\n"  # realtime bytes and line ends: not in a console line
 CONSOLE_REALTIME = {"?": "status report", "!": "feed hold", "~": "cycle start"}
 SETTING_LINE = re.compile(r"\$(\d+)\s*=\s*(\S+)")  # a console line writing one setting
+# Console lines that wedge or wipe the board: sent only when confirmed (the board reads
+# a `$` line with its spaces removed and in capitals, so they are compared so).
+CONSOLE_CONFIRM = {
+    "$SLP": "puts the board to sleep: motors off, and it answers no further line until it "
+            "is reset (each console line would wait 30 s for an answer)",
+    "$RST=$": "restores every $ setting to the firmware's defaults (steps/mm, speeds, "
+              "pen and work area)",
+    "$RST=#": "clears the stored coordinate offsets (G54-G59, G28, G30)",
+    "$RST=*": "wipes the board's EEPROM: every setting and offset back to the defaults",
+}
 
 
 @dataclass(frozen=True)
@@ -254,10 +264,11 @@ class Plotter:
             raise Refused(409, f"cannot jog while the machine is {self.state}")
         return await self.send("jog", f"$J=G91 G21 X{dx:.3f} Y{dy:.3f} F{feed:.0f}")
 
-    async def console(self, line: str) -> list[str]:
+    async def console(self, line: str, confirm: bool = False) -> list[str]:
         """A console line; its answer ends with the `ok` the link keeps to itself.
         `?`, `!` and `~` alone are GRBL's realtime bytes: written at once (also while a job
-        runs: `!` and `~` then act as the machine's own hold and start buttons)."""
+        runs: `!` and `~` then act as the machine's own hold and start buttons). A line
+        of CONSOLE_CONFIRM is refused (428, saying what it does) unless `confirm`."""
         byte = line.strip()
         if byte in CONSOLE_REALTIME:
             try:
@@ -273,6 +284,9 @@ class Plotter:
         line = line.strip()
         if not line or any(ch in line for ch in CONSOLE_FORBIDDEN) or not line.isprintable():
             raise Refused(422, "one printable G-code or $ line, without realtime characters")
+        effect = CONSOLE_CONFIRM.get("".join(line.split()).upper())
+        if effect and not confirm:
+            raise Refused(428, f"{line} {effect}; send it again confirmed to go ahead")
         if written := SETTING_LINE.fullmatch(line):
             with contextlib.suppress(ValueError):  # not a number: the board says so itself
                 self.check_settings({int(written[1]): float(written[2])})

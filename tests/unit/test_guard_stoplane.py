@@ -1,0 +1,94 @@
+"""The stop lane (guard/stoplane.py) and the acceptor's first look at a head
+(guard/acceptor.py), with the guard's real checks and a recording stop verb."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from plotbridge.errors import Refused
+from plotbridge.guard.acceptor import may_be_stop
+from plotbridge.guard.middleware import Checks
+from plotbridge.guard.stoplane import NEED_MORE, StopLane
+
+TOKEN = "lane-test-token-0123456"
+
+
+class Auth:
+    def check_header(self, value: str) -> bool:
+        return value == f"Bearer {TOKEN}"
+
+    def check_session(self, value: str | None) -> bool:
+        return value == "session-1"
+
+    def check_token(self, value: str | None) -> bool:
+        return value == TOKEN
+
+
+@pytest.fixture
+def lane():
+    stops: list[tuple] = []
+
+    def stop(name, every, source, origin):
+        if name == "nope":
+            raise Refused(404, "no plotter named 'nope'")
+        stops.append((name, every, source, origin))
+        return {"status": "stopped"}
+
+    lane = StopLane()
+    lane.bind(Checks(Auth()), stop)
+    lane.stops = stops
+    return lane
+
+
+def head(path: str, *headers: str, body: bytes = b"") -> bytes:
+    lines = [f"POST {path} HTTP/1.1", "Host: 127.0.0.1", *headers]
+    return ("\r\n".join(lines) + "\r\n\r\n").encode() + body
+
+
+def status(answer: bytes) -> tuple[int, dict]:
+    start, _, body = answer.partition(b"\r\n\r\n")
+    assert b"connection: close" in start
+    return int(start.split(b" ")[1]), json.loads(body)
+
+
+def test_a_stop_with_the_token_is_acted_on_and_answered(lane):
+    auth = f"Authorization: Bearer {TOKEN}"
+    assert status(lane.answer(head("/api/machine/estop", auth))) == (202, {"status": "stopped"})
+    assert status(lane.answer(head("/api/estop", auth, "X-Plotbridge-Page: p-1")))[0] == 202
+    assert status(lane.answer(head("/api/plotters/left/machine/estop", auth)))[0] == 202
+    assert lane.stops == [(None, False, "REST", None), (None, True, "REST", "p-1"),
+                          ("left", False, "REST", None)]  # fmt: skip
+    assert status(lane.answer(head("/api/plotters/nope/machine/estop", auth)))[0] == 404
+
+
+def test_what_the_guard_would_refuse_goes_on_to_the_app(lane):
+    cookie = "Cookie: plotbridge_session=session-1"
+    for request in (
+        head("/api/machine/estop"),  # no token: the app answers 401
+        head("/api/machine/estop", "Authorization: Bearer wrong-token-000000"),
+        head("/api/machine/estop", cookie),  # a cookie without our page's header (CSRF)
+        head("/api/machine/estop", cookie, "Origin: http://evil.example"),
+        head("/api/machine/estop", f"Authorization: Bearer {TOKEN}", "Content-Length: 5000"),
+        head("/api/machine/estop", f"Authorization: Bearer {TOKEN}",
+             "Transfer-Encoding: chunked"),
+        head("/api/machine/home", f"Authorization: Bearer {TOKEN}"),  # not a stop
+    ):  # fmt: skip
+        assert lane.answer(request) is None, request
+    assert lane.stops == []
+    assert status(lane.answer(head("/api/estop", cookie, "X-Plotbridge: 1")))[0] == 202
+
+
+def test_a_small_body_is_read_before_the_answer(lane):
+    auth = f"Authorization: Bearer {TOKEN}"
+    partial = head("/api/estop", auth, "Content-Length: 2", body=b"{")
+    assert lane.answer(partial) == NEED_MORE and lane.stops == []
+    assert status(lane.answer(partial + b"}"))[0] == 202
+
+
+def test_the_acceptor_keeps_only_what_may_become_a_stop():
+    assert may_be_stop(b"") and may_be_stop(b"PO") and may_be_stop(b"POST /api/")
+    assert may_be_stop(b"POST /api/estop HTTP/1.1\r\nHost")
+    assert not may_be_stop(b"GET /api/health HTTP/1.1\r\n")
+    assert not may_be_stop(b"POST /api/jobs HTTP/1.1\r\n")
+    assert not may_be_stop(b"X")
