@@ -244,8 +244,11 @@ class Runner:
         while True:
             feed = self._feed = await self.changes.load(job, index)
             self.point.floor = floor
-            state = await self.stream.run(program, line, stop, preamble, feed, self._on_ack,
-                                          self.point.streaming)  # fmt: skip
+            try:
+                state = await self.stream.run(program, line, stop, preamble, feed,
+                                              self._on_ack, self.point.streaming)  # fmt: skip
+            finally:
+                self.point.live = False
             if not job.active:
                 return "Ended", None
             if state != "Idle" or feed.stopped_at is None or feed.pen is None:
