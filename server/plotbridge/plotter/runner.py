@@ -24,6 +24,7 @@ from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.jobs.progress import summary
 from plotbridge.pens import Pen, PenFeed, PenLibrary
 from plotbridge.plotter.afterjob import AfterJobMoves
+from plotbridge.plotter.halt import halt
 from plotbridge.plotter.layerstream import LayerStream
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.plotter.penchange import PenChanges
@@ -133,16 +134,7 @@ class Runner:
         await self.point.exact_stop_known()
 
     async def halt(self) -> None:
-        """Stop what the board still has queued: hold, soft reset once the hold has stopped
-        motion, then lift the pen (`$X` first if the reset left an alarm)."""
-        with contextlib.suppress(Exception):
-            self.link.realtime(b"!")
-        await self._wait_state(lambda s: s in ("Hold", "Idle", "Alarm", "Disconnected"), 5.0)
-        await asyncio.sleep(0.3)  # let the deceleration complete
-        self.link.estop()
-        if await self._wait_state(lambda s: s in ("Idle", "Alarm"), 5.0) == "Alarm":
-            await self._quiet_command("$X")
-        await self._quiet_command("M5")
+        await halt(self.link)
 
     # ---- what the board reports ----------------------------------------------------------
 
@@ -315,19 +307,3 @@ class Runner:
             raise Refused(409, "the plotter is not connected") from exc
         self.lifecycle.move(job, cause)
         return job
-
-    async def _quiet_command(self, line: str) -> None:
-        try:
-            await self.link.command(line)
-        except Exception as exc:
-            log.warning("%s after stopping a job failed: %s", line, exc)
-
-    async def _wait_state(self, predicate: Callable[[str], bool], limit: float) -> str:
-        """Wait (at most `limit` s) for the machine state to satisfy `predicate`."""
-        deadline = time.monotonic() + limit
-        while True:
-            status = self.link.status
-            state = status.state if status.connected else "Disconnected"
-            if predicate(state) or time.monotonic() > deadline:
-                return state
-            await asyncio.sleep(0.02)
