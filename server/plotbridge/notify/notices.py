@@ -17,13 +17,13 @@ from datetime import UTC, datetime
 from typing import Any
 
 from plotbridge.grbl import alarm_message
-from plotbridge.jobs.model import ACTIVE
+from plotbridge.jobs.lifecycle import ACTIVE, RESUMABLE, State
 
 EVENTS: tuple[str, ...] = (
     "job_started", "pen_change", "job_done", "job_failed", "job_stopped", "alarm", "link_lost",
 )  # fmt: skip
 ENDED_RECENTLY_S = 5.0  # a link lost this soon after its job was interrupted names that job
-STOPPED = frozenset({"stopped", "cancelled", "interrupted"})
+STOPPED = RESUMABLE | {State.CANCELLED}  # ended early (the lifecycle's states)
 SAID = ("progress", "drawn_mm", "eta_s", "summary", "actions")  # copied from the job
 
 
