@@ -75,6 +75,8 @@ class SendToPlotbridge(inkex.EffectExtension):
                  f"Estimated plotting time: {minutes} min {seconds} s."]  # fmt: skip
         if job.get("start_error"):
             lines.append(f"It did not start: {job['start_error']}")
+        if job.get("actions"):
+            lines.append("It allows now: " + ", ".join(job["actions"]) + ".")
         inkex.errormsg("\n".join(lines))
         return False  # the document is unchanged: Inkscape keeps it as it is
 

@@ -26,11 +26,17 @@ from urllib.parse import quote, urlencode
 import httpx
 
 Job = dict[str, Any]
-END_STATES = frozenset({"done", "failed", "cancelled", "stopped", "interrupted"})
-ACTIVE_STATES = ("running", "pen_change", "paused", "waiting")
 PLACEMENT = ("paper", "margin", "fit", "rotate", "scale", "dx", "dy", "optimize", "pen_dialect")
 DISCOVER_TIMEOUT_S = 3.0
 NO_ROUTE = (404, 405)  # a server from before several plotters (its web UI answers the path)
+
+
+GOING_ON = ("stop", "start")  # a job with one of these actions runs, or is yet to run
+
+
+def going_on(job: Job) -> bool:
+    """Whether the job runs or will (its actions say so, or it waits for a plotter)."""
+    return bool(job.get("waiting")) or any(a in job.get("actions", ()) for a in GOING_ON)
 
 
 class PlotbridgeError(Exception):
@@ -47,7 +53,13 @@ class SetupError(PlotbridgeError):
 
 
 def describe_detail(detail: Any) -> str:
-    """The server's `detail` as lines a person reads (upload errors with their line)."""
+    """The server's `detail` as lines a person reads (upload errors with their line; a
+    refused action with what the job allows now)."""
+    if isinstance(detail, dict) and "actions" in detail and "message" in detail:
+        allowed = ", ".join(detail["actions"]) or "nothing, for now"
+        return f"{detail['message']} (it allows: {allowed})"
+    if isinstance(detail, dict) and "message" in detail:
+        return str(detail["message"])
     if isinstance(detail, dict) and isinstance(detail.get("errors"), list):
         return "\n".join(
             f"  line {e.get('line')}: {e.get('message')}" if e.get("line") else
@@ -290,14 +302,23 @@ class Plotbridge:
         return self.request("PATCH", f"/api/jobs/{job_id}", "set the pens",
                             json={"pens": pens})  # fmt: skip
 
+    def active_jobs(self) -> list[Job]:
+        """The jobs a plotter runs now (running, held, or waiting for a pen): those that
+        can be stopped."""
+        return [job for job in self.jobs() if "stop" in job.get("actions", ())]
+
     def active_job(self) -> Job | None:
-        """The job that is running (or paused, or waiting for a pen change), if any."""
-        jobs = self.jobs()
-        for state in ACTIVE_STATES:
-            for job in jobs:
-                if job["state"] == state:
-                    return job
-        return None
+        """The first job a plotter runs now, if any."""
+        return next(iter(self.active_jobs()), None)
+
+    def act(self, job_id: str, action: str, plotter: str | None = None,
+            body: dict[str, Any] | None = None) -> Job:  # fmt: skip
+        """One of the job's `actions` (start, hold, continue, stop, resume, home_then_resume,
+        resume_from, restart, cancel, frame); the server answers 409 with the actions it
+        allows when the job's state does not."""
+        params = {"plotter": plotter} if plotter else None
+        return self.request("POST", f"/api/jobs/{job_id}/{action}", action.replace("_", " "),
+                            params=params, json=body)  # fmt: skip
 
     def _job_or_active(self, job_id: str | None, action: str) -> str:
         if job_id:
@@ -308,17 +329,21 @@ class Plotbridge:
         return job["id"]
 
     def pause(self, job_id: str | None = None) -> Job:
-        """Pause a job (default: the running one)."""
-        job_id = self._job_or_active(job_id, "pause")
-        return self.request("POST", f"/api/jobs/{job_id}/pause", "pause")
+        """Hold a job (default: the running one)."""
+        return self.act(self._job_or_active(job_id, "hold"), "hold")
 
     def resume(self, job_id: str | None = None) -> Job:
-        """Resume a paused or pen-change job (default: the active one)."""
-        job_id = self._job_or_active(job_id, "resume")
-        return self.request("POST", f"/api/jobs/{job_id}/resume", "resume")
+        """`continue` a held job or a pen change, or `resume` a stopped or interrupted one
+        (default: the active one), whichever its `actions` offer."""
+        job = self.job(self._job_or_active(job_id, "resume"))
+        action = next((a for a in ("continue", "resume") if a in job.get("actions", ())), None)
+        if action is None:
+            raise PlotbridgeError(f"job {job['id']} is {job['state']}: nothing to resume "
+                                  f"(it allows: {', '.join(job.get('actions', []))})", 409, job)
+        return self.act(job["id"], action)
 
     def cancel(self, job_id: str) -> Job:
-        return self.request("POST", f"/api/jobs/{job_id}/cancel", "cancel")
+        return self.act(job_id, "cancel")
 
     def delete(self, job_id: str) -> None:
         self.request("DELETE", f"/api/jobs/{job_id}", "delete")
@@ -331,14 +356,15 @@ class Plotbridge:
         timeout: float | None = None,
         poll: float = 0.5,
     ) -> Job:
-        """Block until the job ends (done, failed, cancelled, stopped, interrupted); the
-        last job. `progress(job)` is called on every poll. TimeoutError past `timeout`."""
+        """Block until the job neither runs nor waits to (done, failed, cancelled, stopped,
+        interrupted: nothing in its `actions` keeps it going); the last job. `progress(job)`
+        is called on every poll. TimeoutError past `timeout`."""
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
             job = self.job(job_id)
             if progress is not None:
                 progress(job)
-            if job["state"] in END_STATES:
+            if not going_on(job):
                 return job
             if deadline is not None and time.monotonic() > deadline:
                 raise TimeoutError(f"job {job_id} still {job['state']} after {timeout:g} s")

@@ -1,5 +1,7 @@
-"""The command line's client verbs: status, queue, stop, pause, resume, home (and
-the connection options `submit` shares), each a thin layer over `plotbridge.client`."""
+"""The command line's client verbs: status, queue, stop, pause, resume, act, home (and
+the connection options `submit` shares), each a thin layer over `plotbridge.client`.
+A job is shown with the server's own numbers and words (progress, eta_s, summary) and
+the actions it allows now."""
 
 from __future__ import annotations
 
@@ -45,9 +47,12 @@ def _machine_line(name: str | None, machine: dict[str, Any]) -> str:
 
 def _job_line(job: dict[str, Any]) -> str:
     progress = f"{100 * (job.get('progress') or 0):.0f}%"
-    eta = job.get("eta_s") if job.get("eta_s") is not None else job.get("estimate_s")
-    left = f", {eta:.0f} s left" if eta is not None and job["state"] not in ("done",) else ""
-    return f"{job['id']}  {job['state']:<11} {progress:>4}{left}  {job['name']}"
+    eta = job.get("eta_s")
+    left = f", {eta:.0f} s left" if eta else ""
+    said = job.get("summary") or job["state"]
+    actions = ", ".join(job.get("actions", [])) or "none now"
+    return (f"{job['id']}  {job['state']:<11} {progress:>4}{left}  {job['name']}\n"
+            f"    {said}; actions: {actions}")
 
 
 def status(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
@@ -56,11 +61,13 @@ def status(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
         plotters = [p for p in plotters if p.get("name") == args.plotter] or [
             {"name": args.plotter, "machine": pb.machine(args.plotter)}
         ]
-    active = pb.active_job()
+    active = pb.active_jobs()
     lines = [f"plotbridge at {pb.url}"]
     lines += [_machine_line(p.get("name"), p.get("machine") or {}) for p in plotters]
-    lines.append(f"job {_job_line(active)}" if active else "no job running")
-    return {"url": pb.url, "plotters": plotters, "job": active}, "\n".join(lines)
+    lines += [f"job {_job_line(job)}" for job in active] or ["no job running"]
+    answer = {"url": pb.url, "plotters": plotters, "job": active[0] if active else None,
+              "jobs": active}  # fmt: skip
+    return answer, "\n".join(lines)
 
 
 def queue(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
@@ -83,6 +90,11 @@ def resume(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
     return job, f"job {job['id']} {job['state']}"
 
 
+def act(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
+    job = pb.act(args.job, args.action, args.plotter)
+    return job, f"job {_job_line(job)}"
+
+
 def home(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
     answer = pb.home(args.plotter)
     return answer, _machine_line(args.plotter, answer["machine"])
@@ -93,7 +105,8 @@ VERBS: dict[str, tuple[Verb, str]] = {
     "queue": (queue, "the jobs in queue order"),
     "stop": (stop, "emergency stop, at once"),
     "pause": (pause, "pause the running job (or JOB)"),
-    "resume": (resume, "resume the paused job (or JOB)"),
+    "resume": (resume, "continue the held job (or JOB), or resume a stopped one"),
+    "act": (act, "do one of a job's actions (as `plotbridge queue` lists them)"),
     "home": (home, "run the homing cycle"),
 }
 
@@ -104,6 +117,11 @@ def add_verbs(commands: argparse._SubParsersAction) -> None:
         add_connection_arguments(parser)
         if verb in ("pause", "resume"):
             parser.add_argument("job", nargs="?", help="job id (default: the active job)")
+        elif verb == "act":
+            parser.add_argument("job", help="job id")
+            parser.add_argument("action", help="start, hold, continue, stop, resume, "
+                                "home_then_resume, restart, cancel, frame")
+            parser.add_argument("--plotter", help="the plotter to run it on (start, resume)")
         else:
             parser.add_argument("--plotter", help="plotter name (default: the first)")
         if verb == "stop":

@@ -1,4 +1,4 @@
-"""The command line's client verbs (status, queue, pause, resume, stop, home) against
+"""The command line's client verbs (status, queue, pause, resume, stop, act, home) against
 a real server on the virtual plotter."""
 
 from __future__ import annotations
@@ -43,6 +43,13 @@ def test_verbs_drive_a_job_through_pause_resume_and_stop(server_virtual, tmp_pat
     [listed] = answer(server_virtual, "queue")
     assert listed["id"] == job["id"] and listed["state"] == "stopped"
     assert f"{job['id']}  stopped" in run_cli(server_virtual, "queue").stdout
+    shown = run_cli(server_virtual, "queue").stdout  # the server's words and actions
+    assert "stopped at X " in shown and "actions: resume, home_then_resume" in shown, shown
+    refused = run_cli(server_virtual, "act", job["id"], "continue")
+    assert refused.returncode == 1 and "is stopped: cannot continue it" in refused.stderr
+    assert "(it allows: resume, home_then_resume, resume_from" in refused.stderr
+    assert answer(server_virtual, "act", job["id"], "cancel")["actions"] == [
+        "resume_from", "restart", "frame", "delete"]
 
 
 @pytest.mark.e2e

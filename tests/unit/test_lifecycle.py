@@ -5,18 +5,16 @@ fake board) that `actions` is exactly what the verbs accept."""
 from __future__ import annotations
 
 import random
-from typing import Any
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from plotbridge.errors import Refused
-from plotbridge.events import EventHub
 from plotbridge.jobs.imports import Importer
-from plotbridge.jobs.lifecycle import ACTIONS, EVENTS, TABLE, Lifecycle, State, allowed
-from plotbridge.jobs.model import Job
+from plotbridge.jobs.lifecycle import ACTIONS, EVENTS, TABLE, State, allowed
 
 from tests.fixtures.fake_app import fake_import, make_app, serving, upload
+from tests.fixtures.jobs import a_job, lifecycle_with
 from tests.fixtures.waits import settle
 
 # The contract as /work/briefs/ACTIONS.md and docs/INTERNALS.md state it, written out again.
@@ -34,29 +32,6 @@ EXPECTED: dict[str, set[str]] = {
     "interrupted": {"resume", "home_then_resume", "resume_from", "restart", "cancel", "frame",
                     "delete"},
 }  # fmt: skip
-
-
-class Store:
-    """Records what the lifecycle persists."""
-
-    def __init__(self) -> None:
-        self.saved: list[tuple[str, str]] = []
-
-    def save(self, job: Job, _position: int) -> None:
-        self.saved.append((job.id, job.state))
-
-
-def a_job(state: str = "queued") -> Job:
-    return Job(id="j1", name="j", state=state, format="gcode", lines_total=10, estimate_s=1.0)
-
-
-def lifecycle_with(job: Job) -> tuple[Lifecycle, list[dict[str, Any]]]:
-    hub = EventHub()
-    heard: list[dict[str, Any]] = []
-    hub.subscribe(heard.append)
-    life = Lifecycle(Store(), hub)  # type: ignore[arg-type]
-    life.jobs[job.id] = job
-    return life, heard
 
 
 @pytest.mark.parametrize("state", [s.value for s in State])

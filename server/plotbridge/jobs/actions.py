@@ -18,7 +18,7 @@ from pydantic import ValidationError
 from plotbridge.errors import Refused
 from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.model import Job
-from plotbridge.models import MoveBody, ResumeBody, StartBody
+from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, StartBody
 from plotbridge.plotter.plotter import HOMING_S, Plotter
 from plotbridge.queue import JobQueue
 from plotbridge.resume import PickError, ResumePoint, pick
@@ -108,8 +108,6 @@ class JobActions:
         self.queue.move(job.id, _model(MoveBody, body).position)
 
     async def edit(self, job: Job, _plotter: str | None, body: Body | None) -> None:
-        from plotbridge.models import PatchJobBody  # the REST body; PATCH /api/jobs/{id}
-
         patch: PatchJobBody = _model(PatchJobBody, body)
         placement = patch.placement.model_dump(exclude_unset=True) if patch.placement else None
         if patch.name is not None or placement is not None:

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
 Point = tuple[float, float]
 SYNC_WORDS = frozenset({PEN_DOWN, PEN_UP, "M0", "M1", "G4"})
+RAPID_MM_MIN = 5000.0  # a G0's speed for the split of a stretch's time among its lines
 
 
 @dataclass
@@ -42,13 +43,16 @@ class Measure:
     syncs: array = field(default_factory=lambda: array("l"))
     """Lines the board answers only once the moves before them are done (pen, pause,
     dwell), and the last line."""
+    secs: array = field(default_factory=lambda: array("d", [0.0]))
+    """Seconds up to the end of each line at its feed, without acceleration (`Plan` scales
+    them between two `syncs` to the estimate's time)."""
 
     @classmethod
     def of(cls, program: Path) -> Measure:
         """The program's measure (blocking: reads the file once)."""
         m = cls()
-        x = y = total = 0.0
-        pen = False
+        x = y = total = seconds = 0.0
+        pen, feed = False, RAPID_MM_MIN
         for number, text in read_program(program):
             command = Command.parse(text)
             length = 0.0
@@ -69,8 +73,13 @@ class Measure:
                 else:
                     length = math.hypot(ex - x, ey - y)
                 x, y = ex, ey
-            drawn = pen and command.moves and command.word not in ("G0", "G00")
+            rapid = command.word in ("G0", "G00")
+            if command.feed and not rapid:
+                feed = command.feed
+            drawn = pen and command.moves and not rapid
             total += length if drawn else 0.0
+            seconds += length * 60.0 / (RAPID_MM_MIN if rapid else feed)
+            m.secs.append(seconds)
             m.down.append(drawn)
             m.mm.append(total)
             m.x.append(x)
@@ -129,25 +138,31 @@ def _arc_along(start: Point, end: Point, arc: tuple[float, float, bool], at: Poi
 
 @dataclass(frozen=True)
 class Plan:
-    """The plan's time per line. The import's timeline holds when the board *accepts* each
-    line; a line has been executed about when the line a planner's depth (`depth`) later is
-    accepted, and at the latest when the next line the board answers only once the moves
-    before it are done (`syncs`: pen up or down, a pause, a dwell, the end) is."""
+    """The plan's time per line. The import's timeline holds when the board *accepts*
+    each line; a line the board answers only once the moves before it are done (pen up
+    or down, a pause, a dwell: `Measure.syncs`) is accepted when those have been executed.
+    Between two such lines the stretch's time is split among its lines by their length
+    at their feed (`Measure.secs`). Without a measure: the timeline as it is."""
 
     timeline: Sequence[Sequence[float]]
     estimate_s: float
-    depth: int
-    syncs: Sequence[int]
+    measure: Measure | None = None
 
     def ends(self, line: int) -> float:
         """Seconds from the start until program line `line` has been executed."""
         if line <= 0 or not self.timeline:
             return 0.0
-        later = line + self.depth
-        k = bisect_left(self.syncs, line)
-        if k < len(self.syncs):
-            later = min(later, self.syncs[k])
-        return elapsed(self.timeline, later)
+        m = self.measure
+        if m is None or not m.syncs:
+            return elapsed(self.timeline, line)
+        line = min(line, m.lines)
+        k = bisect_left(m.syncs, line)
+        after = m.syncs[min(k, len(m.syncs) - 1)]
+        before = m.syncs[k - 1] if k > 0 else 0
+        t0, t1 = elapsed(self.timeline, before), elapsed(self.timeline, after)
+        span = m.secs[after] - m.secs[before]
+        share = (m.secs[line] - m.secs[before]) / span if span > 0 else 1.0
+        return t0 + min(max(share, 0.0), 1.0) * (t1 - t0)
 
     @property
     def total(self) -> float:
@@ -160,9 +175,8 @@ class Plan:
         return before + t * (self.ends(line) - before)
 
 
-def plan_of(job: Job, measure: Measure | None, depth: int) -> Plan:
-    syncs = measure.syncs if measure is not None else [job.lines_total]
-    return Plan(job.timeline, job.estimate_s, max(depth, 0), syncs)
+def plan_of(job: Job, measure: Measure | None) -> Plan:
+    return Plan(job.timeline, job.estimate_s, measure)
 
 
 def follow(job: Job, measure: Measure | None, plan: Plan, line: int, at: Point | None,

@@ -17,13 +17,14 @@ from datetime import UTC, datetime
 from typing import Any
 
 from plotbridge.grbl import alarm_message
-from plotbridge.jobs.model import ACTIVE
+from plotbridge.jobs.lifecycle import ACTIVE, RESUMABLE, State
 
 EVENTS: tuple[str, ...] = (
     "job_started", "pen_change", "job_done", "job_failed", "job_stopped", "alarm", "link_lost",
 )  # fmt: skip
 ENDED_RECENTLY_S = 5.0  # a link lost this soon after its job was interrupted names that job
-STOPPED = frozenset({"stopped", "cancelled", "interrupted"})
+STOPPED = RESUMABLE | {State.CANCELLED}  # ended early (the lifecycle's states)
+SAID = ("progress", "drawn_mm", "eta_s", "summary", "actions")  # copied from the job
 
 
 @dataclass(frozen=True)
@@ -99,26 +100,29 @@ class NoticeWatcher:
             self._last_job[plotter] = ref
         where = f" on {plotter}" if plotter else ""
         name = f"Job '{ref.name}'"
+        said = {key: job.get(key) for key in SAID}  # the server's own numbers and words
         if state == "running" and before not in ACTIVE:
             how = "resumed" if before in STOPPED else "started"
             return [Notice("job_started", plotter, ref, f"{name} {how}{where}",
                            {"lines_total": job.get("lines_total"),
-                            "estimate_s": job.get("estimate_s")})]  # fmt: skip
+                            "estimate_s": job.get("estimate_s"), **said})]  # fmt: skip
         if state == "pen_change":
             change = job.get("pen_change") or {}
             text = change.get("message") or "load the next pen, then continue"
-            return [Notice("pen_change", plotter, ref, f"{name}{where}: {text}", dict(change))]
+            return [Notice("pen_change", plotter, ref, f"{name}{where}: {text}",
+                           {**change, **said})]  # fmt: skip
         if state == "done":
-            return [Notice("job_done", plotter, ref, f"{name} done{where}")]
+            return [Notice("job_done", plotter, ref, f"{name} done{where}", said)]
         if state == "failed":
             error = job.get("error") or "no reason given"
             return [Notice("job_failed", plotter, ref, f"{name} failed{where}: {error}",
-                           {"error": job.get("error"), "lines_done": job.get("lines_done")})]
+                           {"error": job.get("error"), "lines_done": job.get("lines_done"),
+                            **said})]  # fmt: skip
         if state in STOPPED and before in ACTIVE:
             why = f": {job['error']}" if job.get("error") else ""
             return [Notice("job_stopped", plotter, ref, f"{name} {state}{where}{why}",
                            {"error": job.get("error"), "lines_done": job.get("lines_done"),
-                            "resume_line": job.get("resume_line")})]  # fmt: skip
+                            "resume_line": job.get("resume_line"), **said})]  # fmt: skip
         return []
 
     def _machine(self, plotter: str | None, machine: dict[str, Any]) -> list[Notice]:

@@ -16,19 +16,20 @@ import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import cast
 
 from plotbridge.errors import Refused
 from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.jobs.progress import summary
-from plotbridge.pens import Pen, PenFeed, PenLibrary
+from plotbridge.pens import PenLibrary
 from plotbridge.plotter.afterjob import AfterJobMoves
+from plotbridge.plotter.halt import halt
+from plotbridge.plotter.layers import LayerRuns
 from plotbridge.plotter.layerstream import LayerStream
 from plotbridge.plotter.link import Link, LinkDown, MachineStatus, StreamAborted
 from plotbridge.plotter.penchange import PenChanges
 from plotbridge.plotter.stoppoint import StopPoint
-from plotbridge.resume import ResumePoint, layer_runs, resume_preamble
+from plotbridge.resume import ResumePoint
 
 log = logging.getLogger("plotbridge.runner")
 
@@ -54,10 +55,9 @@ class Runner:
         self.after = AfterJobMoves(plotter, link, after_job, park)
         self.point = StopPoint(link, jobs_dir, lifecycle)
         self.changes = PenChanges(link, lifecycle, pens, self.after.park_lines)
-        self.stream = LayerStream(link)
+        self.layers = LayerRuns(self.point, self.changes, LayerStream(link), self._on_ack)
         self.job: Job | None = None
         self._task: asyncio.Task[None] | None = None
-        self._feed: PenFeed | None = None
         self._last_save = 0.0
         self._control_at = 0.0
         self._idle_poll_hz = link.poll_hz
@@ -133,16 +133,7 @@ class Runner:
         await self.point.exact_stop_known()
 
     async def halt(self) -> None:
-        """Stop what the board still has queued: hold, soft reset once the hold has stopped
-        motion, then lift the pen (`$X` first if the reset left an alarm)."""
-        with contextlib.suppress(Exception):
-            self.link.realtime(b"!")
-        await self._wait_state(lambda s: s in ("Hold", "Idle", "Alarm", "Disconnected"), 5.0)
-        await asyncio.sleep(0.3)  # let the deceleration complete
-        self.link.estop()
-        if await self._wait_state(lambda s: s in ("Idle", "Alarm"), 5.0) == "Alarm":
-            await self._quiet_command("$X")
-        await self._quiet_command("M5")
+        await halt(self.link)
 
     # ---- what the board reports ----------------------------------------------------------
 
@@ -167,8 +158,7 @@ class Runner:
         if line <= 0 or job is None:
             return
         job.lines_acked = line
-        if self._feed is not None:
-            self._feed.acked(line)
+        self.layers.acked(line)
         now = time.monotonic()
         if now - self._last_save >= SAVE_INTERVAL:
             self._last_save = now
@@ -183,21 +173,7 @@ class Runner:
             await self.point.measure(job)
             floor, line, preamble = await asyncio.to_thread(self.point.preamble, job, line,
                                                             resumed, point)  # fmt: skip
-            state, reink = "Idle", cast(Pen | None, None)
-            runs = layer_runs(job.layers, job.plot_layers, line)
-            for number, (start, stop, layer) in enumerate(runs):  # a layer at a time
-                if number:  # after a layer: the M0s (not sent) and skipped layers are done
-                    self.point.follow(job, start, None)
-                    if not await self.changes.wait(job, self.changes.layer_prompt(job, layer,
-                                                                                  reink)):
-                        return  # stopped, cancelled or lost during the change
-                    floor = start
-                    preamble = (await asyncio.to_thread(resume_preamble, program,
-                                                        ResumePoint(start)))[1]  # fmt: skip
-                state, reink = await self._layer(job, program, layer, start, stop, preamble,
-                                                 floor)  # fmt: skip
-                if state != "Idle":
-                    break
+            state = await self.layers.plot(job, program, line, preamble, floor)
             if state == "Idle":
                 self.point.follow(job, job.lines_total + 1, None)
                 after = self.after.claim(job)
@@ -226,42 +202,12 @@ class Runner:
                 with contextlib.suppress(Exception):
                     await self.halt()
         finally:
-            self._feed = None
             if self.pens is not None:
                 self.pens.flush()
             self.link.poll_hz = self._idle_poll_hz
             if self.job is job:
                 self.job = None
             self.busy_changed()
-
-    async def _layer(self, job: Job, program: Path, index: int, line: int, stop: int | None,
-                     preamble: list[str], floor: int) -> tuple[str, Pen | None]:  # fmt: skip
-        """Stream lines `line`..`stop` with the pen of layer `index` (0-based), stopping to
-        re-ink where due and drawing follows. The board's state once it stands ("Ended":
-        the job ended meanwhile) and the pen still due for re-inking at the layer's end."""
-        end = (stop - 1) if stop is not None else job.lines_total
-        due: Pen | None = None
-        while True:
-            feed = self._feed = await self.changes.load(job, index)
-            self.point.floor = floor
-            state = await self.stream.run(program, line, stop, preamble, feed, self._on_ack,
-                                          self.point.streaming)  # fmt: skip
-            if not job.active:
-                return "Ended", None
-            if state != "Idle" or feed.stopped_at is None or feed.pen is None:
-                return state, due
-            line, floor = feed.stopped_at + 1, feed.stopped_at + 1
-            if not self.point.draws_between(job, feed.stopped_at, end):
-                due, preamble = feed.pen, []  # the last stroke: told at the boundary, if any
-                if line > end:
-                    return state, due
-                continue  # the rest of the layer (travel) as it is
-            self.point.follow(job, line, None)
-            if not await self.changes.wait(job, self.changes.reink_prompt(job, feed.pen,
-                                                                          index)):
-                return "Ended", None
-            x, y = feed.position  # back where the pen went up, then on
-            preamble = [f"G0 X{x:.3f} Y{y:.3f}"]
 
     # ---- how a run ends -------------------------------------------------------------------
 
@@ -312,19 +258,3 @@ class Runner:
             raise Refused(409, "the plotter is not connected") from exc
         self.lifecycle.move(job, cause)
         return job
-
-    async def _quiet_command(self, line: str) -> None:
-        try:
-            await self.link.command(line)
-        except Exception as exc:
-            log.warning("%s after stopping a job failed: %s", line, exc)
-
-    async def _wait_state(self, predicate: Callable[[str], bool], limit: float) -> str:
-        """Wait (at most `limit` s) for the machine state to satisfy `predicate`."""
-        deadline = time.monotonic() + limit
-        while True:
-            status = self.link.status
-            state = status.state if status.connected else "Disconnected"
-            if predicate(state) or time.monotonic() > deadline:
-                return state
-            await asyncio.sleep(0.02)

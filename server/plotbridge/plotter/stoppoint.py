@@ -49,17 +49,20 @@ class StopPoint:
         self._known.set()
         self._orphan: Job | None = None
         self._orphan_at = 0.0
+        self._orphan_writer: asyncio.Task[None] | None = None
         self._last_progress = 0.0
 
     # ---- a run ---------------------------------------------------------------------------
 
     def reset(self, line: int) -> None:
         self.floor, self.motion, self._mark = line, bytearray(), None
+        self.live, self._high = False, 0
         self._told()
 
     def streaming(self, motion: bytearray) -> None:
-        """The motion flags of the stretch streaming now (filled as it is read)."""
-        self.motion = motion
+        """The motion flags of the stretch streaming now (filled as it is read); reports
+        tell the pen's progress until `live` goes False (the stretch stands)."""
+        self.motion, self.live = motion, True
 
     async def measure(self, job: Job) -> None:
         """Read the job's program for its progress (once per job; in a thread)."""
@@ -69,7 +72,7 @@ class StopPoint:
 
     def _plan(self, job: Job) -> tuple[Measure | None, Plan]:
         measure = self._measure[1] if self._measure and self._measure[0] == job.id else None
-        return measure, plan_of(job, measure, self.link.facts.most_queued)
+        return measure, plan_of(job, measure)
 
     def follow(self, job: Job, line: int, at: tuple[float, float] | None) -> None:
         """The job's progress with the pen at `at` on `line`."""
@@ -97,6 +100,9 @@ class StopPoint:
             return
         job.safe_line = safe
         self._keep(job, Mark(safe, max(job.lines_acked, safe), status.x, status.y))
+        if not self.live or safe < self._high:
+            return  # parked for a pen, or an older report: the progress stands
+        self._high = safe
         self.follow(job, safe, (status.x, status.y))
         now = time.monotonic()
         if now - self._last_progress >= PROGRESS_INTERVAL:
@@ -176,10 +182,12 @@ class StopPoint:
         if job.state == "interrupted":
             path = self.jobs_dir / job.id / MARK_FILE
             point = (status.x, status.y)
-            self._writer = asyncio.get_running_loop().create_task(self._ran_to(job, path, point))
+            self._orphan_writer = asyncio.get_running_loop().create_task(
+                self._ran_to(job, path, point))  # fmt: skip
 
     async def _ran_to(self, job: Job, path: Path, point: tuple[float, float]) -> None:
         await asyncio.to_thread(Mark.ran_out, path, point)
+        self._orphan_writer = None
         await self.settle(job)
 
     # ---- the mark file -----------------------------------------------------------------
@@ -202,9 +210,10 @@ class StopPoint:
 
     async def written(self) -> None:
         """Wait for the mark writes under way (a resume reads the mark from the file)."""
-        if self._writer is not None and not self._writer.done():
-            with contextlib.suppress(Exception):
-                await asyncio.shield(self._writer)
+        for writer in (self._writer, self._orphan_writer):
+            if writer is not None and not writer.done() and writer is not asyncio.current_task():
+                with contextlib.suppress(Exception):
+                    await asyncio.shield(writer)
 
     def preamble(self, job: Job, line: int, resumed: bool,
                  point: ResumePoint | None) -> tuple[int, int, list[str]]:  # fmt: skip
