@@ -171,7 +171,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         float v = *vp;
         if (w == W_L)
             blk->l_word = (uint8_t)v;
-        if (w == W_T && magnitude_above(v, 255.0f))
+        if (w == W_T && (int32_t)float_bits(v) > (int32_t)float_bits(255.0f)) /* (a negative T: 4 below) */
             return ERR_TOOL_NUMBER;
         if (letter == 'G' || letter == 'M') {
             if (undo->motion == UNDO_NONE)
