@@ -95,6 +95,7 @@ void test_gcode_errors(void)
     CHECK(parse("M6") == ERR_UNSUPPORTED);
     CHECK(parse("T1") == STATUS_OK);
     CHECK(parse("T256") == ERR_TOOL_NUMBER);
+    CHECK(parse("T-300") == ERR_NEGATIVE); /* GRBL: the range check passes it, then the sign */
     /* GRBL's range: N up to 10,000,000; the block carries the whole part */
     CHECK(parse("N10000001G0X1") == ERR_LINE_NUMBER);
     CHECK(parse("N10000000G0X1") == STATUS_OK && blk.line == 10000000);
