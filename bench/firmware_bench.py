@@ -32,6 +32,9 @@ Run: .venv/bin/python bench/firmware_bench.py [--board NAME ...]
      .venv/bin/python bench/firmware_bench.py --calls [--check | --accel A]
      (the same runs: every call counted, a line's calls and cycles from entry
      to return per called function and calling function, exact)
+     .venv/bin/python bench/firmware_bench.py --before REF [--board NAME ...]
+     (the same figures for the firmware of git commit REF first, built from
+     its own sources in a temporary directory, then for the working tree's)
 """
 
 from __future__ import annotations
@@ -387,7 +390,16 @@ def measure(board: Board, tmp: Path) -> bool:
     return all(results)
 
 
+def firmware_at(ref: str, tmp: Path) -> Path:
+    """The firmware directory of git commit `ref`, extracted into tmp."""
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", ref, "firmware"], check=True,
+                             capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(tmp)], input=archive, check=True)
+    return tmp / "firmware"
+
+
 def main() -> int:
+    global FW
     args = sys.argv[1:]
     names = [args[k + 1] for k, a in enumerate(args[:-1]) if a == "--board"] or list(BOARDS)
     unknown = [n for n in names if n not in BOARDS]
@@ -403,6 +415,14 @@ def main() -> int:
             (profile if "--profile" in args else call_profile)(
                 harness, elf, tmp, feed=feed, accel=accel, board=board, check="--check" in args)
             return 0
+        if "--before" in args:
+            ref = args[args.index("--before") + 1]
+            here, FW = FW, firmware_at(ref, tmp)
+            print(f"==== before: {ref}")
+            for n in names:
+                measure(BOARDS[n], tmp)
+            FW = here
+            print("==== after: the working tree")
         met = [measure(BOARDS[n], tmp) for n in names]
     print("all targets met" if all(met) else "SHORTFALL: see the figures above")
     return 0

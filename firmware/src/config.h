@@ -18,7 +18,8 @@
 #else
 #define TX_SIZE 128
 #endif
-#define LINE_SIZE 80         /* longest accepted line after stripping */
+#define LINE_SIZE 80         /* the line buffer (and an EEPROM line) */
+#define LINE_MAX 79          /* longest accepted line after stripping: GRBL's 80-byte buffer less its NUL */
 #define SEG_SIZE 8           /* step segment ring (7 usable) */
 
 /* GRBL rows that need more flash than the 328P has beside the pen features

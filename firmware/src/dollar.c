@@ -44,19 +44,22 @@ static void print_modes(void)
     RPT(" G94 ");
 #endif
     report_pstr(mach.pen_down ? PSTR("M3") : PSTR("M5"));
-    RPT(" M9 T0 F");
+    RPT(" M");
+    report_char(gc.coolant ? '8' : '9');
+    RPT(" T0 F");
     report_fixed(gc.feed, 0);
-    RPT(" S0]\r\n");
+    RPT(" S");
+    report_fixed(gc.spindle, 0);
+    RPT("]\r\n");
 }
 
-/* $#: G54..G59, G28, G30 (stored; zeros without GRBL_WCS), G92, TLO, PRB */
+/* $#: G54..G59, G28, G30 (stored; without GRBL_WCS only G54, the rest zeros), G92, TLO, PRB */
 static void print_offsets(void)
 {
     for (uint8_t i = 0; i < GC_SLOTS; i++) {
         float v[GC_AXES] = {0};
-#if GRBL_WCS
-        coord_load(i, v);
-#endif
+        if (GRBL_WCS || !i) /* (the 328P stores G54 only) */
+            coord_load(i, v);
         RPT("[G");
         report_uint(i < GC_SLOT_G28 ? 54 + i : i == GC_SLOT_G28 ? 28 : 30);
         report_char(':');
@@ -108,9 +111,6 @@ static void print_build_info(void)
     /* GRBL's letters, in its order: N (line numbers, every board has them),
      * then what this build leaves out */
     RPT("]\r\n[OPT:N"
-#if !GRBL_WCS
-        "#"
-#endif
 #if !GRBL_LINES
         "I"
 #endif
@@ -122,15 +122,10 @@ static void print_build_info(void)
 /* $RST=$ settings, $RST=# stored positions, $RST=* all; then a reset */
 static uint8_t restore(const char *arg)
 {
-    uint8_t what = arg[4] == '$' ? RESTORE_SETTINGS : arg[4] == '*' ? RESTORE_ALL : 0;
-#if GRBL_WCS
-    if (arg[4] == '#')
-        what = RESTORE_COORDS;
-#endif
-    if (arg[0] != 'R' || arg[1] != 'S' || arg[2] != 'T' || arg[3] != '=' || !what || arg[5])
+    uint8_t what = arg[4] == '$' ? RESTORE_SETTINGS : arg[4] == '*' ? RESTORE_ALL :
+                   arg[4] == '#' ? RESTORE_COORDS : 0;
+    if (arg[1] != 'S' || arg[2] != 'T' || arg[3] != '=' || !what || arg[5])
         return ERR_INVALID_DOLLAR;
-    if (machine_moving())
-        return ERR_NOT_IDLE;
     settings_restore(what);
     stepper_apply_settings();
     report_msg(PSTR("Restoring defaults"));
@@ -139,114 +134,122 @@ static uint8_t restore(const char *arg)
     return STATUS_OK;
 }
 
+/* $x=val, in GRBL's order: a bad number is error:2, anything else wrong 3 */
 static uint8_t set_setting(const char *line)
 {
     uint8_t i = 1;
     float id_f, value;
-    if (!read_number(line, &i, &id_f) || line[i] != '=' || id_f < 0.0f || id_f > 255.0f ||
-        id_f != (float)(uint8_t)id_f)
-        return ERR_INVALID_DOLLAR;
-    i++;
-    if (!read_number(line, &i, &value) || line[i])
+    if (!read_number(line, &i, &id_f))
         return ERR_BAD_NUMBER;
-    if (machine_moving())
-        return ERR_NOT_IDLE;
-    uint8_t e = settings_set(&settings, (uint8_t)id_f, value);
+    if (line[i++] != '=')
+        return ERR_INVALID_DOLLAR;
+    if (!read_number(line, &i, &value))
+        return ERR_BAD_NUMBER;
+    if (line[i] || id_f < 0.0f || id_f > 255.0f)
+        return ERR_INVALID_DOLLAR;
+    uint8_t id = (uint8_t)id_f; /* (GRBL truncates the number) */
+    uint8_t e = settings_set(&settings, id, value);
     if (e)
         return e;
     settings_save();
     stepper_apply_settings();
-    if (id_f >= 100.0f && id_f <= 101.0f) /* a new scale moves the planner's idea of where we are */
+    plan_settings_changed();
+    if (id >= 100 && id <= 101) /* a new scale moves the planner's idea of where we are */
         machine_resync();
     return STATUS_OK;
 }
 
+/* GRBL's dispatch: $J= in Idle or Jog; $$ $G $C $X anywhere (one letter);
+ * everything else (EEPROM, homing, sleep, $#, $I) only in Idle or Alarm,
+ * so check mode answers it error:8: nothing there writes EEPROM, sleeps or
+ * resets, and only $C leaves it. */
 uint8_t dollar_execute(const char *line)
 {
     const char *arg = line + 1;
-    if (arg[0] == 0) {
+    char c = arg[0];
+    if (c == 0) {
         RPT("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H ~ ! ? ctrl-x]\r\n");
         return STATUS_OK;
     }
-    if (arg[0] == 'J' && arg[1] == '=') {
-        if (mach.alarm)
-            return ERR_LOCKED;
-        if (machine_moving() && !mach.jog)
+    if (c == 'J') {
+        if (mach.alarm || mach.check || mach.homing || (machine_moving() && !mach.jog))
             return ERR_NOT_IDLE;
+        if (arg[1] != '=')
+            return ERR_INVALID_DOLLAR;
         return machine_jog(arg + 2);
     }
-    if (arg[0] >= '0' && arg[0] <= '9') {
-        if (mach.homing)
-            return ERR_NOT_IDLE;
-        return set_setting(line);
-    }
-    if (arg[0] == 'R')
-        return restore(arg);
-#if GRBL_LINES
-    if (arg[0] == 'N' && arg[1])
-        return store_startup_line(arg);
-    if (arg[0] == 'I' && arg[1] == '=') {
-        if (machine_moving())
-            return ERR_NOT_IDLE;
-        eeline_save(EELINE_BUILD_INFO, arg + 2);
-        return STATUS_OK;
-    }
-#endif
-    if (arg[0] == 'S' && arg[1] == 'L' && arg[2] == 'P' && !arg[3]) {
-        /* sleep after the ok: pen up, motors off, only a reset wakes it */
-        if (machine_moving())
-            return ERR_NOT_IDLE;
-        mach.sleep = 1;
-        return STATUS_OK;
-    }
-    if (arg[1] != 0)
-        return ERR_INVALID_DOLLAR;
-    switch (arg[0]) {
-    case '$':
-        print_settings();
-        return STATUS_OK;
-    case 'G':
-        print_modes();
-        return STATUS_OK;
-    case '#':
-        print_offsets();
-        return STATUS_OK;
-    case 'I':
-        print_build_info();
-        return STATUS_OK;
-#if GRBL_LINES
-    case 'N':
-        print_startup_lines();
-        return STATUS_OK;
-#endif
-    case 'X':
-        if (inputs_read() & PIN_ESTOP)
-            return ERR_LOCKED; /* the stop button is still pressed */
-        if (mach.alarm) {
-            report_msg(PSTR("Caution: Unlocked"));
-            mach.alarm = 0;
-            inputs_led(0);
-        }
-        return STATUS_OK;
-    case 'C':
-        if (machine_moving() || (mach.alarm && !mach.check))
-            return ERR_NOT_IDLE;
-        if (mach.check) {
+    if (c == '$' || c == 'G' || c == 'C' || c == 'X') {
+        if (arg[1] != 0)
+            return ERR_INVALID_DOLLAR;
+        if (c == '$')
+            print_settings();
+        else if (c == 'G')
+            print_modes();
+        else if (c == 'X') {
+            if (inputs_read() & PIN_ESTOP)
+                return ERR_LOCKED; /* the stop button is still pressed */
+            if (mach.alarm) {
+                report_msg(PSTR("Caution: Unlocked"));
+                mach.alarm = 0;
+                inputs_led(0);
+            }
+        } else if (mach.check) {
             /* leaving the dry run resets, as GRBL does, so no parsed state lingers */
             mach.check = 0;
             report_msg(PSTR("Disabled"));
             mach.reset = RESET_AFTER_ACK;
             mach.abort = 1;
         } else {
+            if (machine_moving() || mach.alarm || mach.hold)
+                return ERR_NOT_IDLE;
             mach.check = 1;
             report_msg(PSTR("Enabled"));
         }
         return STATUS_OK;
+    }
+    if (mach.check || mach.homing || mach.hold || machine_moving())
+        return ERR_NOT_IDLE;
+    switch (c) {
+    case '#':
+        if (arg[1])
+            return ERR_INVALID_DOLLAR;
+        print_offsets();
+        return STATUS_OK;
+    case 'S':
+        if (arg[1] != 'L' || arg[2] != 'P' || arg[3])
+            return ERR_INVALID_DOLLAR;
+        mach.sleep = 1; /* after the ok: pen up, motors off, only a reset wakes it */
+        return STATUS_OK;
+    case 'R':
+        return restore(arg);
+    case 'I':
+        if (!arg[1]) {
+            print_build_info();
+            return STATUS_OK;
+        }
+#if GRBL_LINES
+        if (arg[1] != '=')
+            return ERR_INVALID_DOLLAR;
+        eeline_save(EELINE_BUILD_INFO, arg + 2);
+        return STATUS_OK;
+#else
+        return ERR_INVALID_DOLLAR;
+#endif
+    case 'N':
+#if GRBL_LINES
+        if (!arg[1]) {
+            print_startup_lines();
+            return STATUS_OK;
+        }
+        return store_startup_line(arg);
+#else
+        return ERR_INVALID_DOLLAR;
+#endif
     case 'H': {
+        if (arg[1])
+            return ERR_INVALID_DOLLAR;
         if (!settings.homing_enable)
             return ERR_HOMING_DISABLED;
-        if (mach.check || machine_moving())
-            return ERR_NOT_IDLE;
         if (inputs_read() & PIN_ESTOP)
             return ERR_LOCKED;
         mach.alarm = 0;
@@ -261,6 +264,6 @@ uint8_t dollar_execute(const char *line)
         protocol_startup_lines(); /* as GRBL: after a successful homing cycle */
         return STATUS_OK;
     }
-    default: return ERR_INVALID_DOLLAR;
+    default: return set_setting(line);
     }
 }

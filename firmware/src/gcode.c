@@ -13,16 +13,18 @@
 #define M300_THRESHOLD 40.0f /* M300 S30 down, S50 up */
 
 /* word letters that carry a value, as bits for repeat detection */
-enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_COUNT };
-/* words whose value is kept (L's only for G10: without GRBL_WCS it is
- * always an unused word, its value never read) */
-#define W_VALUES (GRBL_WCS ? W_COUNT : W_L)
+enum { W_X, W_Y, W_Z, W_I, W_J, W_R, W_F, W_P, W_S, W_N, W_T, W_L, W_K, W_COUNT };
+/* words whose value is kept in val[]: T is checked as it is read (as GRBL
+ * does), L kept as G10's small integer (GRBL truncates it), K never read (no
+ * Z arcs: GRBL ignores it in G17) */
+#define W_VALUES W_T
 /* each letter's word plus one (0: none), by letter - 'A': one flash read a
  * word instead of a search, and no table in RAM */
 #define WORD(letter, w) [(letter) - 'A'] = (w) + 1
 static const uint8_t word_of_letter[26] PROGMEM = {
     WORD('X', W_X), WORD('Y', W_Y), WORD('Z', W_Z), WORD('I', W_I), WORD('J', W_J), WORD('R', W_R),
     WORD('F', W_F), WORD('P', W_P), WORD('S', W_S), WORD('N', W_N), WORD('T', W_T), WORD('L', W_L),
+    WORD('K', W_K),
 };
 #define WB(w) (1u << (w))
 #define MAX_LINE_NUMBER 10000000.0f /* GRBL's limit on N (exact in a float) */
@@ -39,7 +41,7 @@ static uint8_t magnitude_above(float v, float limit)
 
 /* modal groups a line may name once, as bits */
 enum { GRP_UNITS = 1, GRP_DIST = 2, GRP_PLANE = 4, GRP_COORD = 8, GRP_FEED_MODE = 16,
-       GRP_PEN = 32, GRP_STOP = 64, GRP_G53 = 128 /* (not a group: G53 seen) */ };
+       GRP_PEN = 32, GRP_STOP = 64, GRP_COOLANT = 128 };
 #define PEN_M300 3 /* blk->pen while parsing: M300, whose S decides */
 
 /* 1 when the group (0: none) was already named on the line; marks it */
@@ -50,25 +52,33 @@ static inline uint8_t seen_group(uint8_t *groups, uint8_t group)
     return was;
 }
 
-/* non-modal G commands (GRBL's group 0, one per line) */
-enum { NM_NONE, NM_DWELL, NM_G28, NM_G92, NM_G92_1, NM_G10, NM_SET_HOME };
+/* non-modal G commands (GRBL's group 0, one per line); from NM_G28 on they
+ * are GRBL's axis commands (a G0-G3 on their line is error:24) */
+enum { NM_NONE, NM_DWELL, NM_SET_HOME, NM_G92_1, NM_G53, NM_G28, NM_G92, NM_G10 };
 #define N_COORD_SYSTEMS 6 /* G54..G59 */
 
-/* An unknown G/M number: a fraction on G0-G9 is "needs an integer" (23),
- * anything else unsupported (20). */
-static uint8_t bad_code(uint16_t code10)
+/* GRBL's whole G numbers whose fractions (other than the ones it knows)
+ * are "needs an integer" (23): 0-4 10 17-21 40 49 53-59 80 93 94, as bits.
+ * A fraction on any other G (28.2, 38.1, 43.2, 61.1, 90.1, 92.2) or an
+ * unknown number is unsupported (20); a fraction on any M is 23. */
+static const uint8_t g_whole[12] PROGMEM = {0x1F, 0x04, 0x3E, 0x00, 0x00, 0x01, 0xE2,
+                                            0x0F, 0x00, 0x00, 0x01, 0x60};
+
+static uint8_t bad_code(char letter, uint16_t code10)
 {
-    return code10 % 10 && code10 < 100 ? ERR_NOT_INTEGER : ERR_UNSUPPORTED;
+    uint8_t n = (uint8_t)(code10 / 10);
+    if (!(code10 % 10))
+        return ERR_UNSUPPORTED;
+    if (letter == 'M' || (code10 < 960 && pgm_read_byte(&g_whole[n >> 3]) & (1u << (n & 7))))
+        return ERR_NOT_INTEGER;
+    return ERR_UNSUPPORTED;
 }
 
 void gc_init(gc_state_t *st)
 {
     memset(st, 0, sizeof(*st));
     st->motion = MOTION_G0;
-    st->z = 1.0f;
-#if GRBL_WCS
     coord_load(0, st->wcs);
-#endif
 }
 
 void gc_program_end(gc_state_t *st)
@@ -76,6 +86,7 @@ void gc_program_end(gc_state_t *st)
     st->motion = MOTION_G1;
     st->incremental = 0;
     st->plane = 0;
+    st->coolant = 0;
 #if GRBL_G93
     st->inverse_time = 0;
 #endif
@@ -88,14 +99,7 @@ void gc_program_end(gc_state_t *st)
 #endif
 }
 
-float gc_wco(const gc_state_t *st, uint8_t a)
-{
-#if GRBL_WCS
-    return st->wcs[a] + st->g92[a];
-#else
-    return st->g92[a];
-#endif
-}
+float gc_wco(const gc_state_t *st, uint8_t a) { return st->wcs[a] + st->g92[a]; }
 
 /* Centre of an R-form arc: on the perpendicular bisector of the chord;
  * negative R picks the long way round. */
@@ -165,33 +169,45 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         if (!read_number(line, &i, vp))
             return ERR_BAD_NUMBER;
         float v = *vp;
+        if (w == W_L)
+            blk->l_word = (uint8_t)v;
+        if (w == W_T && (int32_t)float_bits(v) > (int32_t)float_bits(255.0f)) /* (a negative T: 4 below) */
+            return ERR_TOOL_NUMBER;
         if (letter == 'G' || letter == 'M') {
             if (undo->motion == UNDO_NONE)
                 memcpy(undo, st, sizeof(*st));
-            if (v < 0.0f || v > 1000.0f)
+            if (float_bits(v) > float_bits(1000.0f)) /* (a negative one too: its sign bit) */
                 return ERR_UNSUPPORTED;
-            uint16_t code10 = (uint16_t)lroundf(v * 10.0f);
-            if (fabsf(v * 10.0f - (float)code10) > 0.001f)
+            float v10 = v * 10.0f;
+            uint16_t code10 = (uint16_t)(v10 + 0.5f);
+            if (fabsf(v10 - (float)code10) > 0.001f)
                 return ERR_NOT_INTEGER;
+            if (jog && (letter == 'M' || (code10 != 200 && code10 != 210 && code10 != 900 &&
+                                          code10 != 910 && code10 != 530))) {
+                blk->jog_bad = 1; /* (after the F check, as GRBL orders them) */
+                continue;
+            }
             if (letter == 'G') {
-                if (jog && code10 != 200 && code10 != 210 && code10 != 900 && code10 != 910 &&
-                    code10 != 530)
-                    return ERR_INVALID_JOG;
                 switch (code10) {
                 case 0: case 10: case 20: case 30: case 800:
+                    /* GRBL: a second axis command is error:24 before the group's 21 */
+                    if (code10 != 800 && ((uint8_t)motion <= MOTION_G3 || non_modal >= NM_G28))
+                        return ERR_AXIS_COMMAND_CONFLICT;
                     if (motion >= 0)
                         return ERR_MODAL_CONFLICT;
                     motion = code10 == 800 ? MOTION_NONE : (int8_t)(code10 / 10);
                     break;
 #if GRBL_WCS
-                case 100: case 281: case 301:
+                case 281: case 301:
 #endif
-                case 40: case 280: case 300: case 920: case 921:
+                case 40: case 100: case 280: case 300: case 530: case 920: case 921:
+                    if (!(code10 % 10) && code10 != 40 && code10 != 530 && (uint8_t)motion <= MOTION_G3)
+                        return ERR_AXIS_COMMAND_CONFLICT;
                     if (non_modal)
                         return ERR_MODAL_CONFLICT;
                     if (code10 >= 300 && code10 < 400)
                         home_slot = GC_SLOT_G30;
-                    non_modal = code10 == 40 ? NM_DWELL : code10 == 100 ? NM_G10 :
+                    non_modal = code10 == 40 ? NM_DWELL : code10 == 100 ? NM_G10 : code10 == 530 ? NM_G53 :
                                 code10 % 10 && code10 < 400 ? NM_SET_HOME :
                                 code10 < 400 ? NM_G28 : code10 == 920 ? NM_G92 : NM_G92_1;
                     break;
@@ -225,7 +241,6 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                     st->inverse_time = code10 == 930;
 #endif
                     break;
-                case 530: groups |= GRP_G53; break;
                 case 170: case 180: case 190:
                     if (seen_group(&groups, GRP_PLANE))
                         return ERR_MODAL_CONFLICT;
@@ -245,22 +260,22 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                  * compensation), G49 (no tool length offset), G61 (exact
                  * path), G91.1 (IJK relative) */
                 case 400: case 490: case 610: case 911: break;
-                default: return bad_code(code10);
+                default: return bad_code(letter, code10);
                 }
             } else {
-                if (jog)
-                    return ERR_INVALID_JOG;
-                uint8_t m_group = 0; /* (M17/M18/M84 and coolant: none) */
+                uint8_t m_group = 0; /* (M17/M18/M84: none) */
                 switch (code10) {
                 case 30: case 40: blk->pen = PEN_DOWN; m_group = GRP_PEN; break;
                 case 50: blk->pen = PEN_UP; m_group = GRP_PEN; break;
                 case 3000: blk->pen = PEN_M300; m_group = GRP_PEN; break;
                 case 170: blk->motors = MOTORS_ON; break;
                 case 180: case 840: blk->motors = MOTORS_OFF; break;
-                case 0: case 10: blk->pause = 1; m_group = GRP_STOP; break;
+                case 0: blk->pause = 1; /* fall through */
+                case 10: m_group = GRP_STOP; break; /* M1: GRBL 1.1h has no optional stop switch */
                 case 20: case 300: blk->program_end = 1; m_group = GRP_STOP; break;
-                case 80: case 90: break; /* coolant: no coolant on a plotter */
-                default: return bad_code(code10);
+                /* coolant: no output on a plotter, the state only ($G) */
+                case 80: case 90: st->coolant = code10 == 80; m_group = GRP_COOLANT; break;
+                default: return bad_code(letter, code10);
                 }
                 if (seen_group(&groups, m_group))
                     return ERR_MODAL_CONFLICT;
@@ -272,12 +287,12 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         if (seen & WB(w))
             return ERR_WORD_REPEATED;
         /* words whose value must not be negative (GRBL's rule) */
-        if (w >= W_F && v < 0.0f) /* (the float compare only for those words) */
+        if (w >= W_F && w <= W_T && v < 0.0f) /* F P S N T (the float compare only for those) */
             return ERR_NEGATIVE;
         seen |= (uint16_t)WB(w);
     }
 
-    uint8_t g53 = groups & GRP_G53;
+    uint8_t g53 = non_modal == NM_G53;
     uint8_t inverse = 0;
 #if GRBL_G93
     inverse = st->inverse_time; /* F is 1/min then, not a length */
@@ -288,18 +303,20 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                 val[w] *= 25.4f;
     uint8_t axes = (uint8_t)(seen & (WB(W_X) | WB(W_Y)));
     if (jog) {
+        /* GRBL's order: the F word first, then what a jog may not command,
+         * then words it leaves unused (S, T, P, ...) */
+        if (!(seen & WB(W_F)))
+            return ERR_UNDEFINED_FEED;
+        if (blk->jog_bad || !axes || (seen & WB(W_Z)))
+            return ERR_INVALID_JOG;
         if (seen & ~(WB(W_X) | WB(W_Y) | WB(W_F) | WB(W_N)))
-            return ERR_INVALID_JOG;
-        if (!axes || !(seen & WB(W_F)))
-            return ERR_INVALID_JOG;
+            return ERR_UNUSED_WORDS;
         motion = MOTION_G1;
     }
-    if ((seen & WB(W_N)) && val[W_N] > MAX_LINE_NUMBER)
+    if ((seen & WB(W_N)) && magnitude_above(val[W_N], MAX_LINE_NUMBER))
         return ERR_LINE_NUMBER;
     if (seen & WB(W_N)) /* GRBL keeps the whole part */
         blk->line = (uint32_t)val[W_N];
-    if ((seen & WB(W_T)) && val[W_T] > 255.0f)
-        return ERR_TOOL_NUMBER;
     if (seen & WB(W_F)) {
         if (jog)
             blk->feed = val[W_F];
@@ -310,6 +327,13 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         if (!(seen & WB(W_S)))
             return ERR_VALUE_WORD_MISSING;
         blk->pen = val[W_S] <= M300_THRESHOLD ? PEN_DOWN : PEN_UP;
+    }
+    /* G92.1 with axis words: they are a motion in the modal mode, its
+     * target in the frame before the line, as GRBL computes it; the G92
+     * offset is cleared once the line is valid */
+    if (non_modal == NM_G92_1) {
+        blk->clear_g92 = 1;
+        non_modal = NM_NONE;
     }
 #if GRBL_WCS
     if (non_modal == NM_SET_HOME) {
@@ -324,12 +348,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
     if (seen & WB(W_Z)) {
         /* Z is the pen, decided on machine Z so that no offset can flip it;
          * only a motion moves the pen (G92 Z, G10 Z and G53 Z never do) */
-        if (non_modal == NM_G92) {
-            st->g92[2] = 0.0f;
-            st->g92[2] = st->z - gc_wco(st, 2) - val[W_Z];
-        } else if (non_modal == NM_NONE && !g53) {
-            if ((motion >= 0 ? motion : st->motion) == MOTION_NONE)
-                return ERR_AXIS_WORDS_UNUSED;
+        if (non_modal == NM_NONE) {
             float z = st->incremental ? st->z + val[W_Z] : val[W_Z] + gc_wco(st, 2);
             if (magnitude_above(z, GC_MAX_COORD))
                 return ERR_INVALID_TARGET;
@@ -338,10 +357,15 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                 blk->pen = z <= Z_PEN_THRESHOLD ? PEN_DOWN : PEN_UP;
         }
     }
-    if (g53 && non_modal)
-        return ERR_MODAL_CONFLICT; /* both in GRBL's non-modal group */
-    if (g53 && !jog && (motion >= 0 ? motion : st->motion) > MOTION_G1)
+    uint8_t mode = (uint8_t)(motion >= 0 ? motion : st->motion);
+    if (g53 && !jog && mode > MOTION_G1)
         return ERR_G53_MOTION;
+    /* G80: an axis word on the line is error:31, whatever command it is for */
+    if (mode == MOTION_NONE && (seen & (WB(W_X) | WB(W_Y) | WB(W_Z))))
+        return ERR_AXIS_WORDS_UNUSED;
+    /* an explicit G1 without axis words still needs a feed (GRBL) */
+    if (motion == MOTION_G1 && !jog && (int32_t)float_bits(st->feed) <= 0)
+        return ERR_UNDEFINED_FEED;
 
     /* where the axis words point, in machine mm: made in the block's
      * target itself (no copy; unread by the actions that have none), and
@@ -374,60 +398,60 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
             return ERR_AXIS_COMMAND_CONFLICT;
         if (!(seen & (1u << W_P)))
             return ERR_VALUE_WORD_MISSING;
-        if (val[W_P] < 0.0f)
-            return ERR_NEGATIVE;
-        if (val[W_P] > 3600.0f)
+        if (magnitude_above(val[W_P], 3600.0f)) /* (P is not negative: refused as it was read) */
             return ERR_BAD_NUMBER;
         blk->action = ACT_DWELL;
         blk->dwell_s = val[W_P];
         used |= 1u << W_P;
-    } else if (non_modal == NM_G92) {
-        if (motion >= 0)
-            return ERR_AXIS_COMMAND_CONFLICT;
-        if (!axes)
-            return ERR_NO_AXIS_WORDS;
-        for (uint8_t a = 0; a < N_AXIS; a++)
-            if (axes & (1u << a)) {
-                st->g92[a] = 0.0f;
-                st->g92[a] = st->pos[a] - gc_wco(st, a) - val[a];
-            }
-        blk->wco_changed = 1;
-    } else if (non_modal == NM_G92_1) {
-        if (motion >= 0)
-            return ERR_AXIS_COMMAND_CONFLICT;
-        memset(st->g92, 0, sizeof(st->g92));
-        blk->wco_changed = 1;
-#if GRBL_WCS
-    } else if (non_modal == NM_G10) {
-        if (motion >= 0)
-            return ERR_AXIS_COMMAND_CONFLICT;
+    } else if (non_modal >= NM_G92) {
+        /* G92 and G10 share one path: an offset from each axis word, the
+         * one that makes the machine position read it (G92: g92 = machine -
+         * wcs - word; G10 L20: wcs = machine - g92 - word; G10 L2: the word) */
         if (!(seen & (WB(W_X) | WB(W_Y) | WB(W_Z))))
             return ERR_NO_AXIS_WORDS;
-        if ((~seen & (WB(W_P) | WB(W_L))))
-            return ERR_VALUE_WORD_MISSING;
-        if (val[W_P] >= N_COORD_SYSTEMS + 1)
-            return ERR_UNSUPPORTED_COORD;
-        uint8_t l = (uint8_t)val[W_L], p = (uint8_t)val[W_P];
-        if ((l != 2 && l != 20) || (l == 2 && (seen & WB(W_R))))
-            return ERR_UNSUPPORTED;
-        uint8_t slot = p ? (uint8_t)(p - 1) : st->coord;
-        if (!coord_load(slot, blk->store))
-            return ERR_EEPROM_READ;
+        float *dst = st->g92;
+        const float *other = st->wcs;
+        uint8_t l = 20;
+        if (non_modal == NM_G10) {
+            if ((~seen & (WB(W_P) | WB(W_L))))
+                return ERR_VALUE_WORD_MISSING;
+            /* P and L as GRBL truncates them (P is not negative: integer
+             * compares of its bits) */
+            if (float_bits(val[W_P]) >= float_bits(N_COORD_SYSTEMS + 1.0f))
+                return ERR_UNSUPPORTED_COORD;
+            l = blk->l_word;
+            if ((l != 2 && l != 20) || (l == 2 && (seen & WB(W_R))))
+                return ERR_UNSUPPORTED;
+#if GRBL_WCS
+            uint8_t p = (uint8_t)val[W_P];
+            uint8_t slot = p ? (uint8_t)(p - 1) : st->coord;
+            if (!coord_load(slot, blk->store))
+                return ERR_EEPROM_READ;
+            dst = slot == st->coord ? st->wcs : blk->store; /* (EEPROM from blk->store) */
+#else
+            /* G54 only: P0 and P1 (what senders' zero buttons send); its
+             * offset is in RAM since power-up */
+            if (float_bits(val[W_P]) >= float_bits(2.0f))
+                return ERR_UNSUPPORTED;
+            const uint8_t slot = 0;
+            dst = st->wcs;
+#endif
+            other = st->g92;
+            blk->store_slot = (uint8_t)(slot + 1);
+            used |= WB(W_P) | WB(W_L);
+        }
         for (uint8_t a = 0; a < GC_AXES; a++) {
             if (!(seen & WB(a)))
                 continue;
-            /* L20: the offset that makes the machine's position read val;
-             * L2: the offset itself */
             float machine = a < N_AXIS ? st->pos[a] : st->z;
-            blk->store[a] = l == 20 ? machine - st->g92[a] - val[a] : val[a];
+            float v = l == 20 ? machine - other[a] - val[a] : val[a];
+            dst[a] = v;
+            blk->store[a] = v;
         }
-        if (slot == st->coord) {
-            memcpy(st->wcs, blk->store, sizeof(st->wcs));
-            blk->wco_changed = 1;
-        }
-        blk->store_slot = (uint8_t)(slot + 1);
-        used |= WB(W_P) | WB(W_L);
+#if !GRBL_WCS
+        memcpy(blk->store, st->wcs, sizeof(st->wcs)); /* (only G10 writes it to EEPROM) */
 #endif
+        blk->wco_changed = dst != blk->store; /* (not for another system than the current) */
     } else if (non_modal == NM_G28) {
         if (motion >= 0)
             return ERR_AXIS_COMMAND_CONFLICT;
@@ -453,8 +477,6 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         if (motion >= 0)
             st->motion = (uint8_t)motion;
         uint8_t moving = axes != 0;
-        if (moving && st->motion == MOTION_NONE)
-            return ERR_AXIS_WORDS_UNUSED;
         if (!moving && (motion == MOTION_G2 || motion == MOTION_G3))
             return seen & WB(W_Z) ? ERR_ARC_NO_PLANE_AXIS : ERR_NO_AXIS_WORDS;
         if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
@@ -497,7 +519,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
                     float dr = fabsf(r1 - r0);
                     if (r0 == 0.0f || (dr > ARC_RADIUS_ABS_TOL && dr > ARC_RADIUS_REL_TOL * r0))
                         return ERR_INVALID_TARGET;
-                    used |= (1u << W_I) | (1u << W_J);
+                    used |= (1u << W_I) | (1u << W_J) | (1u << W_K);
                 }
             }
             memcpy(st->pos, target, sizeof(st->pos));
@@ -505,6 +527,12 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
     }
     if (seen & ~used)
         return ERR_UNUSED_WORDS;
+    if (blk->clear_g92) {
+        memset(st->g92, 0, sizeof(st->g92));
+        blk->wco_changed = 1;
+    }
+    if (seen & WB(W_S))
+        st->spindle = val[W_S];
     if (blk->program_end)
         gc_program_end(st);
 #if GRBL_G93

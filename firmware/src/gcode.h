@@ -26,13 +26,17 @@ typedef struct {
 #if GRBL_G93
     uint8_t inverse_time; /* G93: F is 1/min per move, and only for its own line */
 #endif
+    uint8_t coolant;      /* M8 (1) / M9 (0): no output, $G shows it */
 #if GRBL_WCS
     uint8_t coord;        /* 0..5: G54..G59 */
-    float wcs[GC_AXES];   /* the selected work system's offset, read from EEPROM */
 #endif
+    float wcs[GC_AXES];   /* the selected work system's offset, read from EEPROM (G54 only
+                           * without GRBL_WCS) */
     float feed;           /* mm/min; 0 until an F word is seen */
+    float spindle;        /* the last S word ($G shows it; the pen ignores it) */
     float pos[N_AXIS];    /* machine mm where the last accepted move ends */
-    float z;              /* machine Z of the last Z word: the pen threshold is on it */
+    float z;              /* machine Z of the last Z word (0 at power-up, as GRBL's MPos Z;
+                           * the pen stays up until a Z word): the pen threshold is on it */
     float g92[GC_AXES];   /* G92: machine = work + wcs + g92 (never moves the pen) */
 } gc_state_t;
 
@@ -47,6 +51,9 @@ typedef struct {
     uint8_t has_via;      /* G28 with axis words */
     uint8_t store_slot;   /* G10, G28.1, G30.1: GC_SLOT_* + 1 to write `store` to, 0 none */
     uint8_t inverse_time; /* G93: feed is 1/min, machine scales it by the move's length */
+    uint8_t l_word;       /* parse scratch (in the block, not gc_parse's frame): G10's L, */
+    uint8_t jog_bad;      /* a G or M word a jog may not have, */
+    uint8_t clear_g92;    /* G92.1 (its axis words are a motion) */
     uint32_t line;        /* N word (its whole part), 0 without one */
     /* gc_parse zeroes the fields above and fills these where its action
      * reads them (a 48-byte clear a line saved): feed for a line, an arc

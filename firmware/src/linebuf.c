@@ -43,7 +43,7 @@ uint8_t linebuf_feed(linebuf_t *lb, uint8_t c)
         /* spaces are dropped */
     } else if (c < 0x20 || c > 0x7E) { /* control bytes, NUL and binary noise */
         f |= LBF_BAD_BYTE;
-    } else if (lb->len >= LINE_SIZE) {
+    } else if (lb->len >= LINE_MAX) {
         f |= LBF_OVERFLOW;
     } else {
         if (c >= 'a' && c <= 'z')
@@ -65,7 +65,7 @@ uint8_t linebuf_feed_ring(linebuf_t *lb, const uint8_t *ring, uint8_t mask, uint
             uint8_t len = lb->len;
             /* at most the bytes in the ring and the room in the line: one
              * count down a byte (an overflow is linebuf_feed's) */
-            uint8_t n = ring_count(head, tail), room = (uint8_t)(LINE_SIZE - len);
+            uint8_t n = ring_count(head, tail), room = (uint8_t)(LINE_MAX - len);
             if (n > room)
                 n = room;
             char *t = lb->text + len;

@@ -12,11 +12,13 @@ enum { LB_NONE, LB_LINE, LB_OVERFLOW, LB_BAD_BYTE };
 #define LBF_PAREN 0x01     /* inside ( ) */
 #define LBF_SEMICOLON 0x02 /* after ; up to the line end */
 #define LBF_AFTER_CR 0x04  /* the \n of a \r\n pair ends no second line */
-#define LBF_OVERFLOW 0x08  /* more than LINE_SIZE kept characters */
+#define LBF_OVERFLOW 0x08  /* more than LINE_MAX kept characters */
 #define LBF_BAD_BYTE 0x10  /* a control byte or binary noise */
 
 typedef struct {
-    char text[LINE_SIZE + 1];
+    /* LINE_MAX characters and the NUL; a whole EEPROM line where startup
+     * lines are loaded into it (GRBL_LINES) */
+    char text[(GRBL_LINES ? LINE_SIZE : LINE_MAX) + 1];
     uint8_t len;
     uint8_t flags;
 } linebuf_t;

@@ -205,11 +205,11 @@ void machine_poll(void)
         rt_alarm = 0;
         sei();
     }
-    /* GRBL's rule is by state, not by steps: a reset with moves queued (a
-     * pen settle between them, a hold that has stopped) is ALARM:3 too. The
-     * receive interrupt already raised it if the steppers were running. */
-    if ((f & RT_RESET) && !code && !mach.alarm && (plan_count() || seg_head != seg_tail))
-        code = ALARM_ABORT_CYCLE;
+    /* A reset raises ALARM:3 only when it stops the steppers (the receive
+     * interrupt raised it then: a move or a hold still decelerating), as
+     * GRBL's reset alarms only in a cycle or an executing hold. After a hold
+     * has stopped, or with moves queued but not yet stepping, the position
+     * is known: the queue is dropped and the board stays unlocked. */
     if (code) {
         machine_alarm(code);
         if (code == ALARM_ABORT_CYCLE)
@@ -385,20 +385,22 @@ static uint8_t soft_limit_violation(const gc_block_t *blk)
             return 1;
         if (outside_work_area(blk->target))
             return 1;
+        /* the axis extremes it passes: the quarter turns b * pi/2 between its
+         * end angles (b + 8 counted from floor(angle / (pi/2)) + 8: positive
+         * before the truncation), each at r along +X, +Y, -X or -Y (b % 4) */
         float r = arc.r0 > arc.r1 ? arc.r0 : arc.r1;
-        for (uint8_t q = 0; q < 4; q++) {
-            float ang = (float)q * (float)M_PI_2;
-            /* is ang inside the sweep from angle0? */
-            float rel = (ang - arc.angle0) / (arc.sweep < 0 ? -1.0f : 1.0f);
-            while (rel < 0.0f)
-                rel += 2.0f * (float)M_PI;
-            while (rel >= 2.0f * (float)M_PI)
-                rel -= 2.0f * (float)M_PI;
-            if (rel <= fabsf(arc.sweep)) {
-                float p[N_AXIS] = {arc.center[0] + r * cosf(ang), arc.center[1] + r * sinf(ang)};
-                if (outside_work_area(p))
-                    return 1;
-            }
+        int8_t i0 = (int8_t)(arc.angle0 * (float)M_2_PI + 8.0f);
+        int8_t i1 = (int8_t)((arc.angle0 + arc.sweep) * (float)M_2_PI + 8.0f);
+        int8_t hi = i0 > i1 ? i0 : i1;
+        for (int8_t b = (int8_t)((i0 > i1 ? i1 : i0) + 1); b <= hi; b++) {
+            float p[N_AXIS] = {arc.center[0], arc.center[1]};
+            float d = b & 2 ? -r : r;
+            if (b & 1)
+                p[1] += d;
+            else
+                p[0] += d;
+            if (outside_work_area(p))
+                return 1;
         }
     }
     return 0;
@@ -461,17 +463,18 @@ uint8_t machine_execute(const gc_block_t *blk)
         report_msg(PSTR("Pgm End"));
     }
     if (!e && blk->pause && !mach.check && machine_sync()) {
-        /* M0/M1: a feed hold at this point of the program (Hold:0 until ~) */
+        /* M0: a feed hold at this point of the program (Hold:0); its ok
+         * comes when ~ resumes, as GRBL suspends inside the line */
         mach.hold = 1;
         seg_hold(1);
+        machine_sync();
     }
     if (blk->wco_changed)
         mach.wco_countdown = 0;
-#if GRBL_WCS
-    /* EEPROM writes stall the CPU: after the queued motion, as GRBL does */
-    if (!e && blk->store_slot && machine_sync())
+    /* EEPROM writes stall the CPU: after the queued motion, as GRBL does;
+     * never in check mode (nothing there writes EEPROM) */
+    if (!e && blk->store_slot && !mach.check && machine_sync())
         coord_save((uint8_t)(blk->store_slot - 1), blk->store);
-#endif
     if (!e && blk->motors == MOTORS_OFF && !mach.check && machine_sync())
         stepper_enable(0);
     if (mach.abort)

@@ -46,28 +46,26 @@ void plan_set_line_number(plan_line_t n) { line_number = n; }
 
 /* Reciprocals of the per-axis settings, so that plan_line multiplies where
  * it would divide (a float division costs ~500 cycles here); recomputed
- * whenever one of the settings they come from has changed. Settings change
- * only with the planner empty (the firmware answers error:8 while blocks
- * are queued; the host library resets it after configuring), so only a
- * block queued into an empty planner looks (a 24-byte compare). */
+ * after a setting they come from may have changed. Settings change only
+ * with the planner empty (the firmware answers error:8 while blocks are
+ * queued) and are followed by plan_settings_changed (a $ setting) or
+ * plan_reset (a restore's reset, power-up, the host library's configure),
+ * so only a block queued into an empty planner looks (a flag: no 24-byte
+ * copy of the settings kept in RAM). */
+static uint8_t axis_stale = 1;
 static struct {
-    float seen[3 * N_AXIS];       /* $100.., $110.., $120.. as last seen (adjacent in settings_t) */
     float mm_per_step[N_AXIS];
     float s_per_mm[N_AXIS];       /* 1 / max rate in mm/s */
     float inv_accel[N_AXIS];
 } axis;
-_Static_assert(offsetof(settings_t, accel) - offsetof(settings_t, steps_per_mm) ==
-                   2 * sizeof(settings.steps_per_mm) &&
-               offsetof(settings_t, max_rate) - offsetof(settings_t, steps_per_mm) ==
-                   sizeof(settings.steps_per_mm),
-               "refresh_axis compares the three per-axis settings as one run of floats");
+
+void plan_settings_changed(void) { axis_stale = 1; }
 
 static void refresh_axis(void)
 {
-    const void *now = (const char *)&settings + offsetof(settings_t, steps_per_mm);
-    if (!memcmp(axis.seen, now, sizeof(axis.seen)))
+    if (!axis_stale)
         return;
-    memcpy(axis.seen, now, sizeof(axis.seen));
+    axis_stale = 0;
     memset(&last_feed, 0xFF, sizeof(last_feed)); /* a NaN no F word gives: feed_nominal again */
     for (uint8_t a = 0; a < N_AXIS; a++) {
         axis.mm_per_step[a] = 1.0f / settings.steps_per_mm[a];
@@ -82,6 +80,7 @@ static uint8_t prev_index(uint8_t i) { return (uint8_t)(i == 0 ? RING_SLOTS - 1 
 
 void plan_reset(void)
 {
+    plan_settings_changed();
     head = tail = count = ov_left = 0;
 #if PLAN_LAZY
     lazy_n = 0;

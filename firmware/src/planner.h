@@ -100,6 +100,9 @@ void plan_motion_complete(const plan_block_t *b, plan_motion_t *m);
 #endif
 
 void plan_reset(void);
+/* a $100-$121 setting may have changed (the planner is empty): its reciprocals are
+ * derived again for the next block (plan_reset does this too) */
+void plan_settings_changed(void);
 /* Planner position in cartesian steps, e.g. after homing or an abort. */
 void plan_set_position(const int32_t *steps);
 void plan_get_position(int32_t *steps);

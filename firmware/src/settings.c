@@ -96,6 +96,8 @@ uint8_t settings_set(settings_t *s, uint8_t id, float value)
     uint8_t *field = (uint8_t *)s + pgm_read_byte(&r->offset);
     if (kind == K_FIXED)
         return value > limit - 0.001f && value < limit + 0.001f ? STATUS_OK : ERR_INVALID_DOLLAR;
+    if (kind != K_FLOAT) /* GRBL truncates an integer setting ($1=1.5 is $1=1) */
+        value = (float)(uint32_t)value;
     if (id == 20 && value != 0.0f && !s->homing_enable)
         return ERR_SOFT_LIMIT_NO_HOME;
     if (kind == K_FLOAT) {
@@ -105,8 +107,6 @@ uint8_t settings_set(settings_t *s, uint8_t id, float value)
         memcpy(field, &value, sizeof(value));
         return STATUS_OK;
     }
-    if (value != (float)(uint32_t)value)
-        return ERR_NOT_INTEGER;
     if (id == 0 && value < 3.0f)
         return ERR_STEP_PULSE;
     if (value > limit || ((id == 60 || id == 61) && value < 500.0f))

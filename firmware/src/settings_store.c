@@ -1,6 +1,7 @@
 /* EEPROM: every record is [data][checksum] (settings_checksum).
  *   0    settings version byte, then settings_t
- *   128  GC_SLOTS stored positions (G54..G59, G28, G30), X Y Z floats each (GRBL_WCS)
+ *   128  GC_SLOTS stored positions (G54..G59, G28, G30), X Y Z floats each (G54 only
+ *        read and written without GRBL_WCS)
  *   256  $N0, $N1 and the $I= string, LINE_SIZE + 1 chars each (GRBL_LINES)
  * A bad copy reads as zeros or an empty line and is rewritten so, as GRBL does. */
 #include <avr/eeprom.h>
@@ -47,7 +48,6 @@ void settings_save(void)
     ee_save(&settings, EE_SETTINGS, sizeof(settings));
 }
 
-#if GRBL_WCS
 uint8_t coord_load(uint8_t slot, float *xyz)
 {
     uint16_t addr = EE_COORDS + slot * (COORD_BYTES + 1);
@@ -59,7 +59,6 @@ uint8_t coord_load(uint8_t slot, float *xyz)
 }
 
 void coord_save(uint8_t slot, const float *xyz) { ee_save(xyz, EE_COORDS + slot * (COORD_BYTES + 1), COORD_BYTES); }
-#endif
 
 #if GRBL_LINES
 uint8_t eeline_load(uint8_t slot, char *line)
@@ -87,13 +86,11 @@ void settings_restore(uint8_t what)
         settings_defaults(&settings);
         settings_save();
     }
-#if GRBL_WCS
     if (what & RESTORE_COORDS) {
         static const float zero[GC_AXES];
-        for (uint8_t i = 0; i < GC_SLOTS; i++)
+        for (uint8_t i = 0; i < (GRBL_WCS ? GC_SLOTS : 1); i++) /* (the 328P stores G54 only) */
             coord_save(i, zero);
     }
-#endif
 #if GRBL_LINES
     if (what & RESTORE_LINES)
         for (uint8_t i = 0; i < EELINE_COUNT; i++)

@@ -72,7 +72,21 @@ void test_gcode_errors(void)
     CHECK(parse("1") == ERR_EXPECTED_LETTER);
     CHECK(parse("G1X1.2.3") == ERR_EXPECTED_LETTER);
     CHECK(parse("G0X1X2") == ERR_WORD_REPEATED);
-    CHECK(parse("G0G1X1") == ERR_MODAL_CONFLICT);
+    /* GRBL's order: a second axis command (G0-G3, G10 G28 G30 G92) is 24
+     * before the group's 21; G80 is no axis command */
+    CHECK(parse("G0G1X1") == ERR_AXIS_COMMAND_CONFLICT);
+    CHECK(parse("G92G1X1") == ERR_AXIS_COMMAND_CONFLICT);
+    CHECK(parse("G80G0X1") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G0G80") == ERR_MODAL_CONFLICT);
+    CHECK(parse("G80G92X0") == ERR_AXIS_WORDS_UNUSED);
+    CHECK(parse("G4G53P1") == ERR_MODAL_CONFLICT);
+    /* a fraction on a whole number GRBL knows is 23, on any other 20 */
+    CHECK(parse("G59.1") == ERR_NOT_INTEGER);
+    CHECK(parse("G28.2") == ERR_UNSUPPORTED);
+    CHECK(parse("G61.1") == ERR_UNSUPPORTED);
+    CHECK(parse("M3.5") == ERR_NOT_INTEGER);
+    CHECK(parse("M8M9") == ERR_MODAL_CONFLICT);
+    CHECK(parse("M7") == ERR_UNSUPPORTED);
     CHECK(parse("M3M5") == ERR_MODAL_CONFLICT);
     CHECK(parse("G20G21") == ERR_MODAL_CONFLICT);
     CHECK(parse("G5") == ERR_UNSUPPORTED);
@@ -81,6 +95,7 @@ void test_gcode_errors(void)
     CHECK(parse("M6") == ERR_UNSUPPORTED);
     CHECK(parse("T1") == STATUS_OK);
     CHECK(parse("T256") == ERR_TOOL_NUMBER);
+    CHECK(parse("T-300") == ERR_NEGATIVE); /* GRBL: the range check passes it, then the sign */
     /* GRBL's range: N up to 10,000,000; the block carries the whole part */
     CHECK(parse("N10000001G0X1") == ERR_LINE_NUMBER);
     CHECK(parse("N10000000G0X1") == STATUS_OK && blk.line == 10000000);
@@ -91,7 +106,7 @@ void test_gcode_errors(void)
     CHECK(parse("G53G2X1I1") == ERR_G53_MOTION);
     CHECK(parse("G53G92X1") == ERR_MODAL_CONFLICT);
     CHECK(parse("G18G2X1I1F100") == ERR_UNSUPPORTED);
-    CHECK(parse("G17G40G49G61G91.1G94G54M8M9") == STATUS_OK);
+    CHECK(parse("G17G40G49G61G91.1G94G54M9") == STATUS_OK);
     CHECK(parse("/G0X1") == STATUS_OK);
     CHECK(parse("G80X1") == ERR_AXIS_WORDS_UNUSED);
     CHECK(parse("G0") == STATUS_OK);
@@ -129,9 +144,51 @@ void test_gcode_errors(void)
     gc_block_t j;
     gc_state_t after = st;
     CHECK(gc_parse("G91X10F1000", &after, &j, 1, &undo) == STATUS_OK && j.action == ACT_LINE);
-    CHECK(gc_parse("X10", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    /* GRBL: the missing F first (22), then a command a jog may not have
+     * (16), then words it leaves unused (36) */
+    CHECK(gc_parse("X10", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
+    CHECK(gc_parse("G4P1", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
+    CHECK(gc_parse("G91X-1", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
+    CHECK(gc_parse("G4P1F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G91X1F100S100", &after, &j, 1, &undo) == ERR_UNUSED_WORDS);
     CHECK(gc_parse("G0X10F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
     CHECK(gc_parse("M3X1F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+}
+
+void test_gcode_grbl_state(void)
+{
+    gc_init(&st);
+    /* an explicit G1 needs a feed even without axis words */
+    CHECK(parse("G01S1") == ERR_UNDEFINED_FEED);
+    /* S is kept for $G, M8/M9 too; M2 clears the coolant */
+    CHECK(parse("S250") == STATUS_OK && st.spindle == 250.0f);
+    CHECK(parse("M8") == STATUS_OK && st.coolant == 1);
+    CHECK(parse("M2") == STATUS_OK && st.coolant == 0 && st.spindle == 250.0f);
+    /* M0 pauses, M1 does not (GRBL 1.1h has no optional stop) */
+    CHECK(parse("M0") == STATUS_OK && blk.pause);
+    CHECK(parse("M1") == STATUS_OK && !blk.pause);
+    /* G92.1 with axis words: a motion, its target in the frame before the line */
+    gc_init(&st);
+    CHECK(parse("G0X40Y40") == STATUS_OK);
+    CHECK(parse("G92.1X0Y0") == STATUS_OK && blk.action == ACT_RAPID);
+    CHECK(blk.target[0] == 0.0f && blk.target[1] == 0.0f);
+    CHECK(parse("G92X0Y0Z0") == STATUS_OK && gc_wco(&st, 2) == 0.0f); /* Z: 0 at power-up */
+    CHECK(parse("G0X40Y40") == STATUS_OK && parse("G92X0Y0") == STATUS_OK && gc_wco(&st, 0) == 40.0f);
+    CHECK(parse("G92.1G0X1") == STATUS_OK && blk.target[0] == 41.0f && gc_wco(&st, 0) == 0.0f);
+    /* K in G17 arcs: ignored as GRBL does (no Z arcs); elsewhere unused */
+    gc_init(&st);
+    CHECK(parse("G0X10Y10") == STATUS_OK);
+    CHECK(parse("G2X12Y10I1K1F500") == STATUS_OK && blk.action == ACT_ARC);
+    CHECK(parse("G0X1K1") == ERR_UNUSED_WORDS);
+    /* G10 L20 P0/P1 on every build (the 328P stores G54 only) */
+    gc_init(&st);
+    CHECK(parse("G0X30Y20") == STATUS_OK);
+    CHECK(parse("G10L20P1X0Y0") == STATUS_OK && blk.store_slot == 1);
+    CHECK(gc_wco(&st, 0) == 30.0f && gc_wco(&st, 1) == 20.0f);
+    CHECK(parse("G10L20P0X5") == STATUS_OK && gc_wco(&st, 0) == 25.0f);
+    CHECK(parse("G10L2P1X1Y2") == STATUS_OK && gc_wco(&st, 1) == 2.0f);
+    CHECK(parse("G10L20P7X0") == ERR_UNSUPPORTED_COORD);
+    CHECK(parse("G10L3P1X0") == ERR_UNSUPPORTED);
 }
 
 void test_gcode_arcs(void)

@@ -17,6 +17,7 @@ static const test_case cases[] = {
     {"ring", test_ring},
     {"gcode_valid", test_gcode_valid},
     {"gcode_errors", test_gcode_errors},
+    {"gcode_grbl_state", test_gcode_grbl_state},
     {"gcode_arcs", test_gcode_arcs},
     {"gcode_pen", test_gcode_pen},
     {"gcode_coords", test_gcode_coords},

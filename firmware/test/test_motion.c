@@ -522,7 +522,8 @@ void test_settings(void)
     CHECK(settings_set(&s, 110, -1) == ERR_NEGATIVE);
     CHECK(settings_set(&s, 100, 0) == ERR_INVALID_DOLLAR);
     CHECK(settings_set(&s, 0, 2) == ERR_STEP_PULSE);
-    CHECK(settings_set(&s, 20, 0.5f) == ERR_NOT_INTEGER);
+    CHECK(settings_set(&s, 20, 0.5f) == STATUS_OK && s.soft_limits == 0); /* truncated, as GRBL */
+    CHECK(settings_set(&s, 1, 1.5f) == STATUS_OK && s.idle_delay_ms == 1);
     CHECK(settings_set(&s, 20, 2) == ERR_INVALID_DOLLAR);
     CHECK(settings_set(&s, 60, 3000) == ERR_INVALID_DOLLAR);
     CHECK(settings_set(&s, 61, 2100) == STATUS_OK && s.pen_down_us == 2100);

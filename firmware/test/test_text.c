@@ -86,8 +86,14 @@ void test_linebuf(void)
     memset(longline, 'X', sizeof(longline));
     longline[299] = 0;
     CHECK(feed_all(&lb, longline, &last) == 0);
-    CHECK(lb.len == LINE_SIZE);
+    CHECK(lb.len == LINE_MAX);
     CHECK(feed_all(&lb, "\n", &last) == 1 && last == LB_OVERFLOW);
+    /* GRBL's 80-byte buffer: 79 characters are a line, 80 overflow */
+    longline[LINE_MAX] = 0;
+    CHECK(feed_all(&lb, longline, &last) == 0 && feed_all(&lb, "\n", &last) == 1 && last == LB_LINE);
+    longline[LINE_MAX] = 'X';
+    longline[LINE_MAX + 1] = 0;
+    CHECK(feed_all(&lb, longline, &last) == 0 && feed_all(&lb, "\n", &last) == 1 && last == LB_OVERFLOW);
     CHECK(feed_all(&lb, "G1\n", &last) == 1 && last == LB_LINE && strcmp(lb.text, "G1") == 0);
     /* NUL and binary bytes */
     uint8_t bin[] = {'G', 0, 0xFF, '1', '\n'};

@@ -8,6 +8,7 @@ void test_fmt(void);
 void test_ring(void);
 void test_gcode_valid(void);
 void test_gcode_errors(void);
+void test_gcode_grbl_state(void);
 void test_gcode_arcs(void);
 void test_gcode_pen(void);
 void test_gcode_coords(void);

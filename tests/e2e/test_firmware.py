@@ -186,6 +186,31 @@ def test_soft_limit_rejects_before_moving(plotter, grbl: Grbl) -> None:
     assert grbl.send("$J=G91 X-20 F1000")[-1] == "error:15"
 
 
+@pytest.mark.parametrize(("start", "arc", "outside"), [
+    ((295, 100), "G3 X295 Y120 I0 J10", True),   # counter-clockwise through +X: (305, 110)
+    ((295, 100), "G2 X295 Y120 I0 J10", False),  # clockwise the other way: (285, 110)
+    ((100, 4), "G3 X110 Y4 I5 J0", True),        # counter-clockwise through -Y: (105, -1)
+    ((100, 4), "G2 X110 Y4 I5 J0", False),       # clockwise through +Y: (105, 9)
+    ((150, 100), "G2 X150 Y100 I0 J-97", True),  # a full circle: all four extremes
+    ((150, 110), "G2 X150 Y110 I0 J-50", False),
+])
+def test_soft_limit_checks_an_arcs_extremes(plotter, grbl: Grbl, start, arc: str,
+                                            outside: bool) -> None:
+    """An arc whose ends are inside is refused before moving when it swings past
+    the work area (its axis extremes between its end angles), and not otherwise."""
+    unlocked(grbl)
+    grbl.ok(f"G0 X{start[0]} Y{start[1]}")
+    grbl.wait_state("Idle")
+    got = grbl.send(arc + " F3000")
+    if outside:
+        assert got[-2:] == ["ALARM:2", "error:9"], got
+        assert plotter.trace()["position"] == {"x": float(start[0]), "y": float(start[1])}
+        unlocked(grbl)
+    else:
+        assert got[-1] == "ok", got
+        grbl.wait_state("Idle")
+
+
 def test_soft_limit_edges_keep_their_tolerance(plotter, grbl: Grbl) -> None:
     # within 0.0005 mm of the work area is inside; past it, the line is refused
     unlocked(grbl)

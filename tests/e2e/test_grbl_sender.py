@@ -121,3 +121,49 @@ def test_grbl_streamer_plots_holds_overrides_and_resets(plotter) -> None:
         wait_event("on_boot", 20)
     finally:
         sender.disconnect()
+
+
+def test_forced_stop_hold_then_reset_leaves_the_board_idle(plotter) -> None:
+    """CNCjs's "forced stop" (and grbl-streamer's abort): a feed hold, then a soft
+    reset once the carriage has stopped. Stock GRBL 1.1h alarms only when a reset
+    interrupts motion, so the board comes back Idle, unlocked, where it stopped."""
+    read: list[str] = []
+    events: queue.Queue[str] = queue.Queue()
+    state = {"mode": ""}
+
+    def callback(event: str, *data: Any) -> None:
+        if event == "on_stateupdate":
+            state["mode"] = data[0]
+        if event == "on_read":
+            read.append(str(data[0]).strip())
+        events.put(event)
+
+    def wait_until(done, what: str, timeout: float = 30) -> None:
+        deadline = time.monotonic() + timeout
+        while not done():
+            assert time.monotonic() < deadline, f"{what}: state {state['mode']!r}, read {read[-5:]}"
+            time.sleep(0.05)
+
+    sender = GrblStreamer(callback)
+    sender.setup_logging()
+    sender.cnect(plotter.port, 115200)
+    try:
+        wait_until(lambda: "on_boot" in list(events.queue), "banner", 20)
+        sender.killalarm()
+        sender.poll_start()
+        wait_until(lambda: state["mode"].startswith("Idle"), "Idle", 20)
+        sender.write(["G1 X100 F600"])
+        sender.job_run()
+        plotter.wait_trace(lambda t: t["position"]["x"] > 5, 30)
+        sender.hold()
+        wait_until(lambda: state["mode"].startswith("Hold:0"), "Hold:0")
+        held = plotter.trace()["steps"]
+        booted = len([line for line in read if line.startswith("Grbl 1.1h")])
+        sender.softreset()
+        wait_until(lambda: len([line for line in read if line.startswith("Grbl 1.1h")]) > booted,
+                   "banner after the reset", 20)
+        wait_until(lambda: state["mode"].startswith("Idle"), "Idle after the reset", 20)
+        assert not any(line.startswith("ALARM") for line in read), read
+        assert plotter.trace()["steps"] == held  # the position kept: motion had stopped
+    finally:
+        sender.disconnect()
