@@ -23,7 +23,7 @@ import shapely
 from shapely.geometry import Polygon
 from shapely.geometry.base import BaseGeometry
 
-from . import curves, fill, svgtext
+from . import curves, fill, pathdata, svgtext
 from .curves import Affine, compose
 from .fillplan import FillPlan, named_colour
 from .models import ErrorLog, ImportFailed, ImportOptions
@@ -123,6 +123,7 @@ class SvgReader:
         self.page: tuple[float, float] | None = None
         self._clip_cache: dict[tuple, BaseGeometry] = {}
         self._page_clip: list[tuple[Layer, int, list[np.ndarray]]] = []
+        self._warned: set[tuple[int, str]] = set()
 
     # ---- entry ---------------------------------------------------------------------
 
@@ -159,8 +160,7 @@ class SvgReader:
             if self.options.clip_to_page:
                 b = (0.0, 0.0, w * PX_MM, h * PX_MM)
                 ctx = replace(ctx, clip=fill.rect(*b), clip_box=b)
-        if root.get("transform"):
-            ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(root.get("transform"))))
+        ctx = replace(ctx, m=compose(ctx.m, self._transform(root, "svg", own)))
         ctx = replace(ctx, opacity=opacity(own.get("opacity")))
         with np.errstate(all="ignore"):     # huge or degenerate geometry: skipped, not warned
             self.children(root, ctx)
@@ -221,8 +221,8 @@ class SvgReader:
         if ctx.opacity <= 0:
             self.invisible += 1
             return
-        if elem.get("transform"):
-            ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(elem.get("transform"))))
+        if own.get("transform"):
+            ctx = replace(ctx, m=compose(ctx.m, self._transform(elem, tag, own)))
         if own.get("mask") and url_id(own.get("mask")) not in self.ids:
             self.errors.warn(None, f"{_where(elem, tag)}: mask not found; drawn unmasked")
         clip_id = url_id(own.get("clip-path"))
@@ -307,9 +307,7 @@ class SvgReader:
             if own.get("display", "").strip() == "none":
                 return
             ctx = replace(ctx, style=style, opacity=ctx.opacity * opacity(own.get("opacity")))
-            if target.get("transform"):
-                ctx = replace(ctx, m=compose(ctx.m,
-                                             curves.parse_transform(target.get("transform"))))
+            ctx = replace(ctx, m=compose(ctx.m, self._transform(target, "symbol", own)))
             self._viewport(target, elem, ctx, target.get("width"), target.get("height"))
             return
         x = length(elem.get("x"), ctx.vw)
@@ -341,8 +339,8 @@ class SvgReader:
             m = compose(ctx.m, (x1 - x0, 0.0, 0.0, y1 - y0, x0, y0))
         else:
             m = ctx.m
-        if cp.get("transform"):
-            m = compose(m, curves.parse_transform(cp.get("transform")))
+        m = compose(m, self._transform(cp, "clipPath", cascade(cp, "clipPath", ROOT_STYLE,
+                                                                self.sheet)[1]))
         key = (clip_id, m)
         area = self._clip_cache.get(key)
         if area is None:
@@ -356,7 +354,9 @@ class SvgReader:
                         continue
                     x = length(child.get("x"), ctx.vw)
                     y = length(child.get("y"), ctx.vh)
-                    cm = compose(m, curves.parse_transform(child.get("transform") or ""))
+                    cm = compose(m, self._transform(child, "use", cascade(child, "use",
+                                                                          ROOT_STYLE,
+                                                                          self.sheet)[1]))
                     child, ctag = target, local(target.tag)
                     cm = compose(cm, (1.0, 0.0, 0.0, 1.0, x, y))
                 else:
@@ -366,8 +366,7 @@ class SvgReader:
                 cstyle, cown = cascade(child, ctag, ROOT_STYLE, self.sheet)
                 if cown.get("display", "").strip() == "none":
                     continue
-                if child.get("transform"):
-                    cm = compose(cm, curves.parse_transform(child.get("transform")))
+                cm = compose(cm, self._transform(child, ctag, cown))
                 geo = self._geometry(child, ctag, replace(sub, m=cm))
                 rings = [curves.apply(cm, p) for p, _ in geo]
                 parts.append(fill.region(rings, cstyle.get("clip-rule", "nonzero")))
@@ -392,8 +391,10 @@ class SvgReader:
         vw, vh = ctx.vw, ctx.vh
         g = elem.get
         if tag == "path":
-            d = g("d")
-            return curves.path_subpaths(d, tol) if d else []
+            geo, error = curves.path_data(g("d") or "", tol)
+            if error:
+                self._warn_once(elem, tag, f"path data drawn up to its error: {error}")
+            return geo
         if tag == "rect":
             w, h = length(g("width"), vw), length(g("height"), vh)
             if w <= 0 or h <= 0:
@@ -418,13 +419,31 @@ class SvgReader:
         if tag == "line":
             return [(np.array([[length(g("x1"), vw), length(g("y1"), vh)],
                                [length(g("x2"), vw), length(g("y2"), vh)]]), False)]
-        vals = numbers(g("points"))
+        vals, error = pathdata.numbers(g("points"))
+        if error or len(vals) % 2:
+            self._warn_once(elem, tag, "points drawn up to their error: "
+                                       f"{error or 'an odd number of coordinates'}")
         if len(vals) < 4:
             return []
         pts = np.array(vals[: len(vals) // 2 * 2], dtype=float).reshape(-1, 2)
         if tag == "polygon":
             return [(np.vstack([pts, pts[:1]]), True)]
         return [(pts, False)]
+
+    def _transform(self, elem: Element, tag: str, own: dict[str, str]) -> Affine:
+        """The element's transform (the CSS property, else the attribute); one that
+        cannot be read is left out with a warning, as a browser ignores it."""
+        try:
+            return curves.parse_transform(own.get("transform"))
+        except ValueError as e:
+            self._warn_once(elem, tag, f"transform not read, drawn untransformed: {e}")
+            return curves.IDENTITY
+
+    def _warn_once(self, elem: Element, tag: str, message: str) -> None:
+        key = (id(elem), message)
+        if key not in self._warned:
+            self._warned.add(key)
+            self.errors.warn(None, f"{_where(elem, tag)}: {message}")
 
     def _visible_stroke(self, ctx: Ctx) -> str | None:
         style = ctx.style
@@ -631,7 +650,7 @@ class SvgReader:
                                    f"'#{href(node) or ''}' does not exist; skipped")
             return
         text = svgtext.collapse("".join(node.itertext()), preserve).strip()
-        pm = curves.parse_transform(target.get("transform") or "")
+        pm = self._transform(target, "path", cascade(target, "path", ROOT_STYLE, self.sheet)[1])
         tol = self.tol_mm / max(curves.scale_of(ctx.m), 1e-12)
         subs = curves.path_subpaths(target.get("d") or "", tol)
         if not subs or not text:
