@@ -2,8 +2,8 @@
 common lines (native/gcodescan.c, read a chunk at a time, written in bulk by
 ProgramWriter.moves through native/movelines.c) against every line through the general
 parser and each move written alone; the preview's strokes written by
-native/previewjson.c against json.dumps; SVG path data read in bulk against
-svgelements."""
+native/previewjson.c against json.dumps. Both ways go through penplace.py (pen-downs
+with no move dropped, the first pen-down placed with the drawing)."""
 
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from plotbridge.importing.detect import line_chunks
 from plotbridge.importing.gcode import read_ops
 from plotbridge.importing.models import ErrorLog
 from plotbridge.importing.ops import PATH, single_moves
+from plotbridge.importing.penplace import placed_pens
 from plotbridge.importing.pipeline import write_program
 from plotbridge.importing.placement import Transform
 from plotbridge.importing.preview import PreviewBuilder
@@ -40,8 +41,8 @@ def _write(src: Path, dest: Path, options: ImportOptions, fast: bool, transform:
     def ops():
         chunks = line_chunks(src, "utf-8", chunk)
         if fast:
-            return read_ops(chunks, options, errors)
-        return single_moves(read_ops(chunks, options, errors, fast=False))
+            return placed_pens(read_ops(chunks, options, errors), errors)
+        return placed_pens(single_moves(read_ops(chunks, options, errors, fast=False)), errors)
 
     try:
         r = write_program(ops, "gcode", dest, transform, PROFILE, errors)

@@ -29,6 +29,7 @@ from .ops import (
 )
 from .optimize import optimize_strokes, time_budget, travel
 from .patterns import pattern_strokes
+from .penplace import placed_pens
 from .placement import Bounds, Transform, needs_bounds, placement
 from .program import ProgramWriter
 from .svg import read_svg
@@ -175,8 +176,9 @@ def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOpt
         with source.open("r", encoding=encoding, newline=None) as f:
             options = replace(options, pen_dialect=sniff_dialect(f.read(SNIFF_CHARS)))
     try:
-        def ops() -> Iterator[tuple]:
-            return read_ops(line_chunks(source, encoding), options, errors)
+        def ops(warn: bool = True) -> Iterator[tuple]:
+            return placed_pens(read_ops(line_chunks(source, encoding), options, errors),
+                               errors if warn else None)
         ops()  # validates the dialect options before reading
     except ValueError as e:
         raise ImportFailed.one(422, str(e)) from None
@@ -186,7 +188,7 @@ def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOpt
                              feed=feed or None)
     bounds = None
     if needs_bounds(options):
-        bounds = drawn_bounds(ops())
+        bounds = drawn_bounds(ops(warn=False))
         errors.raise_if_any()
         if bounds is None:
             raise ImportFailed.one(422, "nothing to draw: the input has no pen-down moves")

@@ -22,7 +22,7 @@ BASELINE = 9.0
 DEFAULT_FONT = "futural"
 # font-family names that the Hershey fonts stand for without substitution
 HERSHEY_NAMES = re.compile(r"hershey|futura|rowman|scripts|timesr|gothic", re.I)
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_NUMBER = re.compile(r"[+-]?(\d+(?:\.\d*)?|\.\d+)([eE][+-]?\d+)?")
 
 
 @dataclass
