@@ -94,7 +94,7 @@ class ImportOptions:
     z_threshold: float = 0.0
     servo_down_angle: float | None = None
     feed: float = 3000.0  # mm/min for drawing moves of SVG, coordinates and patterns
-    fill: str = "none"    # SVG fills: "none", "outline" (filled-only shapes), "hatch"
+    fill: str = "outline"  # SVG fills: "outline" (filled-only shapes), "none", "hatch"
     hatch_spacing: float = 0.5   # mm between hatch lines (the default pen's width)
     hatch_angle: float = 45.0    # degrees, counter-clockwise on the page
     hatch_cross: bool = False    # a second hatch at right angles

@@ -51,6 +51,7 @@ NOT_RENDERED = frozenset({
     "animateTransform", "animateMotion", "image", "namedview",
 })
 SHAPES = frozenset({"path", "rect", "circle", "ellipse", "line", "polyline", "polygon"})
+EDGE_MM = 0.01           # the page clip keeps what lies on the page's edge or this near it
 MAX_ELEMENTS = 500_000   # elements drawn, counting each <use> copy: bounds clone bombs
 MAX_DEPTH = 64
 LANGUAGES = ("en",)
@@ -74,6 +75,13 @@ class Ctx:
 def _where(elem: Element, tag: str) -> str:
     ident = elem.get("id")
     return f"<{tag} id=\"{ident}\">" if ident else f"<{tag}>"
+
+
+def _unless_percent(value: str | None, vb: list[float]) -> str | None:
+    """The root's width or height, None for a percentage when there is no viewBox."""
+    if value is not None and value.strip().endswith("%") and not vb:
+        return None
+    return value
 
 
 def viewbox_transform(vb: list[float], x: float, y: float, w: float, h: float,
@@ -136,8 +144,12 @@ class SvgReader:
         if len(vb) != 4 or vb[2] <= 0 or vb[3] <= 0:
             vb = []
         try:
-            w = length(root.get("width"), vb[2] if vb else 0.0, default=-1.0)
-            h = length(root.get("height"), vb[3] if vb else 0.0, default=-1.0)
+            # A percentage of the viewBox (the size a browser gives the image), or with
+            # no viewBox an unknown size: the drawing's own extent, as with none given.
+            w = length(_unless_percent(root.get("width"), vb), vb[2] if vb else 0.0,
+                       default=-1.0)
+            h = length(_unless_percent(root.get("height"), vb), vb[3] if vb else 0.0,
+                       default=-1.0)
         except ValueError as e:
             raise ImportFailed.one(422, f"<svg>: width or height: {e}") from None
         if w < 0:
@@ -158,8 +170,9 @@ class SvgReader:
         if w > 0 and h > 0:
             self.page = (w * PX_MM, h * PX_MM)
             if self.options.clip_to_page:
-                b = (0.0, 0.0, w * PX_MM, h * PX_MM)
-                ctx = replace(ctx, clip=fill.rect(*b), clip_box=b)
+                # what lies within EDGE_MM of the page is kept as it is
+                b = (-EDGE_MM, -EDGE_MM, w * PX_MM + EDGE_MM, h * PX_MM + EDGE_MM)
+                ctx = replace(ctx, clip=fill.rect(0.0, 0.0, w * PX_MM, h * PX_MM), clip_box=b)
         ctx = replace(ctx, m=compose(ctx.m, self._transform(root, "svg", own)))
         ctx = replace(ctx, opacity=opacity(own.get("opacity")))
         with np.errstate(all="ignore"):     # huge or degenerate geometry: skipped, not warned
@@ -537,8 +550,15 @@ class SvgReader:
         flat = [ln for _, _, lines in self._page_clip for ln in lines]
         owner = [k for k, (_, _, lines) in enumerate(self._page_clip) for _ in lines]
         index = np.repeat(np.arange(len(flat)), [len(ln) for ln in flat])
-        lines = shapely.linestrings(np.vstack(flat), indices=index)
-        clipped = shapely.clip_by_rect(lines, 0.0, 0.0, *self.page)
+        pts = np.vstack(flat)
+        w, h = self.page
+        for k, top in ((0, w), (1, h)):    # points just off an edge onto it
+            col = pts[:, k]
+            col[(col < 0) & (col >= -EDGE_MM)] = 0.0
+            col[(col > top) & (col <= top + EDGE_MM)] = top
+        lines = shapely.linestrings(pts, indices=index)
+        # an intersection keeps what lies on the page's edge (clip_by_rect drops it)
+        clipped = shapely.intersection(lines, fill.rect(0.0, 0.0, w, h))
         pieces: list[list] = [[] for _ in self._page_clip]
         for k, geom in zip(owner, clipped, strict=True):
             for part in shapely.get_parts(shapely.line_merge(geom)):
