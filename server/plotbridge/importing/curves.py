@@ -156,3 +156,28 @@ def rounded_rect(x: float, y: float, w: float, h: float, rx: float, ry: float,
     ]
     pts = np.vstack(parts)
     return np.vstack([pts, pts[:1]])
+
+
+def viewbox_transform(vb: list[float], x: float, y: float, w: float, h: float,
+                      par: str | None) -> Affine:
+    """The viewBox mapped into the viewport (x, y, w, h) as preserveAspectRatio says."""
+    vx, vy, vw, vh = vb
+    sx, sy = w / vw, h / vh
+    words = (par or "xMidYMid meet").split()
+    align = words[0] if words else "xMidYMid"
+    if align == "defer" and len(words) > 1:
+        words = words[1:]
+        align = words[0]
+    if align == "none":
+        return (sx, 0.0, 0.0, sy, x - vx * sx, y - vy * sy)
+    s = max(sx, sy) if len(words) > 1 and words[1] == "slice" else min(sx, sy)
+    tx, ty = x - vx * s, y - vy * s
+    if "xMid" in align:
+        tx += (w - vw * s) / 2
+    elif "xMax" in align:
+        tx += w - vw * s
+    if "YMid" in align:
+        ty += (h - vh * s) / 2
+    elif "YMax" in align:
+        ty += h - vh * s
+    return (s, 0.0, 0.0, s, tx, ty)

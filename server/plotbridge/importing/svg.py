@@ -24,10 +24,12 @@ from shapely.geometry import Polygon
 from shapely.geometry.base import BaseGeometry
 
 from . import curves, fill, pathdata, svgtext
-from .curves import Affine, compose
+from .curves import Affine, compose, viewbox_transform
 from .fillplan import FillPlan, named_colour
 from .models import ErrorLog, ImportFailed, ImportOptions
 from .ops import Layer
+from .svgclip import ClipMixin
+from .svgmarkers import MARKED, MarkerMixin
 from .svgstyle import (
     ROOT_STYLE,
     Stylesheet,
@@ -84,32 +86,9 @@ def _unless_percent(value: str | None, vb: list[float]) -> str | None:
     return value
 
 
-def viewbox_transform(vb: list[float], x: float, y: float, w: float, h: float,
-                      par: str | None) -> Affine:
-    """The viewBox mapped into the viewport (x, y, w, h) as preserveAspectRatio says."""
-    vx, vy, vw, vh = vb
-    sx, sy = w / vw, h / vh
-    words = (par or "xMidYMid meet").split()
-    align = words[0] if words else "xMidYMid"
-    if align == "defer" and len(words) > 1:
-        words = words[1:]
-        align = words[0]
-    if align == "none":
-        return (sx, 0.0, 0.0, sy, x - vx * sx, y - vy * sy)
-    s = max(sx, sy) if len(words) > 1 and words[1] == "slice" else min(sx, sy)
-    tx, ty = x - vx * s, y - vy * s
-    if "xMid" in align:
-        tx += (w - vw * s) / 2
-    elif "xMax" in align:
-        tx += w - vw * s
-    if "YMid" in align:
-        ty += (h - vh * s) / 2
-    elif "YMax" in align:
-        ty += h - vh * s
-    return (s, 0.0, 0.0, s, tx, ty)
+class SvgReader(ClipMixin, MarkerMixin):
+    _where = staticmethod(_where)
 
-
-class SvgReader:
     def __init__(self, root: Element, options: ImportOptions, errors: ErrorLog) -> None:
         self.root = root
         self.options = options
@@ -132,6 +111,8 @@ class SvgReader:
         self._clip_cache: dict[tuple, BaseGeometry] = {}
         self._page_clip: list[tuple[Layer, int, list[np.ndarray]]] = []
         self._warned: set[tuple[int, str]] = set()
+        self._capture: list[np.ndarray] | None = None    # ClipMixin._captured
+        self.root_style = ROOT_STYLE
 
     # ---- entry ---------------------------------------------------------------------
 
@@ -140,6 +121,7 @@ class SvgReader:
         if local(root.tag) != "svg":
             raise ImportFailed.one(422, f"not SVG: the root element is <{root.tag}>")
         style, own = cascade(root, "svg", ROOT_STYLE, self.sheet)
+        self.root_style = style
         vb = numbers(root.get("viewBox"))
         if len(vb) != 4 or vb[2] <= 0 or vb[3] <= 0:
             vb = []
@@ -236,12 +218,16 @@ class SvgReader:
             return
         if own.get("transform"):
             ctx = replace(ctx, m=compose(ctx.m, self._transform(elem, tag, own)))
-        if own.get("mask") and url_id(own.get("mask")) not in self.ids:
-            self.errors.warn(None, f"{_where(elem, tag)}: mask not found; drawn unmasked")
         clip_id = url_id(own.get("clip-path"))
         if clip_id is not None:
             ctx = self._clipped(ctx, clip_id, elem, tag)
             if ctx.clip is not None and ctx.clip.is_empty:
+                return
+        mask_id = url_id(own.get("mask"))
+        if mask_id is not None:
+            ctx = self._masked(ctx, mask_id, elem, tag)
+            if ctx.clip is not None and ctx.clip.is_empty:
+                self.invisible += 1
                 return
         if tag in ("g", "a"):
             names = [n for n in (elem.get("id"), elem.get(f"{INKSCAPE}label")) if n]
@@ -276,13 +262,14 @@ class SvgReader:
         return True
 
     def _viewport(self, elem: Element, sized: Element, ctx: Ctx, w_default: str | None,
-                  h_default: str | None) -> None:
+                  h_default: str | None,
+                  size: tuple[str | None, str | None] = (None, None)) -> None:
         """A nested <svg> or a <symbol> placed by a <use> (`sized` carries x, y,
-        width and height; the use for a symbol)."""
+        width and height; the use for a symbol; `size` overrides width and height)."""
         x = length(sized.get("x"), ctx.vw)
         y = length(sized.get("y"), ctx.vh)
-        w = length(sized.get("width") or w_default or "100%", ctx.vw)
-        h = length(sized.get("height") or h_default or "100%", ctx.vh)
+        w = length(size[0] or sized.get("width") or w_default or "100%", ctx.vw)
+        h = length(size[1] or sized.get("height") or h_default or "100%", ctx.vh)
         if w <= 0 or h <= 0:
             return
         vb = numbers(elem.get("viewBox"))
@@ -325,76 +312,11 @@ class SvgReader:
             return
         x = length(elem.get("x"), ctx.vw)
         y = length(elem.get("y"), ctx.vh)
-        if ttag == "svg":
+        if ttag == "svg":      # the use's width and height, when given, size it
             self._viewport(target, target, replace(ctx, m=compose(ctx.m, (1, 0, 0, 1, x, y))),
-                           None, None)
+                           None, None, (elem.get("width"), elem.get("height")))
             return
         self.element(target, replace(ctx, m=compose(ctx.m, (1.0, 0.0, 0.0, 1.0, x, y))))
-
-    # ---- clipping ------------------------------------------------------------------
-
-    def _intersect(self, ctx: Ctx, area: BaseGeometry) -> Ctx:
-        if ctx.clip is None:
-            return replace(ctx, clip=area, clip_box=None)
-        return replace(ctx, clip=ctx.clip.intersection(area), clip_box=None)
-
-    def _clipped(self, ctx: Ctx, clip_id: str, elem: Element, tag: str) -> Ctx:
-        cp = self.ids.get(clip_id)
-        if cp is None or local(cp.tag) != "clipPath":
-            self.errors.warn(None, f"{_where(elem, tag)}: clip-path '#{clip_id}' not found; "
-                                   "drawn unclipped")
-            return ctx
-        if cp.get("clipPathUnits") == "objectBoundingBox":
-            bbox = self._bbox(elem, tag, ctx)
-            if bbox is None:
-                return replace(ctx, clip=Polygon())
-            x0, y0, x1, y1 = bbox
-            m = compose(ctx.m, (x1 - x0, 0.0, 0.0, y1 - y0, x0, y0))
-        else:
-            m = ctx.m
-        m = compose(m, self._transform(cp, "clipPath", cascade(cp, "clipPath", ROOT_STYLE,
-                                                                self.sheet)[1]))
-        key = (clip_id, m)
-        area = self._clip_cache.get(key)
-        if area is None:
-            parts = []
-            sub = Ctx(m=m, style=ROOT_STYLE, vw=ctx.vw, vh=ctx.vh)
-            for child in cp:
-                ctag = local(child.tag)
-                if ctag == "use":
-                    target = self.ids.get(href(child) or "")
-                    if target is None:
-                        continue
-                    x = length(child.get("x"), ctx.vw)
-                    y = length(child.get("y"), ctx.vh)
-                    cm = compose(m, self._transform(child, "use", cascade(child, "use",
-                                                                          ROOT_STYLE,
-                                                                          self.sheet)[1]))
-                    child, ctag = target, local(target.tag)
-                    cm = compose(cm, (1.0, 0.0, 0.0, 1.0, x, y))
-                else:
-                    cm = m
-                if ctag not in SHAPES:
-                    continue
-                cstyle, cown = cascade(child, ctag, ROOT_STYLE, self.sheet)
-                if cown.get("display", "").strip() == "none":
-                    continue
-                cm = compose(cm, self._transform(child, ctag, cown))
-                geo = self._geometry(child, ctag, replace(sub, m=cm))
-                rings = [curves.apply(cm, p) for p, _ in geo]
-                parts.append(fill.region(rings, cstyle.get("clip-rule", "nonzero")))
-            area = shapely.unary_union(parts) if parts else Polygon()
-            self._clip_cache[key] = area
-        return self._intersect(ctx, area)
-
-    def _bbox(self, elem: Element, tag: str, ctx: Ctx) -> tuple | None:
-        if tag not in SHAPES:
-            return None
-        pts = [p for p, _ in self._geometry(elem, tag, ctx)]
-        if not pts:
-            return None
-        allp = np.vstack(pts)
-        return (*allp.min(axis=0), *allp.max(axis=0))
 
     # ---- shapes --------------------------------------------------------------------
 
@@ -424,8 +346,13 @@ class SvgReader:
             if tag == "circle":
                 r = length(g("r"), math.hypot(vw, vh) / math.sqrt(2))
                 rx = ry = r
-            else:
-                rx, ry = length(g("rx"), vw), length(g("ry"), vh)
+            else:      # SVG 2: a radius missing or `auto` is the other one
+                rx_s, ry_s = g("rx"), g("ry")
+                rx = length(rx_s, vw) if rx_s not in (None, "auto") else None
+                ry = length(ry_s, vh) if ry_s not in (None, "auto") else None
+                rx = ry if rx is None else rx
+                ry = rx if ry is None else ry
+                rx, ry = rx or 0.0, ry or 0.0
             if rx <= 0 or ry <= 0:
                 return []
             return [(curves.ellipse(length(g("cx"), vw), length(g("cy"), vh), rx, ry, tol), True)]
@@ -485,6 +412,8 @@ class SvgReader:
         return p[0]
 
     def _shape(self, elem: Element, tag: str, ctx: Ctx) -> None:
+        if tag in MARKED:
+            self._markers(elem, tag, ctx)
         stroke = self._visible_stroke(ctx)
         fill_colour = self._visible_fill(ctx)
         fills = self.fills.fill_for(((ctx.layer,) if ctx.layer else ()) + ctx.chain, fill_colour)
@@ -523,6 +452,9 @@ class SvgReader:
     def emit(self, ctx: Ctx, colour: str, lines: list[np.ndarray]) -> None:
         lines = [ln for ln in lines if len(ln) > 1 and np.isfinite(ln).all()]
         if not lines:
+            return
+        if self._capture is not None:
+            self._capture.extend(lines)
             return
         deferred = False
         if ctx.clip is not None:
@@ -651,8 +583,15 @@ class SvgReader:
         if colour is None:
             self.invisible += 1
             return
-        if not self._selected(ctx, colour):
+        if self._capture is None and not self._selected(ctx, colour):
             return
+        missing, plain = svgtext.unlike(text)
+        for chars, how in ((missing, "not in the single-stroke fonts, drawn as '?'"),
+                           (plain, "drawn without their accents")):
+            if chars:
+                names = ", ".join(f"'{c}' U+{ord(c):04X}" for c in chars[:10])
+                more = f" and {len(chars) - 10} more" if len(chars) > 10 else ""
+                self._warn_once(elem, "text", f"text '{text[:40]}': {names}{more} {how}")
         family = ctx.style.get("font-family", "").strip()
         if not svgtext.HERSHEY_NAMES.search(family):
             note = {"element": _where(elem, "text"), "text": text[:60], "font": family,

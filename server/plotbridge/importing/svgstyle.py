@@ -13,9 +13,10 @@ from . import pathdata
 SVG_NS = "{http://www.w3.org/2000/svg}"
 INHERITED = ("stroke", "stroke-width", "stroke-opacity", "fill", "fill-opacity", "fill-rule",
              "clip-rule", "visibility", "color", "font-family", "font-size", "text-anchor",
-             "letter-spacing", "word-spacing")
-OWN = ("display", "opacity", "clip-path", "mask", "overflow", "transform", "marker-start",
-       "marker-mid", "marker-end", "marker")
+             "letter-spacing", "word-spacing", "marker-start", "marker-mid", "marker-end")
+OWN = ("display", "opacity", "clip-path", "mask", "overflow", "transform", "marker")
+FONT_SIZES = {"xx-small": 9.0, "x-small": 10.0, "small": 13.0, "medium": 16.0, "large": 18.0,
+              "x-large": 24.0, "xx-large": 32.0, "xxx-large": 48.0}
 PROPERTIES = frozenset(INHERITED + OWN)
 ROOT_STYLE = {"stroke": "none", "stroke-width": "1", "stroke-opacity": "1", "fill": "black",
               "fill-opacity": "1", "fill-rule": "nonzero", "clip-rule": "nonzero",
@@ -213,8 +214,31 @@ def cascade(elem: Element, tag: str, parent: dict[str, str],
     inline_normal, inline_important = declarations(elem.attrib.get("style", ""))
     for decls in (sheet_normal, inline_normal, sheet_important, inline_important):
         own.update(decls)
+    if "marker" in own:                 # the shorthand sets all three
+        for key in ("marker-start", "marker-mid", "marker-end"):
+            own.setdefault(key, own["marker"])
     style = parent
     changed = {k: v for k, v in own.items() if k in INHERITED and v.strip() != "inherit"}
+    if "font-size" in changed:
+        changed["font-size"] = font_size(changed["font-size"], parent.get("font-size", "16"))
     if changed:
         style = {**parent, **changed}
     return style, own
+
+
+def font_size(value: str, parent: str) -> str:
+    """A font-size as px: em, ex and % of the parent's (itself px), keywords as CSS sizes
+    them; one that cannot be read is the parent's."""
+    try:
+        base = float(parent)
+    except ValueError:
+        base = 16.0
+    v = value.strip().lower()
+    if v in FONT_SIZES:
+        return repr(FONT_SIZES[v])
+    if v in ("larger", "smaller"):
+        return repr(base * 1.2 if v == "larger" else base / 1.2)
+    try:
+        return repr(length(v, base, font=base))
+    except ValueError:
+        return repr(base)
