@@ -91,6 +91,9 @@ def assert_agree(inked: np.ndarray, strokes: list[np.ndarray], reach: float) -> 
 @pytest.mark.parametrize("name", [
     "use_nested", "symbol_viewbox", "doctype_public", "illustrator_entities",
     "prefixed_namespace", "viewport_clip", "clip_path", "switch", "mask", "invisible",
+    # issue 32: markers, masks, CSS !important and transform, auto radii, <use> sizing
+    # an <svg>, path data drawn up to its error, the page's edge
+    "markers", "mask_partial", "css_transform", "use_svg_size", "path_errors", "page_edge",
 ])
 def test_strokes_match_chromium(render_page, tmp_path, name):
     svg = FIXTURES / f"{name}.svg"

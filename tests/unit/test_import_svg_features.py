@@ -223,3 +223,11 @@ def test_glyphs_outside_the_font_are_named_greek_drawn_from_the_greek_set(tmp_pa
     assert "'Ж' U+0416" in messages and "drawn as '?'" in messages
     assert "'é' U+00E9" in messages and "without their accents" in messages
     assert "Ω" not in messages.replace("'Ωé Ж'", "")
+
+
+def test_outlines_are_drawn_only_for_shapes_with_an_area(tmp_path):
+    # a line never fills; a path along one line encloses nothing; a figure eight does
+    r = imported(tmp_path, '<line x1="0" y1="5" x2="50" y2="5"/>'
+                           '<path d="M 10 10 L 30 10 L 20 10"/>'
+                           '<path d="M 10 50 L 30 70 L 30 50 L 10 70 Z"/>')
+    assert r.stats["pen_down_mm"] == pytest.approx(2 * 20 + 2 * 20 * 2 ** 0.5)

@@ -79,6 +79,15 @@ def _where(elem: Element, tag: str) -> str:
     return f"<{tag} id=\"{ident}\">" if ident else f"<{tag}>"
 
 
+def _area(p: np.ndarray) -> float:
+    """Zero when the points lie on one line (a ring through them encloses nothing), else
+    the summed areas of the triangles they fan into from the first."""
+    if len(p) < 3:
+        return 0.0
+    d = p[1:] - p[0]
+    return float(np.abs(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0]).sum()) / 2
+
+
 def _unless_percent(value: str | None, vb: list[float]) -> str | None:
     """The root's width or height, None for a percentage when there is no viewBox."""
     if value is not None and value.strip().endswith("%") and not vb:
@@ -415,7 +424,7 @@ class SvgReader(ClipMixin, MarkerMixin):
         if tag in MARKED:
             self._markers(elem, tag, ctx)
         stroke = self._visible_stroke(ctx)
-        fill_colour = self._visible_fill(ctx)
+        fill_colour = self._visible_fill(ctx) if tag != "line" else None   # no area
         fills = self.fills.fill_for(((ctx.layer,) if ctx.layer else ()) + ctx.chain, fill_colour)
         mode = fills.mode
         if stroke is None and (fill_colour is None or mode == "none"):
@@ -433,9 +442,9 @@ class SvgReader(ClipMixin, MarkerMixin):
         if stroke is not None:
             self.emit(ctx, stroke, [p for p, _ in page if len(p) > 1])
         if fill_colour is not None and mode != "none":
-            if mode == "outline" and stroke is None:
+            if mode == "outline" and stroke is None:     # subpaths with an area
                 self.emit(ctx, fill_colour, [np.vstack([p, p[:1]]) if not c else p
-                                             for p, c in page if len(p) > 1])
+                                             for p, c in page if _area(p) > 1e-9])
             elif mode == "hatch":
                 area = fill.region([p for p, _ in page], ctx.style.get("fill-rule", "nonzero"))
                 self.emit(ctx, fill_colour, fill.hatch(area, fills.spacing, fills.angle,
