@@ -231,3 +231,14 @@ def test_outlines_are_drawn_only_for_shapes_with_an_area(tmp_path):
                            '<path d="M 10 10 L 30 10 L 20 10"/>'
                            '<path d="M 10 50 L 30 70 L 30 50 L 10 70 Z"/>')
     assert r.stats["pen_down_mm"] == pytest.approx(2 * 20 + 2 * 20 * 2 ** 0.5, abs=0.002)
+
+
+def test_the_preview_carries_the_outlines_of_filled_shapes_placed(tmp_path):
+    import json
+    r = imported(tmp_path, '<rect x="10" y="10" width="20" height="10" fill="red"/>'
+                           '<rect x="50" y="50" width="10" height="10" fill="none" '
+                           'stroke="black"/>', dx=5)
+    fills = json.loads(r.preview_path.read_text())["fills"]
+    assert len(fills) == 1                                   # the stroked one is not filled
+    xs, ys = zip(*fills[0], strict=True)
+    assert (min(xs), max(xs), min(ys), max(ys)) == pytest.approx((15, 35, 80, 90))

@@ -54,6 +54,7 @@ NOT_RENDERED = frozenset({
 })
 SHAPES = frozenset({"path", "rect", "circle", "ellipse", "line", "polyline", "polygon"})
 EDGE_MM = 0.01           # the page clip keeps what lies on the page's edge or this near it
+MAX_FILL_POINTS = 50_000   # outlines of filled shapes kept for the preview
 MAX_ELEMENTS = 500_000   # elements drawn, counting each <use> copy: bounds clone bombs
 MAX_DEPTH = 64
 LANGUAGES = ("en",)
@@ -121,6 +122,7 @@ class SvgReader(ClipMixin, MarkerMixin):
         self._page_clip: list[tuple[Layer, int, list[np.ndarray]]] = []
         self._warned: set[tuple[int, str]] = set()
         self._capture: list[np.ndarray] | None = None    # ClipMixin._captured
+        self.fill_points = 0
         self.root_style = ROOT_STYLE
 
     # ---- entry ---------------------------------------------------------------------
@@ -181,6 +183,7 @@ class SvgReader(ClipMixin, MarkerMixin):
             top = max(y for lay in layers for s in lay.strokes for _, y in s)
         for lay in layers:
             lay.strokes = [[(x, top - y) for x, y in s] for s in lay.strokes]
+            lay.fills = [[(x, top - y) for x, y in s] for s in lay.fills]
         return layers
 
     # ---- walking -------------------------------------------------------------------
@@ -441,7 +444,8 @@ class SvgReader(ClipMixin, MarkerMixin):
         page = [(curves.apply(ctx.m, p), closed) for p, closed in geo]
         if stroke is not None:
             self.emit(ctx, stroke, [p for p, _ in page if len(p) > 1])
-        if fill_colour is not None and mode != "none":
+        if fill_colour is not None and mode != "none" and self._capture is None:
+            self._note_fill(ctx, stroke or fill_colour, page)
             if mode == "outline" and stroke is None:     # subpaths with an area
                 self.emit(ctx, fill_colour, [np.vstack([p, p[:1]]) if not c else p
                                              for p, c in page if _area(p) > 1e-9])
@@ -449,6 +453,21 @@ class SvgReader(ClipMixin, MarkerMixin):
                 area = fill.region([p for p, _ in page], ctx.style.get("fill-rule", "nonzero"))
                 self.emit(ctx, fill_colour, fill.hatch(area, fills.spacing, fills.angle,
                                                        fills.cross))
+
+    def _note_fill(self, ctx: Ctx, colour: str, page: list[tuple[np.ndarray, bool]]) -> None:
+        """The outline of a shape drawn for its fill, for the preview (at most
+        MAX_FILL_POINTS points in all, each ring at most 256)."""
+        if self.fill_points >= MAX_FILL_POINTS:
+            return
+        key = ctx.layer if ctx.layer is not None else colour
+        layer = self.layers.get(key)
+        if layer is None:
+            layer = self.layers[key] = Layer(name=key, colour=colour)
+        for p, _ in page:
+            if len(p) > 2:
+                ring = p[:: max(1, len(p) // 256)]
+                self.fill_points += len(ring)
+                layer.fills.append(list(map(tuple, ring.tolist())))
 
     def _selected(self, ctx: Ctx, colour: str | None) -> bool:
         layers = self.options.layers
