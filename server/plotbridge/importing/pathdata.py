@@ -138,6 +138,18 @@ def _commands(d: str) -> tuple[list[tuple[str, list[str]]], str | None]:
     return out, error
 
 
+def _line_to(sub: Subpath, start: tuple[float, float], pts: list[tuple[float, float]]) -> None:
+    """Lines from `start` through `pts`, joined to a line run the subpath ends with (a
+    Python list until `parse` ends: no array a command)."""
+    if not pts:
+        return
+    last = sub.segments[-1] if sub.segments else None
+    if last is not None and last[0] == "L" and isinstance(last[1], list):
+        last[1].extend(pts)
+    else:
+        sub.segments.append(("L", [start, *pts]))
+
+
 def parse(d: str) -> PathData:
     """The path data as absolute segments, up to the first error."""
     commands, error = _commands(d)
@@ -152,40 +164,43 @@ def parse(d: str) -> PathData:
         if up == "Z":
             if sub is not None:
                 if (x, y) != sub.start:
-                    sub.segments.append(("L", np.array([[x, y], sub.start])))
+                    _line_to(sub, (x, y), [sub.start])
                 sub.closed = True
                 x, y = sub.start
             prev = "Z"
             continue
-        v = np.array(args, dtype=float)
-        if up in ("M", "L"):
-            pts = v.reshape(-1, 2)
-            if rel:
-                pts = np.cumsum(np.vstack([[x, y], pts]), axis=0)[1:]
+        if up in ("M", "L", "H", "V"):
+            vals = [float(a) for a in args]
+            pts: list[tuple[float, float]] = []
+            if up in ("M", "L"):
+                if rel:
+                    px, py = x, y
+                    for k in range(0, len(vals), 2):
+                        px += vals[k]
+                        py += vals[k + 1]
+                        pts.append((px, py))
+                else:
+                    pts = list(zip(vals[0::2], vals[1::2], strict=True))
+            else:
+                px, py = x, y
+                for v in vals:
+                    if up == "H":
+                        px = px + v if rel else v
+                    else:
+                        py = py + v if rel else v
+                    pts.append((px, py))
             if up == "M":
-                sub = Subpath((float(pts[0, 0]), float(pts[0, 1])))
+                sub = Subpath(pts[0])
                 subs.append(sub)
-                line = pts       # the pairs after the first are linetos
+                _line_to(sub, pts[0], pts[1:])      # the pairs after the first are linetos
             else:
                 sub = _ensure(subs, sub, x, y)
-                line = np.vstack([[x, y], pts])
-            if len(line) > 1:
-                sub.segments.append(("L", line))
-            x, y = float(pts[-1, 0]), float(pts[-1, 1])
+                _line_to(sub, (x, y), pts)
+            x, y = pts[-1]
             prev = up
             continue
         sub = _ensure(subs, sub, x, y)
-        if up in ("H", "V"):
-            k = 0 if up == "H" else 1
-            run = np.cumsum(np.concatenate([[(x, y)[k]], v]))[1:] if rel else v
-            pts = np.empty((len(v) + 1, 2))
-            pts[0] = (x, y)
-            pts[1:, k] = run
-            pts[1:, 1 - k] = (y, x)[k]
-            sub.segments.append(("L", pts))
-            x, y = float(pts[-1, 0]), float(pts[-1, 1])
-            prev = up
-            continue
+        v = np.array(args, dtype=float)
         step = ARGS[up]
         for j in range(0, len(v), step):
             a = v[j:j + step]
@@ -212,6 +227,9 @@ def parse(d: str) -> PathData:
             ctrl = (float(p[-2, 0]), float(p[-2, 1]))
             x, y = float(p[-1, 0]), float(p[-1, 1])
             prev = up
+    for one in subs:
+        one.segments = [(kind, np.array(data, dtype=float)) if isinstance(data, list)
+                        else (kind, data) for kind, data in one.segments]
     return PathData(subs, error)
 
 
