@@ -13,9 +13,13 @@
     names, not vpype's files):
     our SVG stage (parse, resolve, flatten) against vpype's `read` (target: no slower),
     and our whole import (parse, optimize, estimate, preview) against vpype's
-    `read linemerge linesort` (target: within 2x).
+    `read linemerge linesort` (target: within 2x);
+(e) inputs of the kinds that held an import worker (issue 32: path data that made a
+    regular expression backtrack, long runs of digits before an error, unclosed CSS
+    comments, G-code that made the dialect sniff quadratic), each beside vpype's `read`
+    for the SVGs (target: each under 1 s).
 
-Usage: python bench/import_bench.py [--lines N] [--skip a,b,c,d] [--sim-speed X]
+Usage: python bench/import_bench.py [--lines N] [--skip a,b,c,d,e] [--sim-speed X]
                                     [--board NAME] [--vpype-drawings DIR]
 """
 
@@ -43,7 +47,7 @@ from plotbridge.importing import (  # noqa: E402
 )
 from plotbridge.importing.detect import check_text, detect_format  # noqa: E402
 from plotbridge.importing.gcode import sniff_dialect  # noqa: E402
-from plotbridge.importing.models import ErrorLog  # noqa: E402
+from plotbridge.importing.models import ErrorLog, ImportFailed  # noqa: E402
 from plotbridge.importing.optimize import optimize_strokes, time_budget  # noqa: E402
 from plotbridge.importing.pipeline import SNIFF_CHARS  # noqa: E402
 from plotbridge.importing.svg import read_svg  # noqa: E402
@@ -297,6 +301,64 @@ def bench_vs_vpype(tmp: Path) -> None:
               f"[{'MET' if ours_opt <= vp_opt else 'NOT MET'}]")
 
 
+# ------------------------------------------------------- (e) the slowest kinds of input
+
+def hostile_inputs() -> dict[str, tuple[str, str]]:
+    """Inputs of the kinds that held an import worker (issue 32): name -> (file name,
+    text). Each is under 1 MB; the target is a time proportional to its size."""
+    head = ('<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="100mm" '
+            'viewBox="0 0 100 100">')
+    redos = "M0 0" + "L10.5 10.5" * 40 + "A1 1 0 0 1 2 2"
+    ruler = "M0 0" + "".join(f"L{k}.25 {k % 7}.5h.5v-1" for k in range(20_000)) + "a1 1 0 0 1 1 1"
+    return {
+        "issue 32's path": ("redos1.svg", head + f'<path stroke="black" fill="none" '
+                                                 f'd="{redos}"/></svg>'),
+        "issue 32's path (x2000)": ("redos.svg", head + "".join(
+            f'<path stroke="black" fill="none" d="{redos}"/>' for _ in range(2000)) + "</svg>"),
+        "one long path with an arc at its end": (
+            "ruler.svg", head + f'<path stroke="black" fill="none" d="{ruler}"/></svg>'),
+        "digits before a bad character": ("digits.svg", head + '<path stroke="black" d="M0 0L'
+                                          + "1" * 500_000 + 'x"/><line x2="9" '
+                                          'stroke="black"/></svg>'),
+        "unclosed CSS comments and blocks": ("css.svg", head + "<style>" + "a{/*" * 100_000
+                                             + "</style><line x2='9' stroke='black'/></svg>"),
+        "60 KB of M3 lines (the laser sniff)": ("m3.gcode", "M3\n" * 20_000
+                                                + "G0 X1 Y1\nM3\nG1 X5 Y5 F100\nM5\n"),
+        "unclosed comments (G-code)": ("paren.gcode", "(" * 500_000
+                                       + "\nG0 X1 Y1\nM3\nG1 X5 Y5 F100\nM5\n"),
+    }
+
+
+def bench_hostile(tmp: Path) -> None:
+    import vpype_cli
+
+    for name, (filename, text) in hostile_inputs().items():
+        src = tmp / filename
+        src.write_text(text)
+        t = time.perf_counter()
+        cpu = time.process_time()
+        try:
+            import_file(src, filename, tmp / f"out_{src.stem}", ImportOptions(fill="outline"),
+                        MachineProfile(width=300, height=220))
+            outcome = "imported"
+        except ImportFailed as e:
+            outcome = f"refused {e.status}: {e.errors[0]['message'][:40]}"
+        ours = time.perf_counter() - t
+        cpu = time.process_time() - cpu
+        size = len(text.encode())
+        line = (f"(e) {name}: {size / 1e6:.3f} MB, ours {ours:.2f} s, CPU {cpu:.2f} s "
+                f"({outcome})")
+        if filename.endswith(".svg"):
+            t = time.perf_counter()
+            try:
+                vpype_cli.execute(f"read '{src}'")
+                vp = f"{time.perf_counter() - t:.2f} s"
+            except Exception as e:    # vpype's own refusal, named
+                vp = f"fails after {time.perf_counter() - t:.2f} s ({type(e).__name__})"
+            line += f" vs vpype read {vp}"
+        print(line + f" [{'MET' if cpu < 1.0 else 'NOT MET'}: CPU under 1 s]")
+
+
 # ---------------------------------------------------------------- (d) SVG import speed
 
 def speed_drawings(tmp: Path, directory: Path | None) -> dict[str, Path]:
@@ -520,6 +582,8 @@ def main() -> int:
             bench_accuracy(tmp, args.sim_speed, args.board)
         if "d" not in skip:
             bench_svg_speed(tmp, args.vpype_drawings)
+        if "e" not in skip:
+            bench_hostile(tmp)
     return 0
 
 

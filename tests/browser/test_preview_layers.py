@@ -110,3 +110,13 @@ def test_layers_in_their_colours_and_progress_across_each_pen_change(desktop, se
     server.wait_job(job["id"], ("done",), 120)
     pixels(page, lambda n: n["blue"] < before["blue"] * 0.02)
     assert not errors
+
+
+def test_the_preview_geometry_keeps_the_filled_shapes(modules, tmp_path):
+    src = tmp_path / "filled.svg"
+    src.write_text('<svg xmlns="http://www.w3.org/2000/svg" width="50mm" height="50mm" '
+                   'viewBox="0 0 50 50"><circle cx="25" cy="25" r="10" fill="red"/></svg>')
+    r = import_file(src, "filled.svg", tmp_path / "out", ImportOptions(), MachineProfile())
+    data = json.loads(r.preview_path.read_text())
+    fills = run(modules, f"return m.buildGeometry({json.dumps(data)}).fills;")
+    assert fills == data["fills"] and len(fills) == 1 and len(fills[0]) > 8

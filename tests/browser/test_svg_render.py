@@ -91,6 +91,9 @@ def assert_agree(inked: np.ndarray, strokes: list[np.ndarray], reach: float) -> 
 @pytest.mark.parametrize("name", [
     "use_nested", "symbol_viewbox", "doctype_public", "illustrator_entities",
     "prefixed_namespace", "viewport_clip", "clip_path", "switch", "mask", "invisible",
+    # issue 32: markers, masks, CSS !important and transform, auto radii, <use> sizing
+    # an <svg>, path data drawn up to its error, the page's edge
+    "markers", "mask_partial", "css_transform", "use_svg_size", "path_errors", "page_edge",
 ])
 def test_strokes_match_chromium(render_page, tmp_path, name):
     svg = FIXTURES / f"{name}.svg"
@@ -123,3 +126,40 @@ def test_text_anchors_match_chromium(render_page, tmp_path):
                 "middle": lambda a: (a.min() + a.max()) / 2}[anchor]
         assert abs(pick(ours[:, 0]) - pick(theirs[:, 0])) <= 6, anchor   # 0.6 mm
         assert abs(ours[:, 1].max() - theirs[:, 1].max()) <= 6, anchor  # baseline
+
+
+PATH_LENGTH = """(ds) => ds.map((d) => {
+  const svg = document.createElementNS("http://www.w3.org/2000/svg", "svg");
+  const p = document.createElementNS("http://www.w3.org/2000/svg", "path");
+  p.setAttribute("d", d);
+  svg.appendChild(p);
+  document.body.appendChild(svg);
+  const b = p.getBBox();
+  const out = [p.getTotalLength(), b.x, b.y, b.x + b.width, b.y + b.height];
+  svg.remove();
+  return out;
+})"""
+
+
+@pytest.mark.parametrize("d", [
+    "M 25 5 a 8 6 30 1 1 10 10 S 50 20 55 5 T 55 20",
+    "M 5 20 q 5 -5 10 0 t 10 0 t 10 0 L 40 25 L 45,,30",      # up to the double comma
+    "M 5 5 L 20 5 L 20 15 x L 40 40",                         # up to the 'x'
+    "M5 38h10v-2h10l2-.5.5 1.5",
+    "M 10 10 A 5 5 0 1 0 30 10 A 20 10 -45 0 1 40 30",
+    "M 0 0 A 1 1 0 0 1 40 0",                                  # radii scaled up
+    "M5 5a3 3 0 1110 0z m 20 0 c 5 -10 10 10 15 0 s 5 10 10 0",
+    "M 10 10 L 20 20 M 30 30",
+])
+def test_path_data_length_and_bounds_match_chromium(render_page, d):
+    """The importer's reading of path data (pathdata.py) against Chromium's: the length
+    of what is drawn (getTotalLength) and its bounding box (getBBox), broken data
+    included (both draw up to the first error)."""
+    from plotbridge.importing import curves
+
+    (length, *box), = render_page.evaluate(PATH_LENGTH, [d])
+    geo, _ = curves.path_data(d, 0.0005)
+    ours = sum(float(np.hypot(*np.diff(p, axis=0).T).sum()) for p, _ in geo)
+    assert ours == pytest.approx(length, rel=2e-3, abs=1e-3)
+    pts = np.vstack([p for p, _ in geo if len(p) > 1])     # a lone moveto draws nothing
+    assert [*pts.min(axis=0), *pts.max(axis=0)] == pytest.approx(box, abs=0.01)

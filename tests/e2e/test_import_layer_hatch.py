@@ -59,7 +59,7 @@ def test_hatch_per_layer_and_colour_plots_layer_by_layer(server, plotter):
     server.home()
     plotter.clear()
     response = server.client.post("/api/jobs", files={"file": ("h.svg", SVG)},
-                                  data={"layer_fill": json.dumps(LAYER_FILL)})
+                                  data={"layer_fill": json.dumps(LAYER_FILL), "fill": "none"})
     assert response.status_code == 201, response.text
     uploaded = response.json()
     # moved by a re-import: the job keeps its layers' own fills
@@ -72,7 +72,8 @@ def test_hatch_per_layer_and_colour_plots_layer_by_layer(server, plotter):
         return [(lay["name"], lay["strokes"], lay["pen_down_mm"]) for lay in j["layers"]]
     assert ink(job) == ink(uploaded)
     assert server.client.post(f"/api/jobs/{job['id']}/start").status_code == 200
-    # the orange rectangle has no entry and the import's fill is none: not drawn
+    # the orange rectangle has no entry and the import's fill is none (asked for; the
+    # default outlines): not drawn
     assert [lay["name"] for lay in job["layers"]] == ["rows", "columns", "#008000"]
     data = server.preview(job["id"])
     expected = [layer_strokes(data, lay) for lay in job["layers"]]

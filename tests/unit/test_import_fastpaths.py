@@ -2,8 +2,8 @@
 common lines (native/gcodescan.c, read a chunk at a time, written in bulk by
 ProgramWriter.moves through native/movelines.c) against every line through the general
 parser and each move written alone; the preview's strokes written by
-native/previewjson.c against json.dumps; SVG path data read in bulk against
-svgelements."""
+native/previewjson.c against json.dumps. Both ways go through penplace.py (pen-downs
+with no move dropped, the first pen-down placed with the drawing)."""
 
 from __future__ import annotations
 
@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile, curves
+from plotbridge.importing import ImportFailed, ImportOptions, MachineProfile
 from plotbridge.importing.detect import line_chunks
 from plotbridge.importing.gcode import read_ops
 from plotbridge.importing.models import ErrorLog
 from plotbridge.importing.ops import PATH, single_moves
+from plotbridge.importing.penplace import placed_pens
 from plotbridge.importing.pipeline import write_program
 from plotbridge.importing.placement import Transform
 from plotbridge.importing.preview import PreviewBuilder
@@ -40,8 +41,8 @@ def _write(src: Path, dest: Path, options: ImportOptions, fast: bool, transform:
     def ops():
         chunks = line_chunks(src, "utf-8", chunk)
         if fast:
-            return read_ops(chunks, options, errors)
-        return single_moves(read_ops(chunks, options, errors, fast=False))
+            return placed_pens(read_ops(chunks, options, errors), errors)
+        return placed_pens(single_moves(read_ops(chunks, options, errors, fast=False)), errors)
 
     try:
         r = write_program(ops, "gcode", dest, transform, PROFILE, errors)
@@ -211,57 +212,6 @@ def test_generated_gcode_that_stays_on_the_page_imports_the_same(tmp_path):
     program, _, result = _write(src, tmp_path / "again", ImportOptions(), True, Transform(),
                                 1 << 18)
     assert program is not None and result[0] > 20000
-
-
-def _general_subpaths(d: str, tol: float, monkeypatch) -> list:
-    with monkeypatch.context() as m:
-        m.setattr(curves, "_bulk_subpaths", lambda d, tol: None)
-        return curves.path_subpaths(d, tol)
-
-
-@pytest.mark.parametrize("d", [
-    "M 10 10 L 20 20 30 10 Z",
-    "m10,10 20,0 0,20 -20,0z m 5 5 l 1 1",
-    "M1-2L3.5.5H10V-3h2v-2Z L 4 4",
-    "M0 0C10 0 10 10 20 10S30 20 40 20",             # S: svgelements
-    "M0 0c10 0 10 10 20 10 5 5 5 5 10 0q 3 3 6 0Q 50 50 60 60",
-    "M 1e1 2E-1 l 1e0 1 M 3 3",
-    "M -0 -0 L -0 5",
-    "M 5 5 A 3 3 0 0 1 10 10",                       # A: svgelements
-    "M 1 1 L 2",                                     # odd: svgelements
-    "L 1 1 2 2",                                     # no moveto first: svgelements
-])
-def test_path_data_read_in_bulk_as_svgelements_reads_it(d, monkeypatch):
-    try:
-        general = _general_subpaths(d, 0.01, monkeypatch)
-    except ValueError:      # svgelements refuses it (the element is skipped with a warning)
-        with pytest.raises(ValueError):
-            curves.path_subpaths(d, 0.01)
-        return
-    bulk = curves.path_subpaths(d, 0.01)
-    assert len(bulk) == len(general)
-    for (a, ca), (b, cb) in zip(bulk, general, strict=True):
-        assert ca == cb
-        assert a.shape == b.shape
-        assert np.array_equal(a, b) and (np.signbit(a) == np.signbit(b)).all()
-
-
-def test_svg_fixtures_paths_read_in_bulk_as_svgelements_reads_them(monkeypatch):
-    from plotbridge.importing.svgxml import parse_svg_xml
-
-    seen = 0
-    for src in sorted((FIXTURES / "svg").glob("*.svg")):
-        for el in parse_svg_xml(src.read_bytes()).iter():
-            d = el.get("d")
-            if not d or curves._bulk_subpaths(d, 0.01) is None:
-                continue
-            seen += 1
-            bulk = curves.path_subpaths(d, 0.01)
-            general = _general_subpaths(d, 0.01, monkeypatch)
-            assert [c for _, c in bulk] == [c for _, c in general]
-            assert all(np.array_equal(a, b) for (a, _), (b, _) in zip(bulk, general,
-                                                                      strict=True))
-    assert seen > 0
 
 
 def test_preview_strokes_written_natively_as_json_dumps_writes_them(tmp_path):

@@ -18,8 +18,9 @@ FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "gcode"
 CASES = {
     # name: (pen-down mm, bounds, layer count, words that must appear in the warnings)
     "vpype_gwrite": (100.0, (10, 10, 40, 30), 1, ("feed",)),
-    # the registration dot, then M01's pause: a layer of its own
-    "unicorn_m300": (70.0, (0, 0, 50, 40), 2, ("M18", "M17")),
+    # the registration dot (a pen-down with no move) is not drawn nor in the bounds;
+    # M01's pause before anything is drawn names the one layer
+    "unicorn_m300": (70.0, (10, 10, 50, 40), 1, ("M18", "M17", "pen-down with no move")),
     "makelangelo": (60.0, (10, 10, 60, 30), 2, ()),
     "fusion360": (100.0, (10, 10, 40, 30), 1, ()),
     "inkscape_laser": (50.0 + math.hypot(10, 20), (10, 10, 60, 30), 1, ()),
@@ -122,3 +123,86 @@ def test_m280_threshold_and_explicit_dialect(tmp_path):
 ])
 def test_servo_words_are_sniffed_in_either_case(head, dialect):
     assert sniff_dialect(head) == dialect
+
+
+# ---- issue 32: dwell units, pen-downs placed with the drawing, dots ----------------
+
+@pytest.mark.parametrize(("head", "dwell", "seconds"), [
+    ("M300 S50\n", "G4 P150 (wait 150ms)", "0.150"),          # Unicorn: milliseconds
+    ("M280 P0 S90 T250\n", "G4 P250", "0.250"),              # Makelangelo (Marlin): ms
+    ("M280 P0 S90 T250\n", "G4 S2", "2.000"),                # Marlin's S: seconds
+    ("M5\n", "G4 P1.5", "1.500"),                            # GRBL: seconds
+])
+def test_dwells_are_written_in_grbl_seconds_per_dialect(tmp_path, head, dwell, seconds):
+    down = {"M300 S50\n": "M300 S30", "M280 P0 S90 T250\n": "M280 P0 S20"}.get(head, "M3")
+    up = {"M300 S50\n": "M300 S50", "M280 P0 S90 T250\n": "M280 P0 S90"}.get(head, "M5")
+    r = run_import(tmp_path, f"G21\nG90\n{head}G0 X10 Y10\n{down}\n{dwell}\nG1 X20 Y10 F600\n"
+                   f"{up}\n")
+    assert f"G4 P{seconds}" in program_lines(r)
+    assert r.estimate_s < 5 + float(seconds)
+
+
+def test_the_unicorn_file_is_estimated_with_its_dwells_in_milliseconds(tmp_path):
+    r = run_import(tmp_path, (FIXTURES / "unicorn_m300.gcode").read_text(), "u.gcode")
+    dwells = [float(ln[4:]) for ln in program_lines(r) if ln.startswith("G4")]
+    assert dwells and all(d == pytest.approx(0.15) for d in dwells)
+    assert r.estimate_s < 10
+
+
+VPYPE_PLACED = """G21
+G90
+M3
+G0 X0 Y0
+M5
+G0 X10 Y10
+M3
+G1 X50 Y10 F3000
+G1 X50 Y40
+M5
+"""
+
+
+def test_a_pen_down_with_no_move_is_neither_drawn_nor_in_the_bounds(tmp_path):
+    r = run_import(tmp_path, VPYPE_PLACED, "v.gcode", paper="A5", fit=True, margin=10)
+    lines = program_lines(r)
+    first_down = lines.index("M3")
+    assert lines[first_down - 1].startswith("G0 ") and lines.count("M3") == 1
+    # fitted from the stroke's own bounds (40 x 30 mm) into A5's 128 x 190 mm
+    w = r.bounds["max_x"] - r.bounds["min_x"]
+    assert w == pytest.approx(128, abs=0.01)
+    assert r.stats["pen_down_mm"] == pytest.approx(128 / 40 * 70, rel=1e-3)
+    assert any("pen-down with no move" in w["message"] for w in r.warnings)
+
+
+def test_a_first_stroke_from_the_origin_goes_down_where_placement_puts_it(tmp_path):
+    r = run_import(tmp_path, "G21\nG90\nM3\nG1 X20 Y0 F600\nG1 X20 Y10\nM5\n", "o.gcode",
+                   dx=30, dy=40)
+    lines = program_lines(r)
+    k = lines.index("M3")
+    assert lines[k - 1] == "G0 X30.000 Y40.000"
+    assert r.stats["pen_down_mm"] == pytest.approx(30)
+    assert (r.bounds["min_x"], r.bounds["min_y"]) == (30, 40)
+
+
+def test_dots_in_a_file_of_common_lines_are_dropped_and_counted(tmp_path):
+    strokes = "".join(f"G0 X{5 + k} Y5\nM3\nM5\nG0 X{5 + k} Y20\nM3\nG1 X{6 + k} Y30 F900\nM5\n"
+                      for k in range(50))
+    r = run_import(tmp_path, "G21\nG90\n" + strokes, "d.gcode")
+    assert program_lines(r).count("M3") == 50
+    assert r.bounds["min_y"] == 20
+    (dots,) = [w for w in r.warnings if "pen-down with no move" in w["message"]]
+    assert dots["count"] == 50 and dots["line"] == 4
+
+
+def test_the_laser_sniff_and_comment_stripping_are_linear(tmp_path):
+    import time
+    for head in ("M3\n" * 300_000, "(" * 1_000_000, "G1 X1 (" * 150_000, "M3 " * 300_000):
+        start = time.process_time()
+        sniff_dialect(head)
+        assert time.process_time() - start < 1.0, head[:20]
+
+
+def test_travel_outside_the_area_that_comes_back_before_a_stroke_is_clamped(tmp_path):
+    r = run_import(tmp_path, "G0 X-5 Y-5\nG0 X10 Y10\nM3\nG1 X20 Y10 F1000\nM5\n", "t.gcode")
+    assert any("clamped" in w["message"] and w["line"] == 1 for w in r.warnings)
+    assert r.stats["pen_down_mm"] == pytest.approx(10)

@@ -66,10 +66,10 @@ def test_each_layer_and_colour_gets_its_own_hatch(tmp_path):
 
 
 def test_a_layer_can_hatch_when_the_import_does_not(tmp_path):
-    r = imported(tmp_path, {"B": {"hatch_spacing": 1, "hatch_cross": True}})
+    r = imported(tmp_path, {"B": {"hatch_spacing": 1, "hatch_cross": True}}, fill="none")
     assert [lay["name"] for lay in r.layers] == ["B"]
     # cross-hatch at 45 and 135 degrees: both directions, about twice one hatch's ink
-    one = imported(tmp_path, {"B": {"hatch_spacing": 1}})
+    one = imported(tmp_path, {"B": {"hatch_spacing": 1}}, fill="none")
     assert r.stats["pen_down_mm"] > 1.8 * one.stats["pen_down_mm"]
 
 

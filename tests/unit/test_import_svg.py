@@ -46,11 +46,11 @@ def test_plain_text_entities_are_expanded(tmp_path):
     assert run_import(tmp_path, doc, "d.svg").stats["pen_down_mm"] == pytest.approx(30)
 
 
-def test_nothing_visible_is_refused_and_fills_are_drawn_on_request(tmp_path):
+def test_filled_shapes_are_outlined_by_default_hatched_or_left_out_on_request(tmp_path):
     doc = HEAD + '<rect x="10" y="10" width="20" height="10" fill="red"/></svg>'
-    e = refused(tmp_path, doc)
+    e = refused(tmp_path, doc, fill="none")
     assert "fill=outline or fill=hatch" in e.errors[0]["message"]
-    r = run_import(tmp_path, doc, "d.svg", fill="outline")
+    r = run_import(tmp_path, doc, "d.svg")      # outline: as vpype and AxiDraw draw them
     assert r.stats["pen_down_mm"] == pytest.approx(60)
     hatch = run_import(tmp_path, doc, "d.svg", fill="hatch", hatch_spacing=1, hatch_angle=0)
     assert hatch.stats["pen_down_mm"] == pytest.approx(10 * 20 + 9 * 1, rel=0.02)  # joined

@@ -18,7 +18,7 @@ from plotbridge.importing.svg import read_svg
 
 TAGS = ["g", "path", "rect", "circle", "ellipse", "line", "polyline", "polygon", "use",
         "symbol", "defs", "clipPath", "mask", "switch", "svg", "text", "tspan", "textPath",
-        "a", "style", "image", "foo"]
+        "a", "style", "image", "foo", "marker"]
 NUMBER = st.one_of(st.integers(-50, 300).map(str), st.floats(-1e6, 1e6).map(repr),
                    st.sampled_from(["", "nan", "inf", "-0", "1e308", "50%", "3mm", "2em",
                                     "abc", "auto", "1 2", "0"]))
@@ -33,13 +33,16 @@ ATTR = st.one_of(
     st.tuples(st.sampled_from(["transform"]),
               st.sampled_from(["rotate(30)", "scale(0)", "matrix(1 2 3)", "translate(",
                                "skewX(89.9999)", "scale(1e300)", "rotate(a)"])),
-    st.tuples(st.sampled_from(["href", "clip-path", "mask", "id"]),
+    st.tuples(st.sampled_from(["href", "clip-path", "mask", "id", "marker-start", "marker-mid",
+                               "marker-end", "marker"]),
               st.sampled_from(["#a", "#b", "url(#a)", "url(#b)", "a", "b", "#", "url(#"])),
     st.tuples(st.sampled_from(["stroke", "fill", "style", "viewBox", "fill-rule",
                                "systemLanguage", "text-anchor", "display", "visibility"]),
               st.sampled_from(["black", "none", "red", "url(#a)", "currentColor",
                                "stroke:blue;fill:none", "0 0 10 10", "0 0 0 0", "evenodd",
-                               "en", "middle", "none", "hidden", "rgba(0,0,0,0)", ";;:"])),
+                               "en", "middle", "none", "hidden", "rgba(0,0,0,0)", ";;:",
+                               "transform: rotate(30deg)", "stroke: red !important",
+                               "font-size: 2em"])),
 )
 NAMES = {"stroke", "fill", "style", "viewBox", "fill-rule", "systemLanguage", "text-anchor",
          "display", "visibility", "href", "clip-path", "mask", "id", "transform", "d",

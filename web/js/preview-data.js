@@ -86,6 +86,8 @@ export function buildGeometry(preview) {
   return {
     strokes, travel, lineEnd, expectedLines: line + 1, bounds: boundsOf(strokes),
     lines: strokeLines(preview, nStrokes), colours: colourRuns(preview, strokes),
+    // outlines of the SVG's filled shapes (drawn as outlines or hatched): shown tinted
+    fills: polylines(preview && preview.fills),
   };
 }
 

@@ -23,6 +23,7 @@ const COLORS = {
   penDown: "#e03131",
   penUp: "#212529",
   picked: "#2b8a3e",
+  filled: "rgba(28, 63, 148, 0.12)",
 };
 const CLICK_PX = 4; // a press that moves less than this is a click (picks a point), not a pan
 const SETTLE_MS = 120; // after the last pan/zoom event, re-render crisp
@@ -360,6 +361,21 @@ export class PreviewCanvas {
         }
       });
     });
+    if (g && g.fills.length) {
+      // the shapes the SVG filled, tinted under the strokes (even-odd: holes stay clear)
+      steps.push(() => {
+        const path = new Path2D();
+        for (const ring of g.fills) {
+          ring.forEach(([x, y], i) => {
+            if (i) path.lineTo(t.a * x + t.e, t.f - t.a * y);
+            else path.moveTo(t.a * x + t.e, t.f - t.a * y);
+          });
+          path.closePath();
+        }
+        ctx.fillStyle = COLORS.filled;
+        ctx.fill(path, "evenodd");
+      });
+    }
     if (g) {
       chunkSteps(g.travel, this.travelBoxes, (from, to) => [[from, to, COLORS.travel]]);
       // strokes still to draw in their layer's colour, the drawn part in one colour; the

@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from .models import ErrorLog
 from .ops import Stroke
 
-_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+_NUMBER = re.compile(r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?")
 
 
 def read_coords(lines: Iterable[tuple[int, str]], errors: ErrorLog) -> list[Stroke]:

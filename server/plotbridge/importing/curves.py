@@ -1,8 +1,6 @@
 """SVG geometry to polylines: path data, basic shapes, affine transforms.
 
-Curves are cut into as many chords as their curvature needs for the tolerance,
-computed once per segment (no adaptive refinement): for a Bézier the chord error of
-n equal parameter steps is at most max|B''| / (8 n²).
+Path data is read by pathdata.py; transforms here, both in one linear pass.
 """
 
 from __future__ import annotations
@@ -11,11 +9,12 @@ import math
 import re
 
 import numpy as np
-import svgelements as se
+
+from . import pathdata
 
 Affine = tuple[float, float, float, float, float, float]   # a b c d e f (SVG matrix())
 IDENTITY: Affine = (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
-MAX_SEGMENT_POINTS = 1 << 14
+MAX_SEGMENT_POINTS = pathdata.MAX_SEGMENT_POINTS
 
 
 def compose(m: Affine, n: Affine) -> Affine:
@@ -26,9 +25,84 @@ def compose(m: Affine, n: Affine) -> Affine:
             a * e2 + c * f2 + e, b * e2 + d * f2 + f)
 
 
-def parse_transform(text: str) -> Affine:
-    m = se.Matrix(text)
-    return (m.a, m.b, m.c, m.d, m.e, m.f)
+# A transform list (the attribute, or the CSS property with units) read in one linear
+# pass: a function name and its parenthesised arguments, each a number with a unit.
+_TF_TOKEN = re.compile(rf"[ \t\n\f\r,]*(?:([A-Za-z]+)[ \t\n\f\r]*\(|({pathdata.NUMBER})"
+                       r"([A-Za-z%]*)|(\))|(.))", re.S)
+_TF_ARGS = {"matrix": (6,), "translate": (1, 2), "translatex": (1,), "translatey": (1,),
+            "scale": (1, 2), "scalex": (1,), "scaley": (1,), "rotate": (1, 3),
+            "skewx": (1,), "skewy": (1,), "skew": (1, 2)}
+_ANGLE = {"": 1.0, "deg": 1.0, "rad": 180 / math.pi, "grad": 0.9, "turn": 360.0}
+_LENGTH_UNITS = {"": 1.0, "px": 1.0, "mm": 96 / 25.4, "cm": 96 / 2.54, "in": 96.0,
+                 "pt": 96 / 72, "pc": 16.0}
+
+
+def _tf_one(name: str, v: list[float]) -> Affine:
+    if name == "matrix":
+        return (v[0], v[1], v[2], v[3], v[4], v[5])
+    if name.startswith("translate"):
+        tx, ty = (v[0], v[1] if len(v) > 1 else 0.0) if name == "translate" else \
+            ((v[0], 0.0) if name == "translatex" else (0.0, v[0]))
+        return (1.0, 0.0, 0.0, 1.0, tx, ty)
+    if name.startswith("scale"):
+        sx, sy = (v[0], v[1] if len(v) > 1 else v[0]) if name == "scale" else \
+            ((v[0], 1.0) if name == "scalex" else (1.0, v[0]))
+        return (sx, 0.0, 0.0, sy, 0.0, 0.0)
+    if name == "rotate":
+        a = math.radians(v[0])
+        c, s = math.cos(a), math.sin(a)
+        r: Affine = (c, s, -s, c, 0.0, 0.0)
+        if len(v) == 3:
+            r = compose((1.0, 0.0, 0.0, 1.0, v[1], v[2]),
+                        compose(r, (1.0, 0.0, 0.0, 1.0, -v[1], -v[2])))
+        return r
+    ax = math.tan(math.radians(v[0])) if name in ("skewx", "skew") else 0.0
+    ay = math.tan(math.radians(v[1] if name == "skew" and len(v) > 1 else
+                               v[0] if name == "skewy" else 0.0))
+    return (1.0, ay, ax, 1.0, 0.0, 0.0)
+
+
+def parse_transform(text: str | None) -> Affine:
+    """The transform list of an attribute or of the CSS `transform` property (angles in
+    deg, rad, grad or turn, lengths in px or absolute units); `none` is the identity.
+    ValueError naming what is wrong."""
+    m = IDENTITY
+    if text is None or text.strip() in ("", "none"):
+        return m
+    name = ""
+    vals: list[float] = []
+    for tok in _TF_TOKEN.finditer(text.rstrip(" \t\n\f\r")):
+        fn, num, unit, close, bad = tok.groups()
+        if fn is not None:
+            if name:
+                raise ValueError(f"'{fn}(' inside '{name}(' in transform '{text[:60]}'")
+            name = fn.lower()
+            if name not in _TF_ARGS:
+                raise ValueError(f"unknown transform function '{fn}'")
+            vals = []
+        elif num is not None:
+            if not name:
+                raise ValueError(f"number outside a function in transform '{text[:60]}'")
+            unit = unit.lower()
+            angle = name.startswith(("rotate", "skew")) and (name != "rotate" or not vals)
+            table = _ANGLE if angle else _LENGTH_UNITS if name.startswith(("translate", "rotate")) \
+                else {"": 1.0}
+            if unit not in table:
+                raise ValueError(f"'{num}{unit}' in {name}() of transform '{text[:60]}'")
+            vals.append(float(num) * table[unit])
+        elif close is not None:
+            if not name:
+                raise ValueError(f"unexpected ')' in transform '{text[:60]}'")
+            if len(vals) not in _TF_ARGS[name]:
+                counts = " or ".join(map(str, _TF_ARGS[name]))
+                raise ValueError(f"{name}() takes {counts} numbers in transform '{text[:60]}'")
+            m = compose(m, _tf_one(name, vals))
+            name = ""
+        else:
+            raise ValueError(f"unexpected '{bad}' in transform '{text[:60]}'")
+    if name:
+        raise ValueError(f"'{name}(' is not closed in transform '{text[:60]}'")
+    return m
 
 
 def scale_of(m: Affine) -> float:
@@ -47,147 +121,15 @@ def apply(m: Affine, pts: np.ndarray) -> np.ndarray:
     return out
 
 
-def _bezier(p: np.ndarray, tol: float) -> np.ndarray:
-    """Points of a quadratic (3 control points) or cubic (4) Bézier after the start."""
-    if len(p) == 3:
-        acc = 2 * np.hypot(*(p[0] - 2 * p[1] + p[2]))
-    else:
-        acc = 6 * max(np.hypot(*(p[0] - 2 * p[1] + p[2])), np.hypot(*(p[1] - 2 * p[2] + p[3])))
-    n = min(max(1, math.ceil(math.sqrt(acc / (8 * tol)))), MAX_SEGMENT_POINTS)
-    if n == 1:
-        return p[-1:]
-    t = np.linspace(0.0, 1.0, n + 1)[1:, None]
-    u = 1 - t
-    if len(p) == 3:
-        return u * u * p[0] + 2 * u * t * p[1] + t * t * p[2]
-    return u * u * u * p[0] + 3 * u * u * t * p[1] + 3 * u * t * t * p[2] + t * t * t * p[3]
-
-
-def _arc(seg: se.Arc, tol: float) -> np.ndarray:
-    r = max(abs(seg.rx or 0.0), abs(seg.ry or 0.0))
-    if r <= 0 or not seg.sweep:
-        return np.array([[seg.end.x, seg.end.y]])
-    step = 2 * math.acos(max(1 - tol / r, -1.0))
-    n = min(max(1, math.ceil(abs(seg.sweep) / max(step, 1e-9))), MAX_SEGMENT_POINTS)
-    return np.asarray(seg.npoint(np.linspace(0.0, 1.0, n + 1)[1:]), dtype=float)
-
-
-# Path data of lines and Béziers only (what plotting tools mostly write) is read here in
-# bulk; anything else (arcs, smooth curves, unusual syntax) by svgelements, segment by
-# segment. The number grammar and separators are svgelements' own, so both read the
-# same numbers; the unit tests compare the two.
-_NUM = r"[-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?"
-_PATH_BULK = re.compile(rf"[ ,\t\n\f\r]*[Mm](?:[ ,\t\n\f\r]+|[MmLlHhVvZzCcQq]|{_NUM})*")
-_PATH_TOKEN = re.compile(rf"([MmLlHhVvZzCcQq])|({_NUM})")
-_PAIRS = {"M": 2, "L": 2, "H": 1, "V": 1, "Z": 0, "C": 6, "Q": 4}
-
-
-def _bulk_subpaths(d: str, tol: float) -> list[tuple[np.ndarray, bool]] | None:
-    """path_subpaths for path data of M, L, H, V, Z, C and Q commands; None for other
-    path data."""
-    if _PATH_BULK.fullmatch(d) is None:
-        return None
-    commands: list[tuple[str, list[str]]] = []
-    for cmd, num in _PATH_TOKEN.findall(d):
-        if cmd:
-            commands.append((cmd, []))
-        else:
-            commands[-1][1].append(num)
-    out: list[tuple[np.ndarray, bool]] = []
-    cur: list[np.ndarray] = []
-    closed = False
-    x = y = sx = sy = 0.0
-    started = False
-    for cmd, nums in commands:
-        up = cmd.upper()
-        size = _PAIRS[up]
-        if (len(nums) == 0) != (size == 0) or (size and len(nums) % size):
-            return None
-        rel = cmd != up and started
-        if up == "Z":
-            cur.append(np.array([[sx, sy]]))
-            closed = True
-            x, y = sx, sy
-            continue
-        v = np.array(nums, dtype=float)
-        if up in ("M", "L"):
-            pts = v.reshape(-1, 2)
-            if rel:
-                pts = np.cumsum(np.vstack([[x, y], pts]), axis=0)[1:]
-            elif cmd == "m" and len(pts) > 1:    # the first pair absolute, then relative
-                pts = np.cumsum(pts, axis=0)
-            if up == "M":
-                if cur:
-                    out.append((np.vstack(cur), closed))
-                cur, closed = [], False
-                sx, sy = pts[0]
-                started = True
-            cur.append(pts)
-        elif up in ("H", "V"):
-            k = 0 if up == "H" else 1
-            run = np.cumsum(np.concatenate([[(x, y)[k]], v]))[1:] if rel else v
-            pts = np.empty((len(v), 2))
-            pts[:, k] = run
-            pts[:, 1 - k] = (y, x)[k]
-            cur.append(pts)
-        else:
-            n = size // 2
-            ctrl = v.reshape(-1, n, 2)
-            px, py = x, y
-            for seg in ctrl:
-                if rel:
-                    seg = np.add(seg, (px, py))
-                cur.append(_bezier(np.vstack([[px, py], seg]), tol))
-                px, py = float(seg[-1][0]), float(seg[-1][1])
-            x, y = px, py
-            continue
-        x, y = float(pts[-1][0]), float(pts[-1][1])
-    if cur:
-        out.append((np.vstack(cur), closed))
-    return out
+def path_data(d: str, tol: float) -> tuple[list[tuple[np.ndarray, bool]], str | None]:
+    """(points, closed) of each subpath of path data in user units, drawn up to the
+    first error, and that error."""
+    pd = pathdata.parse(d)
+    return pathdata.flatten(pd, tol), pd.error
 
 
 def path_subpaths(d: str, tol: float) -> list[tuple[np.ndarray, bool]]:
-    """(points, closed) of each subpath of path data, in user units."""
-    bulk = _bulk_subpaths(d, tol)
-    if bulk is not None:
-        return bulk
-    path = se.Path(d)
-    out: list[tuple[np.ndarray, bool]] = []
-    cur: list = []
-    closed = False
-
-    def flush() -> None:
-        if cur:
-            pts = np.vstack(cur) if len(cur) > 1 else np.asarray(cur[0], dtype=float)
-            out.append((pts.reshape(-1, 2), closed))
-
-    for seg in path:
-        if isinstance(seg, se.Move):
-            flush()
-            cur, closed = [np.array([[seg.end.x, seg.end.y]])], False
-            continue
-        if seg.start is None or seg.end is None:
-            continue
-        if not cur:
-            cur = [np.array([[seg.start.x, seg.start.y]])]
-        if isinstance(seg, se.Close):
-            cur.append(np.array([[seg.end.x, seg.end.y]]))
-            closed = True
-        elif isinstance(seg, se.Line):
-            cur.append(np.array([[seg.end.x, seg.end.y]]))
-        elif isinstance(seg, se.QuadraticBezier):
-            cur.append(_bezier(np.array([[seg.start.x, seg.start.y], [seg.control.x, seg.control.y],
-                                         [seg.end.x, seg.end.y]]), tol))
-        elif isinstance(seg, se.CubicBezier):
-            cur.append(_bezier(np.array([[seg.start.x, seg.start.y],
-                                         [seg.control1.x, seg.control1.y],
-                                         [seg.control2.x, seg.control2.y],
-                                         [seg.end.x, seg.end.y]]), tol))
-        elif isinstance(seg, se.Arc):
-            cur.append(_arc(seg, tol))
-    flush()
-    return out
+    return path_data(d, tol)[0]
 
 
 def ellipse(cx: float, cy: float, rx: float, ry: float, tol: float) -> np.ndarray:
@@ -214,3 +156,28 @@ def rounded_rect(x: float, y: float, w: float, h: float, rx: float, ry: float,
     ]
     pts = np.vstack(parts)
     return np.vstack([pts, pts[:1]])
+
+
+def viewbox_transform(vb: list[float], x: float, y: float, w: float, h: float,
+                      par: str | None) -> Affine:
+    """The viewBox mapped into the viewport (x, y, w, h) as preserveAspectRatio says."""
+    vx, vy, vw, vh = vb
+    sx, sy = w / vw, h / vh
+    words = (par or "xMidYMid meet").split()
+    align = words[0] if words else "xMidYMid"
+    if align == "defer" and len(words) > 1:
+        words = words[1:]
+        align = words[0]
+    if align == "none":
+        return (sx, 0.0, 0.0, sy, x - vx * sx, y - vy * sy)
+    s = max(sx, sy) if len(words) > 1 and words[1] == "slice" else min(sx, sy)
+    tx, ty = x - vx * s, y - vy * s
+    if "xMid" in align:
+        tx += (w - vw * s) / 2
+    elif "xMax" in align:
+        tx += w - vw * s
+    if "YMid" in align:
+        ty += (h - vh * s) / 2
+    elif "YMax" in align:
+        ty += h - vh * s
+    return (s, 0.0, 0.0, s, tx, ty)

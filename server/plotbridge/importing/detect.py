@@ -15,8 +15,8 @@ SVG_EXT = {".svg"}
 COORD_EXT = {".txt", ".coords", ".xy", ".csv"}
 _CHUNK = 1 << 20
 _SNIFF = 1 << 16
-_GCODE_LINE = re.compile(r"^\s*(?:N\d+\s*)?[GM]\d", re.I | re.M)
-_NUMBER_LINE = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
+_GCODE_LINE = re.compile(r"^[ \t]*(?:N\d+[ \t]*)?[GM]\d", re.I | re.M)
+_NUMBER_LINE = re.compile(r"^\s*[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?\s*$")
 
 
 def check_text(path: Path) -> str:

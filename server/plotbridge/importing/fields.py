@@ -17,7 +17,8 @@ _FALSE = ("0", "false", "no", "off", "")
 # field: (kind, choices or bounds, description) -- also the OpenAPI description
 FIELDS: dict[str, tuple[str, Any, str]] = {
     "pen_dialect": ("choice", PEN_DIALECTS, "G-code pen convention (auto detects it)"),
-    "fill": ("choice", FILLS, "SVG fills: none, outline filled-only shapes, or hatch"),
+    "fill": ("choice", FILLS, "SVG fills: outline filled-only shapes (the default), none, "
+                              "or hatch"),
     "hatch_spacing": ("number", (0.05, 100.0), "mm between hatch lines"),
     "hatch_angle": ("number", (-360.0, 360.0), "degrees of the hatch lines"),
     "hatch_cross": ("flag", None, "cross-hatch"),

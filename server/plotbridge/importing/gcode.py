@@ -21,6 +21,9 @@ from .fields import PEN_DIALECTS as UPLOAD_DIALECTS
 from .models import ErrorLog, ImportOptions
 from .ops import ARC, DWELL, LAYER, MOVE, MOVES, PALETTE, PATH, PEN
 
+# Dialects whose G4 P is in milliseconds: Unicorn's (M300) and Makelangelo's (M280)
+# files are written for Marlin, where P is milliseconds and S seconds.
+MS_DWELL = frozenset({"m300", "m280"})
 MAX_LINE = 256          # characters of commands on a line (comments do not count)
 MAX_RAW_LINE = 1 << 16  # characters of a line with its comments
 PEN_DIALECTS = (*UPLOAD_DIALECTS, "servo-z")
@@ -31,9 +34,10 @@ M300_DOWN_MAX = 40.0    # M300 S30 lowers the pen, S50 (and S255, servo off) lif
 MOTION_PEN = ("laser", "none")
 _PAUSE = re.compile(r"\s*(?:N\d+\s*)?M0*([01])(?![0-9.])\s*(.*)", re.I)
 _CONSOLE = ("$", "?", "~", "!")
-_BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+\.?\d*|\.\d+))*")
-_WORD = re.compile(r"([A-Z])([-+]?(?:\d+\.?\d*|\.\d+))")
-_COMMENT = re.compile(r"\([^)]*\)|;.*")
+_BLOCK = re.compile(r"(?:[A-Z][-+]?(?:\d+(?:\.\d*)?|\.\d+))*")
+_WORD = re.compile(r"([A-Z])([-+]?(?:\d+(?:\.\d*)?|\.\d+))")
+# A parenthesised comment runs to its ')' or the line's end (never failing: linear).
+_COMMENT = re.compile(r"\([^)\n]*\)?|;.*")
 _SEMICOLON_COMMENT = re.compile(r";.*")
 # G words accepted without effect on a plotter (plane XY, feed per minute, work
 # coordinate system 1, path control, cancel cutter/length compensation, cancel canned cycle).
@@ -340,6 +344,16 @@ class GcodeReader:
             self._plain[raw] = words
         self._block(out, line_no, words)
 
+    def _dwell(self, vals: dict[str, float]) -> float | None:
+        """G4's time in seconds: P in seconds (GRBL), but in milliseconds in the servo
+        dialects (M300, M280: Marlin-based firmware, where S gives seconds)."""
+        p = vals.get("P")
+        if self.dialect in MS_DWELL:
+            if p is None and vals.get("S") is not None and vals["S"] >= 0:
+                return vals["S"]
+            return None if p is None or p < 0 else p / 1000
+        return None if p is None or p < 0 else p
+
     def _pen(self, out: list[tuple], line_no: int, down: bool) -> None:
         if down and self.pending_layer is not None:
             if not self.drawn and self.pending_layer and self.layer_count == 1:
@@ -456,11 +470,13 @@ class GcodeReader:
             self._home(out, line_no, home, vals, unit)
             return
         if dwell:
-            p = vals.get("P")
-            if p is None or p < 0:
-                errors.add(line_no, "G4 needs a dwell time P in seconds (P >= 0)")
+            seconds = self._dwell(vals)
+            if seconds is None:
+                errors.add(line_no, "G4 needs a dwell time P in "
+                                    f"{'milliseconds' if self.dialect in MS_DWELL else 'seconds'}"
+                                    " (P >= 0)")
                 return
-            out.append((DWELL, line_no, p))
+            out.append((DWELL, line_no, seconds))
             return
         if "Z" in vals:
             z = vals["Z"] * unit + (0.0 if self.relative else self.off_z)
@@ -590,15 +606,33 @@ class GcodeReader:
 
 _LASER_SNIFF = 1 << 16
 _BLOCK_AFTER_PAUSE = re.compile(r"[GMXYZFST]\s*[-+.\d]", re.I)
-_Z_WORD = re.compile(r"Z\s*([-+]?(?:\d+\.?\d*|\.\d+))", re.I)
+_Z_WORD = re.compile(r"Z\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+))", re.I)
 # M300 and M280 are searched for in the text with m made M: a case-insensitive search
 # costs 10 times as much, and only m and M fold to m.
 _M300 = re.compile(r"M\s*300\b")
 _M280 = re.compile(r"M\s*280\b")
 _M3 = re.compile(r"^[^\n]*?\bM0*[34](?![0-9.])", re.I | re.M)
-_LASER_G0 = re.compile(r"\bM0*[34](?![0-9.])(?:(?!\bM0*5(?![0-9.]))[\s\S])*?^\s*G0*0(?![0-9.])"
-                       r"[^\n]*[XY](?:(?!\bM0*5(?![0-9.]))[\s\S])*?^\s*G0*1(?![0-9.])",
-                       re.I | re.M)
+_SPINDLE = re.compile(r"\bM0*([345])(?![0-9.])", re.I)
+_G0_XY = re.compile(r"\s*G0*0(?![0-9.])[^\n]*[XY]", re.I)
+_G1 = re.compile(r"\s*G0*1(?![0-9.])", re.I)
+
+
+def _laser(text: str) -> bool:
+    """M3/M4 switched on, then a G0 line with X or Y, then a G1 line, with no M5 between
+    (a laser's file), read line by line: linear in the text."""
+    state = 0               # 0 off, 1 on, 2 on and a G0 travel seen
+    for line in text.split("\n"):
+        if state == 2 and _G1.match(line):
+            return True
+        if state == 1 and _G0_XY.match(line):
+            state = 2
+        words = _SPINDLE.findall(line)
+        if words:
+            if words[-1] == "5":
+                state = 0
+            elif state == 0 or "5" in words:
+                state = 1
+    return False
 
 
 def sniff_dialect(head: str) -> str:
@@ -619,7 +653,7 @@ def sniff_dialect(head: str) -> str:
         return "z"
     if _M3.search(text) is None:
         return "none"
-    if _LASER_G0.search(text[:_LASER_SNIFF]):
+    if _laser(text[:_LASER_SNIFF]):
         return "laser"
     return "m3"
 

@@ -94,7 +94,7 @@ class ImportOptions:
     z_threshold: float = 0.0
     servo_down_angle: float | None = None
     feed: float = 3000.0  # mm/min for drawing moves of SVG, coordinates and patterns
-    fill: str = "none"    # SVG fills: "none", "outline" (filled-only shapes), "hatch"
+    fill: str = "outline"  # SVG fills: "outline" (filled-only shapes), "none", "hatch"
     hatch_spacing: float = 0.5   # mm between hatch lines (the default pen's width)
     hatch_angle: float = 45.0    # degrees, counter-clockwise on the page
     hatch_cross: bool = False    # a second hatch at right angles
@@ -151,16 +151,17 @@ class ErrorLog:
         self.warning_count = 0
         self.substitutions: list[dict] = []
 
-    def warn(self, line: int | None, message: str) -> None:
-        """Something dropped or changed that the user should know about; the import goes
-        on. Repeats of one message are counted, not listed again."""
-        self.warning_count += 1
+    def warn(self, line: int | None, message: str, times: int = 1) -> None:
+        """Something dropped or changed that the user should know about (`times` times);
+        the import goes on. Repeats of one message are counted, not listed again."""
+        self.warning_count += times
         for w in self.warnings:
             if w["message"] == message:
-                w["count"] = w.get("count", 1) + 1
+                w["count"] = w.get("count", 1) + times
                 return
         if len(self.warnings) < MAX_ERRORS:
-            self.warnings.append({"line": line, "message": message})
+            self.warnings.append({"line": line, "message": message}
+                                 | ({"count": times} if times > 1 else {}))
 
     def add(self, line: int | None, message: str) -> None:
         self.count += 1

@@ -45,6 +45,7 @@ class Layer:
     name: str
     colour: str
     strokes: list[Stroke] = field(default_factory=list)
+    fills: list[Stroke] = field(default_factory=list)   # outlines of its filled shapes (preview)
 
 
 def arc_sweep(sx: float, sy: float, x: float, y: float, i: float, j: float,

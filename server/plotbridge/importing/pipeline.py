@@ -29,6 +29,7 @@ from .ops import (
 )
 from .optimize import optimize_strokes, time_budget, travel
 from .patterns import pattern_strokes
+from .penplace import placed_pens
 from .placement import Bounds, Transform, needs_bounds, placement
 from .program import ProgramWriter
 from .svg import read_svg
@@ -69,7 +70,8 @@ def strokes_bounds(strokes: list[Stroke]) -> Bounds | None:
 
 def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir: Path,
                   transform: Transform, profile: MachineProfile, errors: ErrorLog,
-                  travel_before: float | None = None) -> ImportResult:
+                  travel_before: float | None = None,
+                  fills: list[Stroke] | None = None) -> ImportResult:
     """Writes program.gcode and preview.json atomically from the ops; raises ImportFailed
     (leaving nothing behind) when the ops or the errors found while writing say so."""
     dest_dir.mkdir(parents=True, exist_ok=True)
@@ -81,6 +83,7 @@ def write_program(ops_factory: Callable[[], Iterator[tuple]], fmt: str, dest_dir
     try:
         with tmp_program.open("wb") as out:
             writer = ProgramWriter(out, transform, profile, errors)
+            writer.preview.fills = fills or []
             writer.write_ops(ops_factory())
             writer.finish()
         errors.raise_if_any()
@@ -146,6 +149,7 @@ def import_layers(layers: list[Layer], fmt: str, dest_dir: Path, options: Import
     transform = placement(bounds, options, profile)
     placed = [Layer(lay.name, lay.colour, [[transform.apply(x, y) for x, y in s]
                                            for s in lay.strokes]) for lay in layers]
+    fills = [[transform.apply(x, y) for x, y in ring] for lay in layers for ring in lay.fills]
     before = travel([s for lay in placed for s in lay.strokes])
     if optimize:
         deadline = time.monotonic() + time_budget(sum(len(lay.strokes) for lay in placed))
@@ -157,7 +161,7 @@ def import_layers(layers: list[Layer], fmt: str, dest_dir: Path, options: Import
     placed = [lay for lay in placed if lay.strokes]
     draw_feed = feed or options.feed
     return write_program(lambda: layers_to_ops(placed, draw_feed), fmt, dest_dir, Transform(),
-                         profile, errors, travel_before=before)
+                         profile, errors, travel_before=before, fills=fills)
 
 
 def import_strokes(strokes: list[Stroke], fmt: str, dest_dir: Path, options: ImportOptions,
@@ -175,8 +179,9 @@ def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOpt
         with source.open("r", encoding=encoding, newline=None) as f:
             options = replace(options, pen_dialect=sniff_dialect(f.read(SNIFF_CHARS)))
     try:
-        def ops() -> Iterator[tuple]:
-            return read_ops(line_chunks(source, encoding), options, errors)
+        def ops(warn: bool = True) -> Iterator[tuple]:
+            return placed_pens(read_ops(line_chunks(source, encoding), options, errors),
+                               errors if warn else None)
         ops()  # validates the dialect options before reading
     except ValueError as e:
         raise ImportFailed.one(422, str(e)) from None
@@ -186,7 +191,7 @@ def import_gcode(source: Path, encoding: str, dest_dir: Path, options: ImportOpt
                              feed=feed or None)
     bounds = None
     if needs_bounds(options):
-        bounds = drawn_bounds(ops())
+        bounds = drawn_bounds(ops(warn=False))
         errors.raise_if_any()
         if bounds is None:
             raise ImportFailed.one(422, "nothing to draw: the input has no pen-down moves")

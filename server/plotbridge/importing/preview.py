@@ -37,6 +37,7 @@ class PreviewBuilder:
     simplified in batches, harder only when the total would exceed `max_points`."""
 
     def __init__(self, max_points: int = MAX_POINTS) -> None:
+        self.fills: list[list[tuple[float, float]]] = []   # SVG filled shapes' outlines
         self.max_points = max_points
         self.tolerance = BASE_TOLERANCE
         self.strokes: list[np.ndarray] = []
@@ -179,13 +180,17 @@ class PreviewBuilder:
 
     def _rest(self, bounds: dict[str, float]) -> dict:
         """The body after its strokes."""
-        return {
+        body = {
             "colours": self.colours,
             "lines": [list(span) for span in self.lines],
             "travel": [[[round(a, 3), round(b, 3)], [round(c, 3), round(d, 3)]]
                        for a, b, c, d in self.travel],
             "bounds": bounds,
         }
+        if self.fills:
+            body["fills"] = [[[round(x, 3), round(y, 3)] for x, y in ring]
+                             for ring in self.fills]
+        return body
 
     def finish(self, bounds: dict[str, float]) -> dict:
         self._settle()

@@ -68,7 +68,7 @@ class ProgramWriter:
                                motion.DWELL, profile.pen_settle_s)
         self.layers: list[dict] = []
         # Pen-up travel that left the work area (source line, x, y): clamped to the
-        # area when no stroke follows it (a trailing move home), an error otherwise.
+        # area with a warning, an error when the next stroke starts at the clamped point.
         self._outside: tuple[int | None, float, float] | None = None
         for text in HEADER:
             self._write(text)
@@ -169,7 +169,13 @@ class ProgramWriter:
             self.layer("layer 1", PALETTE[0])
         self.down = down
         if down and self._outside is not None:
-            self._check(*self._outside)
+            line, ox, oy = self._outside
+            cx = min(max(ox, 0.0), self.profile.width)
+            cy = min(max(oy, 0.0), self.profile.height)
+            if (round(cx, 3), round(cy, 3)) == (self.x, self.y):
+                self._check(line, ox, oy)       # the stroke would start at the clamped point
+            else:                               # travel came back: only an excursion
+                self._clamped(line, ox, oy)
             self._outside = None
         self._write("M3" if down else "M5")
         if down:
@@ -343,13 +349,15 @@ class ProgramWriter:
             self._write("M5")
             self.planner.stop(self.line, 0.0)
         if self._outside is not None:
-            line, x, y = self._outside
-            self.errors.warn(line, f"pen-up travel after the last stroke to X{x:.3f} "
-                                   f"Y{y:.3f} is outside the work area: clamped to its edge")
+            self._clamped(*self._outside)
         if self.layers:
             self._end_layer()
         self.planner.end()    # the caller waits for the estimate (Estimator.wait)
         self.flush()
+
+    def _clamped(self, line: int | None, x: float, y: float) -> None:
+        self.errors.warn(line, f"pen-up travel to X{x:.3f} Y{y:.3f} is outside the work "
+                               "area: clamped to its edge")
 
     def bounds_dict(self) -> dict[str, float]:
         b = self.bounds

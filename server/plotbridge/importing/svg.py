@@ -23,11 +23,13 @@ import shapely
 from shapely.geometry import Polygon
 from shapely.geometry.base import BaseGeometry
 
-from . import curves, fill, svgtext
-from .curves import Affine, compose
+from . import curves, fill, pathdata, svgtext
+from .curves import Affine, compose, viewbox_transform
 from .fillplan import FillPlan, named_colour
 from .models import ErrorLog, ImportFailed, ImportOptions
 from .ops import Layer
+from .svgclip import ClipMixin
+from .svgmarkers import MARKED, MarkerMixin
 from .svgstyle import (
     ROOT_STYLE,
     Stylesheet,
@@ -51,6 +53,8 @@ NOT_RENDERED = frozenset({
     "animateTransform", "animateMotion", "image", "namedview",
 })
 SHAPES = frozenset({"path", "rect", "circle", "ellipse", "line", "polyline", "polygon"})
+EDGE_MM = 0.01           # the page clip keeps what lies on the page's edge or this near it
+MAX_FILL_POINTS = 50_000   # outlines of filled shapes kept for the preview
 MAX_ELEMENTS = 500_000   # elements drawn, counting each <use> copy: bounds clone bombs
 MAX_DEPTH = 64
 LANGUAGES = ("en",)
@@ -76,32 +80,25 @@ def _where(elem: Element, tag: str) -> str:
     return f"<{tag} id=\"{ident}\">" if ident else f"<{tag}>"
 
 
-def viewbox_transform(vb: list[float], x: float, y: float, w: float, h: float,
-                      par: str | None) -> Affine:
-    """The viewBox mapped into the viewport (x, y, w, h) as preserveAspectRatio says."""
-    vx, vy, vw, vh = vb
-    sx, sy = w / vw, h / vh
-    words = (par or "xMidYMid meet").split()
-    align = words[0] if words else "xMidYMid"
-    if align == "defer" and len(words) > 1:
-        words = words[1:]
-        align = words[0]
-    if align == "none":
-        return (sx, 0.0, 0.0, sy, x - vx * sx, y - vy * sy)
-    s = max(sx, sy) if len(words) > 1 and words[1] == "slice" else min(sx, sy)
-    tx, ty = x - vx * s, y - vy * s
-    if "xMid" in align:
-        tx += (w - vw * s) / 2
-    elif "xMax" in align:
-        tx += w - vw * s
-    if "YMid" in align:
-        ty += (h - vh * s) / 2
-    elif "YMax" in align:
-        ty += h - vh * s
-    return (s, 0.0, 0.0, s, tx, ty)
+def _area(p: np.ndarray) -> float:
+    """Zero when the points lie on one line (a ring through them encloses nothing), else
+    the summed areas of the triangles they fan into from the first."""
+    if len(p) < 3:
+        return 0.0
+    d = p[1:] - p[0]
+    return float(np.abs(d[:-1, 0] * d[1:, 1] - d[:-1, 1] * d[1:, 0]).sum()) / 2
 
 
-class SvgReader:
+def _unless_percent(value: str | None, vb: list[float]) -> str | None:
+    """The root's width or height, None for a percentage when there is no viewBox."""
+    if value is not None and value.strip().endswith("%") and not vb:
+        return None
+    return value
+
+
+class SvgReader(ClipMixin, MarkerMixin):
+    _where = staticmethod(_where)
+
     def __init__(self, root: Element, options: ImportOptions, errors: ErrorLog) -> None:
         self.root = root
         self.options = options
@@ -123,6 +120,10 @@ class SvgReader:
         self.page: tuple[float, float] | None = None
         self._clip_cache: dict[tuple, BaseGeometry] = {}
         self._page_clip: list[tuple[Layer, int, list[np.ndarray]]] = []
+        self._warned: set[tuple[int, str]] = set()
+        self._capture: list[np.ndarray] | None = None    # ClipMixin._captured
+        self.fill_points = 0
+        self.root_style = ROOT_STYLE
 
     # ---- entry ---------------------------------------------------------------------
 
@@ -131,12 +132,17 @@ class SvgReader:
         if local(root.tag) != "svg":
             raise ImportFailed.one(422, f"not SVG: the root element is <{root.tag}>")
         style, own = cascade(root, "svg", ROOT_STYLE, self.sheet)
+        self.root_style = style
         vb = numbers(root.get("viewBox"))
         if len(vb) != 4 or vb[2] <= 0 or vb[3] <= 0:
             vb = []
         try:
-            w = length(root.get("width"), vb[2] if vb else 0.0, default=-1.0)
-            h = length(root.get("height"), vb[3] if vb else 0.0, default=-1.0)
+            # A percentage of the viewBox (the size a browser gives the image), or with
+            # no viewBox an unknown size: the drawing's own extent, as with none given.
+            w = length(_unless_percent(root.get("width"), vb), vb[2] if vb else 0.0,
+                       default=-1.0)
+            h = length(_unless_percent(root.get("height"), vb), vb[3] if vb else 0.0,
+                       default=-1.0)
         except ValueError as e:
             raise ImportFailed.one(422, f"<svg>: width or height: {e}") from None
         if w < 0:
@@ -157,10 +163,10 @@ class SvgReader:
         if w > 0 and h > 0:
             self.page = (w * PX_MM, h * PX_MM)
             if self.options.clip_to_page:
-                b = (0.0, 0.0, w * PX_MM, h * PX_MM)
-                ctx = replace(ctx, clip=fill.rect(*b), clip_box=b)
-        if root.get("transform"):
-            ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(root.get("transform"))))
+                # what lies within EDGE_MM of the page is kept as it is
+                b = (-EDGE_MM, -EDGE_MM, w * PX_MM + EDGE_MM, h * PX_MM + EDGE_MM)
+                ctx = replace(ctx, clip=fill.rect(0.0, 0.0, w * PX_MM, h * PX_MM), clip_box=b)
+        ctx = replace(ctx, m=compose(ctx.m, self._transform(root, "svg", own)))
         ctx = replace(ctx, opacity=opacity(own.get("opacity")))
         with np.errstate(all="ignore"):     # huge or degenerate geometry: skipped, not warned
             self.children(root, ctx)
@@ -177,6 +183,7 @@ class SvgReader:
             top = max(y for lay in layers for s in lay.strokes for _, y in s)
         for lay in layers:
             lay.strokes = [[(x, top - y) for x, y in s] for s in lay.strokes]
+            lay.fills = [[(x, top - y) for x, y in s] for s in lay.fills]
         return layers
 
     # ---- walking -------------------------------------------------------------------
@@ -221,14 +228,18 @@ class SvgReader:
         if ctx.opacity <= 0:
             self.invisible += 1
             return
-        if elem.get("transform"):
-            ctx = replace(ctx, m=compose(ctx.m, curves.parse_transform(elem.get("transform"))))
-        if own.get("mask") and url_id(own.get("mask")) not in self.ids:
-            self.errors.warn(None, f"{_where(elem, tag)}: mask not found; drawn unmasked")
+        if own.get("transform"):
+            ctx = replace(ctx, m=compose(ctx.m, self._transform(elem, tag, own)))
         clip_id = url_id(own.get("clip-path"))
         if clip_id is not None:
             ctx = self._clipped(ctx, clip_id, elem, tag)
             if ctx.clip is not None and ctx.clip.is_empty:
+                return
+        mask_id = url_id(own.get("mask"))
+        if mask_id is not None:
+            ctx = self._masked(ctx, mask_id, elem, tag)
+            if ctx.clip is not None and ctx.clip.is_empty:
+                self.invisible += 1
                 return
         if tag in ("g", "a"):
             names = [n for n in (elem.get("id"), elem.get(f"{INKSCAPE}label")) if n]
@@ -263,13 +274,14 @@ class SvgReader:
         return True
 
     def _viewport(self, elem: Element, sized: Element, ctx: Ctx, w_default: str | None,
-                  h_default: str | None) -> None:
+                  h_default: str | None,
+                  size: tuple[str | None, str | None] = (None, None)) -> None:
         """A nested <svg> or a <symbol> placed by a <use> (`sized` carries x, y,
-        width and height; the use for a symbol)."""
+        width and height; the use for a symbol; `size` overrides width and height)."""
         x = length(sized.get("x"), ctx.vw)
         y = length(sized.get("y"), ctx.vh)
-        w = length(sized.get("width") or w_default or "100%", ctx.vw)
-        h = length(sized.get("height") or h_default or "100%", ctx.vh)
+        w = length(size[0] or sized.get("width") or w_default or "100%", ctx.vw)
+        h = length(size[1] or sized.get("height") or h_default or "100%", ctx.vh)
         if w <= 0 or h <= 0:
             return
         vb = numbers(elem.get("viewBox"))
@@ -307,82 +319,16 @@ class SvgReader:
             if own.get("display", "").strip() == "none":
                 return
             ctx = replace(ctx, style=style, opacity=ctx.opacity * opacity(own.get("opacity")))
-            if target.get("transform"):
-                ctx = replace(ctx, m=compose(ctx.m,
-                                             curves.parse_transform(target.get("transform"))))
+            ctx = replace(ctx, m=compose(ctx.m, self._transform(target, "symbol", own)))
             self._viewport(target, elem, ctx, target.get("width"), target.get("height"))
             return
         x = length(elem.get("x"), ctx.vw)
         y = length(elem.get("y"), ctx.vh)
-        if ttag == "svg":
+        if ttag == "svg":      # the use's width and height, when given, size it
             self._viewport(target, target, replace(ctx, m=compose(ctx.m, (1, 0, 0, 1, x, y))),
-                           None, None)
+                           None, None, (elem.get("width"), elem.get("height")))
             return
         self.element(target, replace(ctx, m=compose(ctx.m, (1.0, 0.0, 0.0, 1.0, x, y))))
-
-    # ---- clipping ------------------------------------------------------------------
-
-    def _intersect(self, ctx: Ctx, area: BaseGeometry) -> Ctx:
-        if ctx.clip is None:
-            return replace(ctx, clip=area, clip_box=None)
-        return replace(ctx, clip=ctx.clip.intersection(area), clip_box=None)
-
-    def _clipped(self, ctx: Ctx, clip_id: str, elem: Element, tag: str) -> Ctx:
-        cp = self.ids.get(clip_id)
-        if cp is None or local(cp.tag) != "clipPath":
-            self.errors.warn(None, f"{_where(elem, tag)}: clip-path '#{clip_id}' not found; "
-                                   "drawn unclipped")
-            return ctx
-        if cp.get("clipPathUnits") == "objectBoundingBox":
-            bbox = self._bbox(elem, tag, ctx)
-            if bbox is None:
-                return replace(ctx, clip=Polygon())
-            x0, y0, x1, y1 = bbox
-            m = compose(ctx.m, (x1 - x0, 0.0, 0.0, y1 - y0, x0, y0))
-        else:
-            m = ctx.m
-        if cp.get("transform"):
-            m = compose(m, curves.parse_transform(cp.get("transform")))
-        key = (clip_id, m)
-        area = self._clip_cache.get(key)
-        if area is None:
-            parts = []
-            sub = Ctx(m=m, style=ROOT_STYLE, vw=ctx.vw, vh=ctx.vh)
-            for child in cp:
-                ctag = local(child.tag)
-                if ctag == "use":
-                    target = self.ids.get(href(child) or "")
-                    if target is None:
-                        continue
-                    x = length(child.get("x"), ctx.vw)
-                    y = length(child.get("y"), ctx.vh)
-                    cm = compose(m, curves.parse_transform(child.get("transform") or ""))
-                    child, ctag = target, local(target.tag)
-                    cm = compose(cm, (1.0, 0.0, 0.0, 1.0, x, y))
-                else:
-                    cm = m
-                if ctag not in SHAPES:
-                    continue
-                cstyle, cown = cascade(child, ctag, ROOT_STYLE, self.sheet)
-                if cown.get("display", "").strip() == "none":
-                    continue
-                if child.get("transform"):
-                    cm = compose(cm, curves.parse_transform(child.get("transform")))
-                geo = self._geometry(child, ctag, replace(sub, m=cm))
-                rings = [curves.apply(cm, p) for p, _ in geo]
-                parts.append(fill.region(rings, cstyle.get("clip-rule", "nonzero")))
-            area = shapely.unary_union(parts) if parts else Polygon()
-            self._clip_cache[key] = area
-        return self._intersect(ctx, area)
-
-    def _bbox(self, elem: Element, tag: str, ctx: Ctx) -> tuple | None:
-        if tag not in SHAPES:
-            return None
-        pts = [p for p, _ in self._geometry(elem, tag, ctx)]
-        if not pts:
-            return None
-        allp = np.vstack(pts)
-        return (*allp.min(axis=0), *allp.max(axis=0))
 
     # ---- shapes --------------------------------------------------------------------
 
@@ -392,8 +338,10 @@ class SvgReader:
         vw, vh = ctx.vw, ctx.vh
         g = elem.get
         if tag == "path":
-            d = g("d")
-            return curves.path_subpaths(d, tol) if d else []
+            geo, error = curves.path_data(g("d") or "", tol)
+            if error:
+                self._warn_once(elem, tag, f"path data drawn up to its error: {error}")
+            return geo
         if tag == "rect":
             w, h = length(g("width"), vw), length(g("height"), vh)
             if w <= 0 or h <= 0:
@@ -410,21 +358,44 @@ class SvgReader:
             if tag == "circle":
                 r = length(g("r"), math.hypot(vw, vh) / math.sqrt(2))
                 rx = ry = r
-            else:
-                rx, ry = length(g("rx"), vw), length(g("ry"), vh)
+            else:      # SVG 2: a radius missing or `auto` is the other one
+                rx_s, ry_s = g("rx"), g("ry")
+                rx = length(rx_s, vw) if rx_s not in (None, "auto") else None
+                ry = length(ry_s, vh) if ry_s not in (None, "auto") else None
+                rx = ry if rx is None else rx
+                ry = rx if ry is None else ry
+                rx, ry = rx or 0.0, ry or 0.0
             if rx <= 0 or ry <= 0:
                 return []
             return [(curves.ellipse(length(g("cx"), vw), length(g("cy"), vh), rx, ry, tol), True)]
         if tag == "line":
             return [(np.array([[length(g("x1"), vw), length(g("y1"), vh)],
                                [length(g("x2"), vw), length(g("y2"), vh)]]), False)]
-        vals = numbers(g("points"))
+        vals, error = pathdata.numbers(g("points"))
+        if error or len(vals) % 2:
+            self._warn_once(elem, tag, "points drawn up to their error: "
+                                       f"{error or 'an odd number of coordinates'}")
         if len(vals) < 4:
             return []
         pts = np.array(vals[: len(vals) // 2 * 2], dtype=float).reshape(-1, 2)
         if tag == "polygon":
             return [(np.vstack([pts, pts[:1]]), True)]
         return [(pts, False)]
+
+    def _transform(self, elem: Element, tag: str, own: dict[str, str]) -> Affine:
+        """The element's transform (the CSS property, else the attribute); one that
+        cannot be read is left out with a warning, as a browser ignores it."""
+        try:
+            return curves.parse_transform(own.get("transform"))
+        except ValueError as e:
+            self._warn_once(elem, tag, f"transform not read, drawn untransformed: {e}")
+            return curves.IDENTITY
+
+    def _warn_once(self, elem: Element, tag: str, message: str) -> None:
+        key = (id(elem), message)
+        if key not in self._warned:
+            self._warned.add(key)
+            self.errors.warn(None, f"{_where(elem, tag)}: {message}")
 
     def _visible_stroke(self, ctx: Ctx) -> str | None:
         style = ctx.style
@@ -453,8 +424,10 @@ class SvgReader:
         return p[0]
 
     def _shape(self, elem: Element, tag: str, ctx: Ctx) -> None:
+        if tag in MARKED:
+            self._markers(elem, tag, ctx)
         stroke = self._visible_stroke(ctx)
-        fill_colour = self._visible_fill(ctx)
+        fill_colour = self._visible_fill(ctx) if tag != "line" else None   # no area
         fills = self.fills.fill_for(((ctx.layer,) if ctx.layer else ()) + ctx.chain, fill_colour)
         mode = fills.mode
         if stroke is None and (fill_colour is None or mode == "none"):
@@ -471,14 +444,30 @@ class SvgReader:
         page = [(curves.apply(ctx.m, p), closed) for p, closed in geo]
         if stroke is not None:
             self.emit(ctx, stroke, [p for p, _ in page if len(p) > 1])
-        if fill_colour is not None and mode != "none":
-            if mode == "outline" and stroke is None:
+        if fill_colour is not None and mode != "none" and self._capture is None:
+            self._note_fill(ctx, stroke or fill_colour, page)
+            if mode == "outline" and stroke is None:     # subpaths with an area
                 self.emit(ctx, fill_colour, [np.vstack([p, p[:1]]) if not c else p
-                                             for p, c in page if len(p) > 1])
+                                             for p, c in page if _area(p) > 1e-9])
             elif mode == "hatch":
                 area = fill.region([p for p, _ in page], ctx.style.get("fill-rule", "nonzero"))
                 self.emit(ctx, fill_colour, fill.hatch(area, fills.spacing, fills.angle,
                                                        fills.cross))
+
+    def _note_fill(self, ctx: Ctx, colour: str, page: list[tuple[np.ndarray, bool]]) -> None:
+        """The outline of a shape drawn for its fill, for the preview (at most
+        MAX_FILL_POINTS points in all, each ring at most 256)."""
+        if self.fill_points >= MAX_FILL_POINTS:
+            return
+        key = ctx.layer if ctx.layer is not None else colour
+        layer = self.layers.get(key)
+        if layer is None:
+            layer = self.layers[key] = Layer(name=key, colour=colour)
+        for p, _ in page:
+            if len(p) > 2:
+                ring = p[:: max(1, len(p) // 256)]
+                self.fill_points += len(ring)
+                layer.fills.append(list(map(tuple, ring.tolist())))
 
     def _selected(self, ctx: Ctx, colour: str | None) -> bool:
         layers = self.options.layers
@@ -491,6 +480,9 @@ class SvgReader:
     def emit(self, ctx: Ctx, colour: str, lines: list[np.ndarray]) -> None:
         lines = [ln for ln in lines if len(ln) > 1 and np.isfinite(ln).all()]
         if not lines:
+            return
+        if self._capture is not None:
+            self._capture.extend(lines)
             return
         deferred = False
         if ctx.clip is not None:
@@ -518,8 +510,15 @@ class SvgReader:
         flat = [ln for _, _, lines in self._page_clip for ln in lines]
         owner = [k for k, (_, _, lines) in enumerate(self._page_clip) for _ in lines]
         index = np.repeat(np.arange(len(flat)), [len(ln) for ln in flat])
-        lines = shapely.linestrings(np.vstack(flat), indices=index)
-        clipped = shapely.clip_by_rect(lines, 0.0, 0.0, *self.page)
+        pts = np.vstack(flat)
+        w, h = self.page
+        for k, top in ((0, w), (1, h)):    # points just off an edge onto it
+            col = pts[:, k]
+            col[(col < 0) & (col >= -EDGE_MM)] = 0.0
+            col[(col > top) & (col <= top + EDGE_MM)] = top
+        lines = shapely.linestrings(pts, indices=index)
+        # an intersection keeps what lies on the page's edge (clip_by_rect drops it)
+        clipped = shapely.intersection(lines, fill.rect(0.0, 0.0, w, h))
         pieces: list[list] = [[] for _ in self._page_clip]
         for k, geom in zip(owner, clipped, strict=True):
             for part in shapely.get_parts(shapely.line_merge(geom)):
@@ -612,8 +611,15 @@ class SvgReader:
         if colour is None:
             self.invisible += 1
             return
-        if not self._selected(ctx, colour):
+        if self._capture is None and not self._selected(ctx, colour):
             return
+        missing, plain = svgtext.unlike(text)
+        for chars, how in ((missing, "not in the single-stroke fonts, drawn as '?'"),
+                           (plain, "drawn without their accents")):
+            if chars:
+                names = ", ".join(f"'{c}' U+{ord(c):04X}" for c in chars[:10])
+                more = f" and {len(chars) - 10} more" if len(chars) > 10 else ""
+                self._warn_once(elem, "text", f"text '{text[:40]}': {names}{more} {how}")
         family = ctx.style.get("font-family", "").strip()
         if not svgtext.HERSHEY_NAMES.search(family):
             note = {"element": _where(elem, "text"), "text": text[:60], "font": family,
@@ -631,7 +637,7 @@ class SvgReader:
                                    f"'#{href(node) or ''}' does not exist; skipped")
             return
         text = svgtext.collapse("".join(node.itertext()), preserve).strip()
-        pm = curves.parse_transform(target.get("transform") or "")
+        pm = self._transform(target, "path", cascade(target, "path", ROOT_STYLE, self.sheet)[1])
         tol = self.tol_mm / max(curves.scale_of(ctx.m), 1e-12)
         subs = curves.path_subpaths(target.get("d") or "", tol)
         if not subs or not text:

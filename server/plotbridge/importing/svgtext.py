@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 import math
 import re
+import unicodedata
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,7 +23,7 @@ BASELINE = 9.0
 DEFAULT_FONT = "futural"
 # font-family names that the Hershey fonts stand for without substitution
 HERSHEY_NAMES = re.compile(r"hershey|futura|rowman|scripts|timesr|gothic", re.I)
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+_NUMBER = re.compile(r"[+-]?(\d+(?:\.\d*)?|\.\d+)([eE][+-]?\d+)?")
 
 
 @dataclass
@@ -32,7 +33,7 @@ class Glyph:
     strokes: list[np.ndarray]
 
 
-@functools.lru_cache(maxsize=len(FONTS))
+@functools.lru_cache(maxsize=len(FONTS) + 1)    # and the Greek set
 def _font(name: str) -> dict[str, Glyph]:
     from HersheyFonts import HersheyFonts
 
@@ -47,9 +48,49 @@ def _font(name: str) -> dict[str, Glyph]:
     return table
 
 
+# Greek letters are in Hershey's Greek simplex set ("greek", the same stroke weight as
+# futural) at the Latin letters of the Symbol font's layout.
+GREEK_FONT = "greek"
+_GREEK = dict(zip("ΑΒΓΔΕΖΗΘΙΚΛΜΝΞΟΠΡΣΤΥΦΧΨΩαβγδεζηθικλμνξοπρσςτυφχψω",
+                  "ABGDEZHQIKLMNXOPRSTUFCYWabgdezhqiklmnxoprsstufcyw", strict=True))
+
+
+@functools.lru_cache(maxsize=4096)
+def fallback(ch: str) -> tuple[str | None, str]:
+    """(font, character) that draws a character outside the Hershey fonts' ASCII table:
+    a Greek letter from the Greek set, a Latin letter with marks as its base letter
+    (font None: the text's font), else ("?", "?"): not drawn as itself."""
+    if ch in _GREEK:
+        return GREEK_FONT, _GREEK[ch]
+    base = unicodedata.normalize("NFKD", ch)
+    base = "".join(c for c in base if not unicodedata.combining(c))
+    if len(base) == 1 and " " <= base <= "~":
+        return None, base
+    return "?", "?"
+
+
 def glyph(font: str, ch: str) -> Glyph:
     table = _font(font)
-    return table.get(ch) or table["?"]
+    g = table.get(ch)
+    if g is not None:
+        return g
+    other, sub = fallback(ch)
+    if other == GREEK_FONT:
+        return _font(GREEK_FONT)[sub]
+    return table[sub]
+
+
+def unlike(text: str) -> tuple[list[str], list[str]]:
+    """The characters of `text` drawn as '?' and those drawn without their marks, each
+    once, in order."""
+    missing: dict[str, None] = {}
+    plain: dict[str, None] = {}
+    for ch in text:
+        if " " <= ch <= "~" or ch in _GREEK:
+            continue
+        other, _ = fallback(ch)
+        (missing if other == "?" else plain)[ch] = None
+    return list(missing), list(plain)
 
 
 def advance(font: str, text: str, size: float, letter: float, word: float) -> float:
