@@ -68,7 +68,15 @@ async def test_login_link_redirects_with_cookie(api):
     response = await api.client.get(f"/login?token={TOKEN}")
     assert response.status_code == 303 and response.headers["location"] == "/"
     assert "plotbridge_session" in response.cookies
-    assert (await api.client.get("/login?token=bad")).status_code == 401
+    stale = await api.client.get("/login?token=bad")  # the login page, saying why
+    assert stale.status_code == 303 and stale.headers["location"] == "/?link=stale"
+    assert "plotbridge_session" not in stale.cookies
+
+
+async def test_session_says_whether_logged_in(api):
+    assert (await api.client.get("/api/session")).json() == {"logged_in": False}
+    await api.client.get(f"/login?token={TOKEN}")
+    assert (await api.client.get("/api/session")).json() == {"logged_in": True}
 
 
 async def test_no_cors_headers(api):

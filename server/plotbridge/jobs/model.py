@@ -9,7 +9,7 @@ from __future__ import annotations
 import time
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, computed_field
 from pydantic_core import to_jsonable_python
 
 from plotbridge.motion.eta import Timeline, share_done
@@ -22,6 +22,22 @@ JobState = Literal[
 ACTIVE: frozenset[str] = frozenset({"running", "paused", "pen_change"})
 FINISHED: frozenset[str] = frozenset({"done", "failed", "cancelled", "stopped"})
 RESUMABLE: frozenset[str] = frozenset({"interrupted", "stopped"})
+
+# Until the lifecycle module (issue #26) lands: the actions each state allows, as its
+# table (docs/INTERNALS.md, "The job lifecycle") has them. The web UI offers exactly these.
+_SETTLED = ("resume_from", "restart", "frame", "delete")
+PROVISIONAL_ACTIONS: dict[str, tuple[str, ...]] = {
+    "queued": ("start", "cancel", "frame", "move", "edit", "delete"),
+    "waiting": ("cancel", "frame", "move", "delete"),
+    "running": ("hold", "stop", "cancel"),
+    "paused": ("continue", "stop", "cancel"),
+    "pen_change": ("continue", "stop", "cancel"),
+    "done": _SETTLED,
+    "failed": _SETTLED,
+    "cancelled": _SETTLED,
+    "stopped": ("resume", "home_then_resume", *_SETTLED[:2], "cancel", *_SETTLED[2:]),
+    "interrupted": ("resume", "home_then_resume", *_SETTLED[:2], "cancel", *_SETTLED[2:]),
+}
 
 AfterJob = Literal["park", "home", "none"]
 """What a plotter does once a job is done: pen up and park, home, or nothing."""
@@ -145,6 +161,12 @@ class Job(BaseModel):
     options: dict[str, Any] = Field(default_factory=dict, exclude=True)
     timeline: list[tuple[int, float]] = Field(default_factory=list, exclude=True)
     safe_line: int | None = Field(None, exclude=True)
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def actions(self) -> list[str]:
+        """What may be asked of the job now."""
+        return list(PROVISIONAL_ACTIONS.get(self.state, ()))
 
     def public(self) -> dict[str, Any]:
         """The API's job object."""
