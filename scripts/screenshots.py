@@ -49,7 +49,8 @@ def stage(client: httpx.Client) -> None:
     for pen in ({"name": "Black fineliner", "colour": "#111111"},
                 {"name": "Red brush pen", "colour": "#d40000"},
                 {"name": "Blue gel", "colour": "#1c5fd4"}):  # fmt: skip
-        pens[pen["name"]] = client.post("/api/pens", json={**pen, "up_us": 1000, "down_us": 2000}).json()["id"]
+        made = client.post("/api/pens", json={**pen, "up_us": 1000, "down_us": 2000})
+        pens[pen["name"]] = made.json()["id"]
 
     def upload(name: str, body: str | bytes, **data: str) -> dict:
         answer = client.post("/api/jobs", files={"file": (name, body)}, data={"name": name, **data})
@@ -62,8 +63,8 @@ def stage(client: httpx.Client) -> None:
     cancelled = upload("test-card.gcode", drawing(circles=2))
     client.post(f"/api/jobs/{cancelled['id']}/cancel").raise_for_status()
     layered = upload("poster.svg", THREE_LAYERS)
-    client.patch(f"/api/jobs/{layered['id']}", json={"pens": {
-        "1": pens["Black fineliner"], "2": pens["Red brush pen"], "3": pens["Blue gel"]}}).raise_for_status()
+    per_layer = {"1": pens["Black fineliner"], "2": pens["Red brush pen"], "3": pens["Blue gel"]}
+    client.patch(f"/api/jobs/{layered['id']}", json={"pens": per_layer}).raise_for_status()
     if len(names) > 1:
         stopped = upload("spiral.gcode", drawing(circles=12), plotter=names[1], start="true")
         wait(lambda: client.get(f"/api/jobs/{stopped['id']}").json()["lines_done"] > 40)
@@ -85,14 +86,16 @@ def shoot(url: str, token: str, out: Path) -> list[str]:
     out.mkdir(parents=True, exist_ok=True)
     errors: list[str] = []
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox", "--disable-gpu"])
+        browser = pw.chromium.launch(executable_path=CHROMIUM,
+                                     args=["--no-sandbox", "--disable-gpu"])  # fmt: skip
         for size, viewport in SIZES.items():
             phone = size == "phone"
             context = browser.new_context(viewport=viewport, is_mobile=phone, has_touch=phone,
                                           device_scale_factor=2 if phone else 1)  # fmt: skip
             page = context.new_page()
-            page.on("console", lambda m: errors.append(f"{size}: {m.text}") if m.type == "error" else None)
-            page.on("pageerror", lambda exc: errors.append(f"{size}: {exc}"))
+            page.on("console", lambda m, at=size: errors.append(f"{at}: {m.text}")
+                    if m.type == "error" else None)  # fmt: skip
+            page.on("pageerror", lambda exc, at=size: errors.append(f"{at}: {exc}"))
             page.goto(f"{url}/")
             page.wait_for_selector("#login-view:not([hidden])")
             page.screenshot(path=str(out / f"login-{size}.png"))

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-import pytest
-
 import json
+
+import pytest
 
 from tests.fixtures.pages import run, server_job
 
@@ -229,9 +229,11 @@ def test_reducer_jobs_and_the_shown_job(modules):
         s = m.reduce(s, {type: 'jobs', jobs: [J.d]});
         out.push(name(s));
         return out;
-    """.replace("JOBS", json.dumps({"old": server_job("done", id="old"), "q": server_job("queued", id="q"),
-                                    "s": server_job("stopped", id="s"), "qr": server_job("running", id="q"),
-                                    "d": server_job("done", id="d")})))
+    """.replace("JOBS", json.dumps({
+        "old": server_job("done", id="old"), "q": server_job("queued", id="q"),
+        "s": server_job("stopped", id="s"), "qr": server_job("running", id="q"),
+        "d": server_job("done", id="d"),
+    })))
     assert got == [
         "q", "s", "q", "old", ["s", "q"], "q", None,
     ]

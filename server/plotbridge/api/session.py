@@ -8,7 +8,7 @@ from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import RedirectResponse, Response
 
 from plotbridge import __version__
-from plotbridge.api.deps import GUARD, Parts, error
+from plotbridge.api.deps import GUARD, Parts
 from plotbridge.auth import COOKIE, SESSION_TTL
 from plotbridge.models import LoginBody
 
