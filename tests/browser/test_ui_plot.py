@@ -111,12 +111,12 @@ def plot_stop_unlock_next(
     long_name, next_name = f"{prefix}-spiral.svg", f"{prefix}-square.svg"
     # with homing enabled the board starts in Alarm: the banner offers Home
     page.wait_for_function(
-        "() => ['Idle', 'Alarm'].includes(document.querySelector('#sum-state').textContent)"
+        "() => ['Idle', 'Alarm'].includes(document.querySelector('#sum-state').dataset.state)"
     )
-    if page.locator("#sum-state").text_content() == "Alarm":
+    if page.locator("#sum-state").get_attribute("data-state") == "Alarm":
         page.locator("#banners button[data-action=home]").click()
         page.wait_for_function(
-            "() => document.querySelector('#sum-state').textContent === 'Idle'", timeout=60_000
+            "() => document.querySelector('#sum-state').dataset.state === 'Idle'", timeout=60_000
         )
     upload(page, long_name, spiral_svg(30))
     wait_job_state(page, long_name, ("queued",))
@@ -152,10 +152,10 @@ def plot_stop_unlock_next(
     page.locator("#queue").scroll_into_view_if_needed()  # where a phone user pressed Start
     if pause_resume:
         row = job_row(page, long_name)
-        row.locator("button[data-verb=pause]").click()
+        row.locator("button[data-verb=hold]").click()
         wait_job_state(page, long_name, ("paused",))
         server.wait_machine(lambda m: m["state"] == "Hold", timeout=10)
-        row.locator("button[data-verb=resume]").click()
+        row.locator("button[data-verb=continue]").click()
         wait_job_state(page, long_name, ("running",))
         server.wait_machine(lambda m: m["state"] == "Run", timeout=10)
     # manual control is locked while the job runs
@@ -170,7 +170,7 @@ def plot_stop_unlock_next(
     elapsed, input_epoch = page.evaluate("window.__stopped")
     clicked_at = input_epoch - (time.time() - time.monotonic())  # on the monotonic clock
     assert elapsed < 1000, f"stopped shown after {elapsed:.0f} ms"
-    assert page.locator("#estop-title").text_content() == "Machine stopped"
+    assert page.locator("#estop-title").text_content() == "The plotter stopped"
     panel = page.locator("#estop-panel").bounding_box()
     assert panel and panel["y"] >= 0 and panel["y"] < viewport["height"] / 2, panel  # in view
     # the server agrees: the job is stopped and the carriage stands still
@@ -196,7 +196,7 @@ def plot_stop_unlock_next(
         page.click("#estop-unlock")
     page.wait_for_selector("#estop-panel", state="hidden")
     page.wait_for_selector("#banners .banner >> text=Alarm", state="detached")
-    page.wait_for_function("() => document.querySelector('#sum-state').textContent === 'Idle'")
+    page.wait_for_function("() => document.querySelector('#sum-state').dataset.state === 'Idle'")
 
     upload(page, next_name, circles_svg(10) if cancel_next else SQUARE_SVG)
     wait_job_state(page, next_name, ("queued",))

@@ -18,7 +18,7 @@ export function jobNotice(before, job) {
     const body = job.pen_change && job.pen_change.message ? job.pen_change.message : `“${job.name}” waits for a pen change`;
     return { title: "plotbridge: change the pen", body, tag: `pen-${job.id}` };
   }
-  if (ENDED[job.state] && before && isActive(before) && !isActive(job)) {
+  if (ENDED[job.state] && before && isActive(before)) {
     const body = job.error || (job.state === "done" ? "The plot is finished." : "");
     return { title: `plotbridge: “${job.name}” ${ENDED[job.state]}`, body, tag: `job-${job.id}` };
   }

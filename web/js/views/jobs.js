@@ -29,8 +29,7 @@ export function layerRows(job, choice, pens = []) {
     pen: l.pen ?? null,
     penName: l.pen === null || l.pen === undefined ? "" : penName(pens, l.pen),
     progress: l.progress || 0,
-    info: [length(Number.isFinite(l.drawn_mm) && l.drawn_mm > 0 ? l.drawn_mm : l.pen_down_mm),
-      `est. ${duration(l.estimate_s)}`, l.progress ? percent(l.progress) : ""].filter(Boolean).join(" · "),
+    info: `${percent(l.progress || 0)} · est. ${duration(l.estimate_s)} · ${length(l.pen_down_mm)}`,
     current: i === due || i === drawing,
     ticked: !choice || choice.ticked.includes(i + 1),
     start: (choice ? choice.start : 1) === i + 1,
@@ -261,7 +260,7 @@ function renderLayers(list, job, state) {
       el("span", { className: "layer-pen-name" })),
     (li, r) => {
       li.querySelector(".swatch").style.backgroundColor = r.colour;
-      setText(li.querySelector(".layer-name"), `${r.number}. ${r.name}`);
+      setText(li.querySelector(".layer-name"), r.name);
       const tick = li.querySelector(".tick");
       setHidden(tick, !choosing);
       if (tick.checked !== r.ticked) tick.checked = r.ticked;

@@ -3,7 +3,6 @@
 
 import { api } from "../api.js";
 import { $, el, setDisabled, setHidden, setText, syncList } from "../dom.js";
-import { isActive } from "../job-actions.js";
 import { jobActive } from "../store.js";
 
 const SERVO_MIN = 500, SERVO_MAX = 2500; // the firmware's range for $60/$61 (µs)
@@ -208,13 +207,6 @@ export function bindPens(actions) {
     actions.save();
   });
   $("#pen-cancel").addEventListener("click", () => actions.cancel());
-  // the per-layer pen pickers in the job rows
-  $("#queue").addEventListener("change", (e) => {
-    const select = e.target.closest("select[data-layer]");
-    const row = e.target.closest("li[data-key]");
-    if (!select || !row) return;
-    actions.setLayerPen(row.dataset.key, select.dataset.layer, select.value === "" ? null : Number(select.value));
-  });
 }
 
 const metres = (m) => `${(m || 0).toFixed(m >= 100 ? 0 : 2)} m`;
@@ -266,28 +258,4 @@ export function renderPens(state) {
     }
     setDisabled($("#pen-save"), busy);
   }
-}
-
-/** The per-layer pen pickers of a job row (`container`), from the job and the pens. */
-export function renderLayerPens(container, job, pens) {
-  const layers = job.layers || [];
-  const shown = pens.length > 0 && layers.length > 0;
-  setHidden(container, !shown);
-  if (!shown) return;
-  const editable = !isActive(job); // any time the job does not run
-  syncList(container, layers, (layer) => layer.first_line,
-    () => el("label", { className: "layer-pen" }, el("span", { className: "layer-name" }), el("select", {})),
-    (label, layer) => {
-      const number = layers.indexOf(layer) + 1;
-      setText(label.querySelector(".layer-name"), `${number}. ${layer.name || "layer"}`);
-      const select = label.querySelector("select");
-      select.dataset.layer = String(number);
-      select.setAttribute("aria-label", `Pen for layer ${number} (${layer.name || "layer"})`);
-      syncList(select, [{ id: "", name: "no pen" }, ...pens], (pen) => pen.id,
-        (pen) => el("option", { value: String(pen.id) }),
-        (option, pen) => setText(option, pen.name));
-      const value = layer.pen === null || layer.pen === undefined ? "" : String(layer.pen);
-      if (document.activeElement !== select && select.value !== value) select.value = value;
-      setDisabled(select, !editable);
-    });
 }
