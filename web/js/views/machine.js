@@ -197,7 +197,8 @@ function renderEstop(state) {
     setText($("#estop-title"), `Stopping ${what}…`);
     setText($("#estop-text"), "Emergency stop sent; waiting for the plotter to confirm.");
   } else {
-    const title = `${what.charAt(0).toUpperCase()}${what.slice(1)} stopped`;
+    const named = what.startsWith("the ") || what.startsWith("all ") ? what.charAt(0).toUpperCase() + what.slice(1) : what;
+    const title = `${named} stopped`;
     setText($("#estop-title"), e.remote ? `${title} from another ${e.remote}` : title);
     setText($("#estop-text"), several || (m && m.state === "Alarm")
       ? "Motion was cut, so the position may be lost. Home (recommended), or unlock to go on from here. A stopped job can be resumed from its card or the queue."
