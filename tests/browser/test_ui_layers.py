@@ -100,7 +100,7 @@ def test_layers_show_progress_and_background_notices(browser, server, plotter, v
         notices = page.evaluate("window.__notices")
         assert [n["title"] for n in notices] == ["plotbridge: change the pen",
                                                  f"plotbridge: “{NAME}” is done"]
-        assert notices[0]["body"].startswith("Layer 2 of 3, 'shade'")
+        assert notices[0]["body"].startswith(f"“{NAME}”, layer 2 of 3 “shade”: load the pen")
         assert page.evaluate("window.__asked") == 1  # asked on the Start click, once
         colours = [layer["colour"] for layer in server.job(job["id"])["layers"]]
         rgb = [f"rgb({int(c[1:3], 16)}, {int(c[3:5], 16)}, {int(c[5:7], 16)})" for c in colours]

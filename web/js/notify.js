@@ -3,6 +3,7 @@
 // a prompt without a user gesture, and a refusal is never asked again).
 
 import { isActive } from "./job-actions.js";
+import { penChangeText } from "./views/machine.js";
 
 const ENDED = { done: "is done", failed: "failed", stopped: "was stopped", cancelled: "was cancelled", interrupted: "was interrupted" };
 
@@ -15,7 +16,7 @@ export function jobNotice(before, job) {
   const was = before ? before.state : null;
   if (was === job.state) return null;
   if (job.state === "pen_change") {
-    const body = job.pen_change && job.pen_change.message ? job.pen_change.message : `“${job.name}” waits for a pen change`;
+    const body = job.pen_change ? `“${job.name}”, ${penChangeText(job)}` : `“${job.name}” waits for a pen change`;
     return { title: "plotbridge: change the pen", body, tag: `pen-${job.id}` };
   }
   if (ENDED[job.state] && before && isActive(before)) {
