@@ -256,6 +256,14 @@ def test_settings_ranges_switches_sticky_save_try_and_leave_guard(phone, server)
     assert "500 to 2500" in row61.locator(".range").text_content()
     assert page.locator("#setting-22").get_attribute("type") == "checkbox"
     assert page.locator("#setting-2 input[type=checkbox]").count() == 2
+    # grouped under headings; the spindle, probe, laser and Z rows only when asked
+    headings = page.locator("#settings-body tr.group-head").all_text_contents()
+    assert headings[:4] == ["Motion", "Pen", "Switches and homing", "Work area"], headings
+    assert page.locator("#setting-30").count() == 0
+    page.check("#settings-all")
+    page.wait_for_selector("#setting-30")
+    page.uncheck("#settings-all")
+    page.wait_for_selector("#setting-30", state="detached")
 
     # out of range: the server refuses it with the range; the board keeps its value
     before = board_setting(server, 61)
