@@ -116,7 +116,10 @@ def test_three_plotters_stops_banners_and_home_all(desktop, tmp_path):
         title = page.locator("#estop-title").text_content()
         assert title.startswith("All plotters") and "another" not in title, title
         assert page.locator("#estop-home").text_content() == "Home all"
-        assert not page.locator('#plotters [data-verb="stop-all"]').is_disabled()
+        stop_all = page.locator('#plotters [data-verb="stop-all"]')
+        assert not stop_all.is_disabled()
+        colour = stop_all.evaluate("(b) => getComputedStyle(b).backgroundColor")
+        assert colour == "rgb(165, 17, 17)", colour  # still red under the pointer: usable
         page.click("#estop-home")
         for name in NAMES:
             server.wait_plotter(name, lambda m: m["state"] == "Idle", 120)
