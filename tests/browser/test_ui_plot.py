@@ -106,7 +106,7 @@ def plot_stop_unlock_next(
     page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False,
     pause_resume: bool = False, cancel_next: bool = False,
 ) -> tuple[float, float]:
-    """The main story; returns the ms from the stop input to 'Machine stopped' shown, and
+    """The main story; returns the ms from the stop input to 'stopped' shown, and
     to the plotter's last step pulse."""
     long_name, next_name = f"{prefix}-spiral.svg", f"{prefix}-square.svg"
     # with homing enabled the board starts in Alarm: the banner offers Home
@@ -278,7 +278,7 @@ def test_desktop_plot_stop_unlock_next(desktop, server, plotter, capsys):
     record("stop_desktop_click", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
         print(
-            f"\n[ui] desktop: click on stop -> 'Machine stopped' shown: {elapsed:.0f} ms; "
+            f"\n[ui] desktop: click on stop -> 'stopped' shown: {elapsed:.0f} ms; "
             f"last step pulse {last_step:.0f} ms after the click"
         )
 
@@ -306,7 +306,7 @@ def test_phone_plot_stop_unlock_next(phone, server, plotter, capsys):
     record("stop_phone_tap", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
         print(
-            f"\n[ui] phone: tap on stop -> 'Machine stopped' shown: {elapsed:.0f} ms; "
+            f"\n[ui] phone: tap on stop -> 'stopped' shown: {elapsed:.0f} ms; "
             f"last step pulse {last_step:.0f} ms after the tap"
         )
 
@@ -451,7 +451,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     assert elapsed < 1000
     record("stop_idle_escape", {"ms": round(elapsed, 1)})
     with capsys.disabled():
-        print(f"\n[ui] Escape key (machine idle) -> 'Machine stopped' shown: {elapsed:.0f} ms")
+        print(f"\n[ui] Escape key (machine idle) -> 'stopped' shown: {elapsed:.0f} ms")
 
     # the REST fallback: at once when the socket cannot send, after ~300 ms without an ack
     for breakage, fallback_ms in (("throw new Error('down')", 0), ("", 300)):
@@ -525,8 +525,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
 
     # a 401 anywhere (here: the session is gone) returns to the login view
     page.context.clear_cookies()
-    page.click(".tab[data-tab=settings]")
-    page.click("#settings-reload")
+    page.click(".tab[data-tab=settings]")  # it reads the webhooks: answered 401
     page.wait_for_selector("#login-view:not([hidden])")
     assert page.locator("#app").is_hidden()
 
