@@ -77,7 +77,7 @@ def stage(client: httpx.Client) -> None:
 
 @contextlib.contextmanager
 def demo_server(tmp: Path) -> Iterator[tuple[str, str]]:
-    with running_server(tmp / "data", ["--virtual", "3", "--sim-speed", "2"]) as server:
+    with running_server(tmp / "data", ["--virtual", "3", "--sim-speed", "1"]) as server:
         stage(server.client)
         yield server.url, server.token
 

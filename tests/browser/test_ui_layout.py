@@ -102,6 +102,13 @@ def test_every_tab_fits_a_phone_and_stop_never_covers_content(browser, server_vi
         desk.evaluate("window.scrollTo(0, 0)")
         card = desk.locator(".preview-card").bounding_box()
         assert card and card["y"] + card["height"] <= DESKTOP["height"], card  # fits 900 px
+        # also with the resume panel above the canvas (a finished job, opened from History)
+        desk.click('.tab[data-tab="history"]')
+        desk.locator("#history-body tr .name").first.click()
+        desk.wait_for_selector("#tab-plot:not([hidden]) #resume-point:not([hidden])")
+        desk.evaluate("window.scrollTo(0, 0)")
+        card = desk.locator(".preview-card").bounding_box()
+        assert card and card["y"] + card["height"] <= DESKTOP["height"], card
     finally:
         desk.context.close()
     assert page_errors == [] and console == [], (page_errors, console)

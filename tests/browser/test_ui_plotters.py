@@ -118,6 +118,7 @@ def test_three_plotters_stops_banners_and_home_all(desktop, tmp_path):
         assert page.locator("#estop-home").text_content() == "Home all"
         stop_all = page.locator('#plotters [data-verb="stop-all"]')
         assert not stop_all.is_disabled()
+        stop_all.hover()
         colour = stop_all.evaluate("(b) => getComputedStyle(b).backgroundColor")
         assert colour == "rgb(165, 17, 17)", colour  # still red under the pointer: usable
         page.click("#estop-home")
