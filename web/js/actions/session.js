@@ -119,7 +119,9 @@ export function sessionActions({ store, socket, estop, core, all }) {
         core.ensurePreview();
       } else if (msg.type === "log") all.appendLog(msg.direction || "rx", msg.line ?? "");
       else if (msg.type === "ack" && msg.command === "estop") estop.onSocketAck();
-      else if (msg.type === "error") {
+      else if (msg.type === "error" && msg.command === "command" && msg.confirm) {
+        all.confirmCommand(msg.line, msg.detail);
+      } else if (msg.type === "error") {
         store.update((st) => {
           const detail = msg.detail ?? msg.message ?? "error from the server";
           const text = errorText(typeof detail === "string" ? detail : new ApiError(0, detail).message);
