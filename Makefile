@@ -16,7 +16,7 @@ BOARDS := $(shell sed -n "s/^BOARDS := //p" firmware/Makefile)
 
 INKSCAPE_EXTENSIONS ?= $(HOME)/.config/inkscape/extensions
 
-.PHONY: run test setup setup-test native firmware boards sim lint flash install-service bench clean inkscape-extension
+.PHONY: run test setup setup-test native firmware boards sim lint flash install-service bench clean inkscape-extension screenshots
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
@@ -82,6 +82,13 @@ inkscape-extension:
 
 bench: setup-test firmware sim
 	for b in bench/*.py; do $(PY) $$b || exit 1; done
+
+# every page of the web UI at 1400x900 and 390x844 (a demo server with three virtual
+# plotters) into SHOTS_DIR, for review; docs/screenshot.png (the README's) from it
+SHOTS_DIR ?= screenshots
+screenshots: setup-test sim
+	$(MAKE) BOARD=$(BOARD) firmware
+	$(PY) scripts/screenshots.py --out $(SHOTS_DIR) --readme
 
 clean:
 	$(MAKE) -C firmware clean

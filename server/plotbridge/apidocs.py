@@ -31,6 +31,55 @@ CSP = (
 SWAGGER_PARAMETERS = {"validatorUrl": None}  # the default badge asks validator.swagger.io
 
 
+# What /docs groups the endpoints by: the first path prefix that matches names the tag.
+TAGS: tuple[tuple[str, str, str], ...] = (
+    ("/api/jobs", "jobs", "Upload, list and act on jobs (each job lists its `actions`)"),
+    ("/api/patterns", "jobs", ""),
+    ("/api/pens", "pens", "The pen library: servo positions, speed, odometers"),
+    ("/api/plotters", "plotters", "Each plotter's board: state, stop, home, jog, settings"),
+    ("/api/machine", "plotters", ""),
+    ("/api/estop", "plotters", ""),
+    ("/api/sim", "virtual plotter", "What the virtual plotter's pen drew"),
+    ("/api/settings", "settings", "Server settings: webhooks"),
+    ("/", "session", "Log in and out, health, server facts"),
+)
+PUBLIC_PATHS = frozenset({"/api/health", "/api/session", "/api/login", "/api/logout", "/login"})
+SECURITY_SCHEMES = {
+    "token": {"type": "http", "scheme": "bearer",
+              "description": "`Authorization: Bearer TOKEN` (the token `plotbridge token` prints)"},
+    "session": {"type": "apiKey", "in": "cookie", "name": "plotbridge_session",
+                "description": "the browser's session after `POST /api/login`; a request that "
+                               "changes something also sends the header `X-Plotbridge: 1`"},
+}  # fmt: skip
+
+
+def _tag(path: str) -> str:
+    return next(tag for prefix, tag, _ in TAGS if path.startswith(prefix))
+
+
+def describe_api(app: FastAPI) -> None:
+    """The OpenAPI document declares how to authenticate (a bearer token or the session
+    cookie; the public paths need neither) and groups every endpoint by tag."""
+    build = app.openapi
+
+    def openapi() -> dict:
+        if app.openapi_schema is None:
+            schema = build()
+            for path, operations in schema.get("paths", {}).items():
+                for operation in operations.values():
+                    if not operation.get("tags"):
+                        operation["tags"] = [_tag(path)]
+            schema.setdefault("components", {})["securitySchemes"] = SECURITY_SCHEMES
+            schema["security"] = [{"token": []}, {"session": []}]
+            for path in PUBLIC_PATHS:
+                for operation in schema.get("paths", {}).get(path, {}).values():
+                    operation["security"] = []
+            schema["tags"] = [{"name": tag, "description": text} for _, tag, text in TAGS if text]
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+
+
 def _page(response: HTMLResponse) -> HTMLResponse:
     response.headers["Content-Security-Policy"] = CSP
     return response
@@ -38,6 +87,7 @@ def _page(response: HTMLResponse) -> HTMLResponse:
 
 def mount_docs(app: FastAPI, docs_url: str = "/docs", redoc_url: str = "/redoc") -> None:
     """Add both pages and their assets; create the app with docs_url=None, redoc_url=None."""
+    describe_api(app)
     openapi_url = app.openapi_url or "/openapi.json"
     oauth2_url = f"{docs_url}/oauth2-redirect"
     favicon = f"{ASSETS_URL}/favicon.png"

@@ -249,22 +249,42 @@ def config_from_args(args: argparse.Namespace) -> Config:
     )
 
 
-def _login_url(host: str, port: int, token: str) -> str:
-    if host in ("0.0.0.0", "::", ""):
-        host = socket.gethostname()
-    return f"http://{host}:{port}/login?token={token}"
+LISTEN_FILE = "listen"  # DATA_DIR/listen: "HOST PORT" of the running server, for `token`
+
+
+def login_hosts(host: str) -> list[str]:
+    """The names a phone on the LAN reaches the server by: listening on every address, the
+    LAN addresses and the zeroconf name (NAME.local, which mdns.py announces); else the
+    host it listens on."""
+    if host not in ("0.0.0.0", "::", ""):
+        return [f"[{host}]" if ":" in host else host]
+    from plotbridge import mdns
+
+    lan = [a for a in mdns.machine_addresses() if ":" not in a]
+    return [*lan[:1], f"{socket.gethostname().split('.')[0]}.local"]
 
 
 def print_login(host: str, port: int, token: str) -> None:
-    """The login link and its QR code (for a phone's camera) on the console."""
+    """The login link and its QR code (for a phone's camera) on the console: by the LAN
+    address where there is one (every phone resolves it), and by NAME.local."""
     import io
 
     import segno
 
-    url = _login_url(host, port, token)
+    urls = [f"http://{name}:{port}/login?token={token}" for name in login_hosts(host)]
     qr = io.StringIO()
-    segno.make(url, error="l").terminal(out=qr, compact=True)
-    print(f"plotbridge: open {url}\n{qr.getvalue()}", flush=True)
+    segno.make(urls[0], error="l").terminal(out=qr, compact=True)
+    also = "".join(f"\n            or {url}" for url in urls[1:])
+    print(f"plotbridge: open {urls[0]}{also}\n{qr.getvalue()}", flush=True)
+
+
+def listening_port(data_dir: Path) -> int:
+    """The port the server with this data directory listens on (DATA_DIR/listen), else
+    PLOTBRIDGE_PORT, else 8000."""
+    try:
+        return int((data_dir / LISTEN_FILE).read_text().split()[1])
+    except (OSError, IndexError, ValueError):
+        return int(_env("PORT", 8000))
 
 
 def resolve_token(config: Config) -> tuple[str, bool]:
@@ -345,6 +365,7 @@ async def serve(config: Config) -> int:
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
         server = connections.GuardedServer(settings)
+        (config.data_dir / LISTEN_FILE).write_text(f"{config.host} {config.port}\n")
         if generated:  # later starts keep it out of logs: `plotbridge token` prints it
             print_login(config.host, config.port, token)
         log.info(
@@ -377,7 +398,8 @@ def add_token_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rotate", action="store_true",
                         help="write a new token: every session ends (a running server notices)")
     parser.add_argument("--host", default=_env("HOST", "0.0.0.0"), help="host in the link")
-    parser.add_argument("--port", type=int, default=int(_env("PORT", 8000)), help="link's port")
+    parser.add_argument("--port", type=int, default=None,
+                        help="link's port (default: the running server's, else 8000)")
 
 
 def token_command(args: argparse.Namespace) -> int:
@@ -395,7 +417,8 @@ def token_command(args: argparse.Namespace) -> int:
     except (OSError, TokenRefused) as exc:
         print(f"plotbridge token: {exc}", file=sys.stderr)
         return 1
-    print_login(args.host, args.port, token)
+    port = args.port if args.port is not None else listening_port(args.data_dir.expanduser())
+    print_login(args.host, port, token)
     return 0
 
 

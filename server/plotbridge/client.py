@@ -157,7 +157,7 @@ class Plotbridge:
                     raise
                 response = self._http.request(method, path, **kwargs)
         except httpx.HTTPError as exc:
-            raise PlotbridgeError(f"cannot reach {self.url}: {exc}") from exc
+            raise SetupError(f"cannot reach {self.url}: {exc}") from exc  # no server: exit 2
         if response.is_error:
             try:
                 detail = response.json().get("detail")

@@ -42,7 +42,7 @@ def _listen_address(host: str) -> ipaddress.IPv4Address | ipaddress.IPv6Address 
     return None if address.is_unspecified else address
 
 
-def _machine_addresses() -> list[str]:
+def machine_addresses() -> list[str]:
     import ifaddr
 
     found = []
@@ -61,7 +61,7 @@ def service_infos(
     """The records the server registers: one per service type, same name and addresses."""
     hostname = (name or socket.gethostname()).split(".")[0]
     listen = _listen_address(host)
-    addresses = [str(listen)] if listen is not None else _machine_addresses()
+    addresses = [str(listen)] if listen is not None else machine_addresses()
     properties = {"path": path, "api": "/api", "version": __version__}
     server = f"{hostname}.local."
     return [

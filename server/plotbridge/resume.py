@@ -256,7 +256,8 @@ class PickError(ValueError):
 
 def pick(program: Path, layers: list[Layer], lines_total: int,
          where: dict[str, Any], overlap: float = 0.0) -> ResumePoint:  # fmt: skip
-    """Where to resume from `where`: {"x", "y"} (the nearest stroke vertex), {"line"}
+    """Where to resume from `where`: {"x", "y"} (the nearest point on any pen-down move,
+    along a segment or an arc, not only at its ends), {"line"}
     (its start) or {"layer"} (1-based; its first line), then `overlap` mm back along
     the stroke that point lies on (split mid-move, never past the stroke's start)."""
     if "layer" in where:
@@ -275,11 +276,9 @@ def pick(program: Path, layers: list[Layer], lines_total: int,
         for move in walk:
             if not move.down:
                 continue
-            for vertex, at in ((move.start, ResumePoint(move.line, move.start)),
-                               (move.end, ResumePoint(move.line, move.end))):  # fmt: skip
-                distance = math.dist(vertex, target)
-                if best is None or distance < best[0]:
-                    best = (distance, at)
+            distance, t = move.nearest(target)
+            if best is None or distance < best[0]:
+                best = (distance, ResumePoint(move.line, move.at(t)))
     if best is None:
         raise PickError("the job draws nothing: there is no stroke to resume from")
     return _back(program, best[1], overlap)

@@ -125,6 +125,22 @@ def _ranges() -> dict[int, Range]:
 
 
 RANGES: dict[int, Range] = _ranges()
+
+Group = Literal["motion", "pen", "switches", "area", "board", "other"]
+GROUPS: dict[Group, tuple[int, ...]] = {
+    "motion": (110, 111, 120, 121, 11, 12, 100, 101, 63),
+    "pen": (60, 61, 62, 64, 65),
+    "switches": (22, 21, 20, 23, 24, 25, 26, 27, 5),
+    "area": (130, 131),
+    "board": (0, 1, 2, 3, 4, 10, 13),
+}
+"""What a plotter user means by each setting, in the order shown; "other" (spindle, probe,
+laser, Z) does not apply to a pen plotter: the UI hides it unless asked."""
+_GROUP_OF = {number: group for group, numbers in GROUPS.items() for number in numbers}
+
+
+def group(number: int) -> Group:
+    return _GROUP_OF.get(number, "other")
 MASK_BITS = ("X", "Y")  # bit 0, bit 1 of every mask setting
 
 

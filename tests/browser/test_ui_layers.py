@@ -6,11 +6,13 @@ Chromium shows none, and the test needs to see what would have been shown."""
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from tests.browser.conftest import PHONE, login, new_page, screenshot
 from tests.fixtures.drawings import THREE_LAYERS
-from tests.fixtures.pages import job_row, upload, wait_job_state
+from tests.fixtures.pages import job_row, server_job, upload, wait_job_state
 
 pytestmark = pytest.mark.browser
 
@@ -93,18 +95,16 @@ def test_layers_show_progress_and_background_notices(browser, server, plotter, v
         wait_layers(page, [1, 1, 0])
         page.evaluate("window.__hidden = true")  # away again when the job ends
         assert server.client.post(f"/api/jobs/{job['id']}/resume").status_code == 200
-        wait_job_state(page, NAME, ("done",), timeout=60_000)
-        done = wait_layers(page, [1, 1, 1])
-        assert all(row["current"] is None for row in done)
+        wait_job_state(page, NAME, ("done",), timeout=60_000)  # now in History
         page.wait_for_function("() => window.__notices.length === 2")
         notices = page.evaluate("window.__notices")
         assert [n["title"] for n in notices] == ["plotbridge: change the pen",
                                                  f"plotbridge: “{NAME}” is done"]
-        assert notices[0]["body"].startswith("Layer 2 of 3, 'shade'")
+        assert notices[0]["body"].startswith(f"“{NAME}”, layer 2 of 3 “shade”: load the pen")
         assert page.evaluate("window.__asked") == 1  # asked on the Start click, once
         colours = [layer["colour"] for layer in server.job(job["id"])["layers"]]
         rgb = [f"rgb({int(c[1:3], 16)}, {int(c[3:5], 16)}, {int(c[5:7], 16)})" for c in colours]
-        assert [row["swatch"] for row in done] == rgb
+        assert [row["swatch"] for row in changing] == rgb
     finally:
         page.context.close()
     assert not errors, f"JavaScript errors on the page: {errors}"
@@ -118,22 +118,25 @@ def test_layer_rows_and_notices_are_pure_functions_of_the_job(desktop, static_we
         const { jobNotice } = await import('/js/notify.js');
         const layer = (name, colour, progress) => ({ name, colour, progress, first_line: 1,
                                                       estimate_s: 65, pen_down_mm: 1234 });
-        const job = { id: 'j', name: 'cat', state: 'running',
+        const A = ACTIONS;
+        const job = { id: 'j', name: 'cat', state: 'running', actions: A.running,
                       layers: [layer('a', '#ff0000', 1), layer('', 'red;x', 0.25)] };
         return {
           rows: layerRows(job),
-          single: layerRows({ ...job, layers: [layer('a', '#000', 0)] }),
-          stopped: layerRows({ ...job, state: 'stopped' }).map((r) => r.current),
+          single: layerRows({ ...job, layers: [layer('a', '#000', 0)] }).length,
+          stopped: layerRows({ ...job, state: 'stopped', actions: A.stopped })
+            .map((r) => r.current),
           progress: jobNotice(job, { ...job, progress: 0.5 }),
           cancelledWaiting: jobNotice({ state: 'waiting' }, { ...job, state: 'cancelled' }),
           failed: jobNotice(job, { ...job, state: 'failed', error: 'line 4: error:20' }),
           change: jobNotice(job, { ...job, state: 'pen_change', pen_change: null }),
         };
-    }""")
+    }""".replace("ACTIONS", json.dumps({s: server_job(s)["actions"]
+                                          for s in ("running", "stopped")})))
     assert [(r["name"], r["colour"], r["current"]) for r in got["rows"]] == [
         ("a", "#ff0000", False), ("layer 2", "", True)]  # a colour that is no colour: none
     assert got["rows"][1]["info"] == "25 % · est. 1 min 05 s · 1.23 m"
-    assert got["single"] == [] and got["stopped"] == [False, False]
+    assert got["single"] == 1 and got["stopped"] == [False, False]
     assert got["progress"] is None and got["cancelledWaiting"] is None
     assert got["failed"]["title"] == "plotbridge: “cat” failed"
     assert got["failed"]["body"] == "line 4: error:20"

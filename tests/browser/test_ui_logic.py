@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
-from tests.fixtures.pages import run
+from tests.fixtures.pages import run, server_job
 
 pytestmark = pytest.mark.browser
 
@@ -94,60 +96,40 @@ def test_banners_say_what_clears_them(modules):
         s.machine = {connected: false, state: 'Disconnected'};
         out.push(keys(s));
         s.machine = {connected: true, state: 'Idle'};
-        s.jobs = [{id: 'a', name: 'n', state: 'interrupted', resume_line: 7}];
+        s.jobs = [JOB];
         out.push(keys(s));
         return out;
-    """)
+    """.replace("JOB", json.dumps(server_job("interrupted", id="a"))))
     assert got[0] == [["socket", ["reconnect"]]]
     assert got[1] == [["alarm", ["home", "unlock"]]]
-    assert "position is lost" in got[2]
+    assert "position is probably lost" in got[2]
     assert got[3] == [["link", []]]
-    assert got[4] == [["int-a", ["resume-job"]]]
+    want = [a for a in ("resume", "home_then_resume") if a in server_job("interrupted")["actions"]]
+    assert got[4] == [["int-a", want]]
 
 
-def test_job_buttons_follow_the_state(modules):
-    got = run(modules, """
-        const verbs = (b) => b.map((x) => x.verb + (x.disabled ? '-' : ''));
-        return [
-          verbs(m.jobButtons({state: 'queued'}, 0, 2, false)),
-          verbs(m.jobButtons({state: 'queued'}, 1, 2, true)),
-          verbs(m.jobButtons({state: 'running'}, -1, 0, true)),
-          verbs(m.jobButtons({state: 'paused'}, -1, 0, true)),
-          verbs(m.jobButtons({state: 'stopped'}, -1, 0, false)),
-          verbs(m.jobButtons({state: 'done'}, -1, 0, false)),
-          verbs(m.jobButtons({state: 'waiting', bounds: {}}, 0, 1, true)),
-          verbs(m.jobButtons({state: 'done', bounds: {}}, -1, 0, false)),
-          m.jobButtons({state: 'queued'}, 0, 1, true)[0].label,
-          verbs(m.jobButtons({state: 'pen_change', bounds: {}}, -1, 0, true)),
+STATES = ["queued", "waiting", "running", "paused", "pen_change", "done", "failed", "cancelled",
+          "stopped", "interrupted"]
 
 
-          verbs(m.jobButtons({state: 'interrupted'}, -1, 0, false)),
-          verbs(m.jobButtons({state: 'failed'}, -1, 0, true)),
-        ];
+def test_job_buttons_are_exactly_the_servers_actions(modules):
+    jobs = [server_job(state) for state in STATES]
+    got = run(modules, f"""
+        const jobs = {json.dumps(jobs)};
+        return jobs.map((j) => m.jobButtons(j, 0, 2).map((b) => b.verb + (b.disabled ? '-' : '')));
     """)
-    assert got == [
-        ["start", "up-", "down", "delete"],
-        ["start", "up", "down-", "delete"],
-        ["pause", "cancel"],
-        ["resume", "cancel"],
-        ["resume", "restart", "delete"],
-        ["start", "delete"],
-        ["cancel", "frame-", "up-", "down-"],
-        ["start", "frame", "delete"],
-        "Start next",
-        ["resume", "cancel"],
-
-
-        ["resume", "restart", "cancel", "delete"],
-        ["restart-", "delete"],
-    ]
+    for job, verbs in zip(jobs, got, strict=True):
+        want = [a for a in job["actions"] if a not in ("edit", "move")]
+        if "move" in job["actions"]:
+            want += ["up-", "down"]
+        assert verbs == want, job["state"]
 
 
 def test_stop_confirmation_and_control_lock(modules):
     got = run(modules, """
         const s = m.initialState();
         s.machine = {connected: true, state: 'Run', seq: 5};
-        s.jobs = [{id: 'j', state: 'running'}];
+        s.jobs = [RUNNING];
         const out = [m.controlLock(s)];
         s.estop = {acked: false, seqAtClick: 5, wasMoving: true};
         out.push(m.estopConfirmed(s));
@@ -155,12 +137,13 @@ def test_stop_confirmation_and_control_lock(modules):
         out.push(m.estopConfirmed(s));          // still the report from before the click
         s.machine = {connected: true, state: 'Alarm', seq: 6};
         out.push(m.estopConfirmed(s));
-        s.jobs = [{id: 'j', state: 'stopped'}];
+        s.jobs = [STOPPED];
         out.push(m.controlLock(s));
         s.machine = {connected: true, state: 'Idle', seq: 7};
         out.push(m.controlLock(s));
         return out;
-    """)
+    """.replace("RUNNING", json.dumps(server_job("running", id="j")))
+       .replace("STOPPED", json.dumps(server_job("stopped", id="j"))))
     assert got[0].startswith("Disabled while a job")
     assert got[1:4] == [False, False, True]
     assert got[4].startswith("In alarm")
@@ -179,16 +162,17 @@ def test_hold_button_follows_the_selected_plotter(modules):
         out.push(m.holdAction(s));
         s.machine.state = 'Idle';
         s.plotter = 'a';
-        s.jobs = [{id: 'j', state: 'running', plotter: 'b'}];
+        s.jobs = [{...RUNNING, plotter: 'b'}];
         out.push(m.holdAction(s));
         s.jobs[0].plotter = 'a';
         out.push(m.holdAction(s));
-        s.jobs[0].state = 'paused';
+        s.jobs[0] = {...PAUSED, plotter: 'a'};
         out.push(m.holdAction(s));
         s.machine.connected = false;
         out.push(m.holdAction(s));
         return out;
-    """)
+    """.replace("RUNNING", json.dumps(server_job("running", id="j")))
+       .replace("PAUSED", json.dumps(server_job("paused", id="j"))))
     assert got == [None, None, "hold", "continue", None, "hold", "continue", None]
 
 
@@ -211,10 +195,10 @@ def test_reducer_stop_from_another_page_and_its_end(modules):
         out.push(s.estop);                                      // another plotter's stop
         s = m.reduce(s, {type: 'stopped', plotter: 'p', origin: null});
         out.push(s.estop.remote);
-        s = m.reduce(s, {type: 'job', job: {id: 'j', state: 'running'}});
+        s = m.reduce(s, {type: 'job', job: RUNNING});
         out.push(s.estop);                                      // a job started: gone
         return out;
-    """)
+    """.replace("RUNNING", json.dumps(server_job("running", id="j"))))
     assert got[0] is None and got[1] == 1 and got[2] == "p"
     assert got[3] is None
     assert got[4:6] == ["browser", False]
@@ -229,22 +213,27 @@ def test_reducer_jobs_and_the_shown_job(modules):
         let s = m.initialState();
         const name = (st) => (m.previewJob(st) || {}).id ?? null;
         const out = [];
-        const jobs = [{id: 'old', state: 'done'}, {id: 'q', state: 'queued'}];
+        const J = JOBS;
+        const jobs = [J.old, J.q];
         s = m.reduce(s, {type: 'jobs', jobs});
         out.push(name(s));                        // never the unrelated finished job
-        s = m.reduce(s, {type: 'job', job: {id: 's', state: 'stopped'}});
+        s = m.reduce(s, {type: 'job', job: J.s});
         out.push(name(s));                        // a stopped job needs attention
-        s = m.reduce(s, {type: 'job', job: {id: 'q', state: 'running'}});
+        s = m.reduce(s, {type: 'job', job: J.qr});
         out.push(name(s));
         s = {...s, selectedJobId: 'old'};
         out.push(name(s));                        // the selected one wins
         s = m.reduce(s, {type: 'job_deleted', id: 'old'});
         s = m.reduce(s, {type: 'queue', order: ['s', 'q']});
         out.push(s.jobs.map((j) => j.id), name(s));
-        s = m.reduce(s, {type: 'jobs', jobs: [{id: 'd', state: 'done'}]});
+        s = m.reduce(s, {type: 'jobs', jobs: [J.d]});
         out.push(name(s));
         return out;
-    """)
+    """.replace("JOBS", json.dumps({
+        "old": server_job("done", id="old"), "q": server_job("queued", id="q"),
+        "s": server_job("stopped", id="s"), "qr": server_job("running", id="q"),
+        "d": server_job("done", id="d"),
+    })))
     assert got == [
         "q", "s", "q", "old", ["s", "q"], "q", None,
     ]
@@ -252,7 +241,7 @@ def test_reducer_jobs_and_the_shown_job(modules):
 
 def test_reducer_placement_form_follows_its_job(modules):
     got = run(modules, """
-        const job = (id, placement) => ({id, state: 'queued', placement});
+        const job = (id, placement) => ({...QUEUED, id, placement});
         let s = m.initialState();
         s = m.reduce(s, {type: 'jobs', jobs: [job('a', {paper: 'A5-landscape', margin: 5, fit: true,
                                                             rotate: 90, scale: 2, dx: 3, dy: 4})]});
@@ -268,7 +257,7 @@ def test_reducer_placement_form_follows_its_job(modules):
         s = m.withPlacement(s);
         out.push([s.placement.scale, s.placement.rotate, s.placementJob]);
         return out;
-    """)
+    """.replace("QUEUED", json.dumps(server_job("queued"))))
     assert got[0] == {
         "paper": "A5", "landscape": True, "margin": 5, "fit": True, "rotate": 90, "scale": 2,
         "dx": 3, "dy": 4,
@@ -282,10 +271,10 @@ def test_header_says_connection_lost(modules):
     got = run(modules, """
         const s = m.initialState();
         s.machine = {connected: true, state: 'Run', position: {x: 1, y: 2}, pen: 'down'};
-        s.jobs = [{id: 'j', name: 'n', state: 'running', progress: 0.5, eta_s: 120}];
+        s.jobs = [{...RUNNING, progress: 0.5, eta_s: 120}];
         const live = m.headerSummary(s);
         s.serverLost = true;
         return [live, m.headerSummary(s)];
-    """)
-    assert got[0]["state"] == "Run" and "left" in got[0]["job"] and got[0]["pos"]
+    """.replace("RUNNING", json.dumps(server_job("running", id="j"))))
+    assert got[0]["state"] == "moving" and "left" in got[0]["job"] and got[0]["pos"]
     assert got[1] == {"state": "connection lost", "badge": "Lost", "pos": "", "pen": "", "job": ""}

@@ -14,7 +14,7 @@ SERVO_US = 8  # the servo timer ticks 4 µs (firmware/src/servo.c)
 
 
 def pen_row(page, name: str):
-    return page.locator("#pens-list tr", has=page.locator(".name", has_text=name))
+    return page.locator("#pens-list li.pen", has=page.locator(".name", has_text=name))
 
 
 def wait_pen_us(plotter, pen: str, us: int) -> None:
@@ -57,7 +57,8 @@ def test_pens_page_and_layer_pickers(desktop, server, plotter):
     # a job's layer pickers: the second layer gets the fineliner
     job = server.client.post("/api/jobs", files={"file": ("three.svg", THREE_LAYERS)}).json()
     page.click(".tab[data-tab=plot]")
-    picker = page.locator(f"#queue li[data-key='{job['id']}'] select[data-layer='2']")
+    row_of_job = f"#queue li[data-key='{job['id']}']"
+    picker = page.locator(f"{row_of_job} li.layer[data-number='2'] select.layer-pen")
     picker.select_option(label="fineliner 0.3")
     page.wait_for_function(
         "id => window.plotbridge.store.state.jobs.find((j) => j.id === id).layers[1].pen !== null",

@@ -106,17 +106,17 @@ def plot_stop_unlock_next(
     page, server, plotter, viewport, prefix: str, press_stop, clear_from_banner: bool = False,
     pause_resume: bool = False, cancel_next: bool = False,
 ) -> tuple[float, float]:
-    """The main story; returns the ms from the stop input to 'Machine stopped' shown, and
+    """The main story; returns the ms from the stop input to 'stopped' shown, and
     to the plotter's last step pulse."""
     long_name, next_name = f"{prefix}-spiral.svg", f"{prefix}-square.svg"
     # with homing enabled the board starts in Alarm: the banner offers Home
     page.wait_for_function(
-        "() => ['Idle', 'Alarm'].includes(document.querySelector('#sum-state').textContent)"
+        "() => ['Idle', 'Alarm'].includes(document.querySelector('#sum-state').dataset.state)"
     )
-    if page.locator("#sum-state").text_content() == "Alarm":
+    if page.locator("#sum-state").get_attribute("data-state") == "Alarm":
         page.locator("#banners button[data-action=home]").click()
         page.wait_for_function(
-            "() => document.querySelector('#sum-state').textContent === 'Idle'", timeout=60_000
+            "() => document.querySelector('#sum-state').dataset.state === 'Idle'", timeout=60_000
         )
     upload(page, long_name, spiral_svg(30))
     wait_job_state(page, long_name, ("queued",))
@@ -152,10 +152,10 @@ def plot_stop_unlock_next(
     page.locator("#queue").scroll_into_view_if_needed()  # where a phone user pressed Start
     if pause_resume:
         row = job_row(page, long_name)
-        row.locator("button[data-verb=pause]").click()
+        row.locator("button[data-verb=hold]").click()
         wait_job_state(page, long_name, ("paused",))
         server.wait_machine(lambda m: m["state"] == "Hold", timeout=10)
-        row.locator("button[data-verb=resume]").click()
+        row.locator("button[data-verb=continue]").click()
         wait_job_state(page, long_name, ("running",))
         server.wait_machine(lambda m: m["state"] == "Run", timeout=10)
     # manual control is locked while the job runs
@@ -170,7 +170,7 @@ def plot_stop_unlock_next(
     elapsed, input_epoch = page.evaluate("window.__stopped")
     clicked_at = input_epoch - (time.time() - time.monotonic())  # on the monotonic clock
     assert elapsed < 1000, f"stopped shown after {elapsed:.0f} ms"
-    assert page.locator("#estop-title").text_content() == "Machine stopped"
+    assert page.locator("#estop-title").text_content() == "The plotter stopped"
     panel = page.locator("#estop-panel").bounding_box()
     assert panel and panel["y"] >= 0 and panel["y"] < viewport["height"] / 2, panel  # in view
     # the server agrees: the job is stopped and the carriage stands still
@@ -196,7 +196,7 @@ def plot_stop_unlock_next(
         page.click("#estop-unlock")
     page.wait_for_selector("#estop-panel", state="hidden")
     page.wait_for_selector("#banners .banner >> text=Alarm", state="detached")
-    page.wait_for_function("() => document.querySelector('#sum-state').textContent === 'Idle'")
+    page.wait_for_function("() => document.querySelector('#sum-state').dataset.state === 'Idle'")
 
     upload(page, next_name, circles_svg(10) if cancel_next else SQUARE_SVG)
     wait_job_state(page, next_name, ("queued",))
@@ -278,7 +278,7 @@ def test_desktop_plot_stop_unlock_next(desktop, server, plotter, capsys):
     record("stop_desktop_click", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
         print(
-            f"\n[ui] desktop: click on stop -> 'Machine stopped' shown: {elapsed:.0f} ms; "
+            f"\n[ui] desktop: click on stop -> 'stopped' shown: {elapsed:.0f} ms; "
             f"last step pulse {last_step:.0f} ms after the click"
         )
 
@@ -306,7 +306,7 @@ def test_phone_plot_stop_unlock_next(phone, server, plotter, capsys):
     record("stop_phone_tap", {"shown_ms": round(elapsed, 1), "last_step_ms": round(last_step)})
     with capsys.disabled():
         print(
-            f"\n[ui] phone: tap on stop -> 'Machine stopped' shown: {elapsed:.0f} ms; "
+            f"\n[ui] phone: tap on stop -> 'stopped' shown: {elapsed:.0f} ms; "
             f"last step pulse {last_step:.0f} ms after the tap"
         )
 
@@ -451,7 +451,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
     assert elapsed < 1000
     record("stop_idle_escape", {"ms": round(elapsed, 1)})
     with capsys.disabled():
-        print(f"\n[ui] Escape key (machine idle) -> 'Machine stopped' shown: {elapsed:.0f} ms")
+        print(f"\n[ui] Escape key (machine idle) -> 'stopped' shown: {elapsed:.0f} ms")
 
     # the REST fallback: at once when the socket cannot send, after ~300 ms without an ack
     for breakage, fallback_ms in (("throw new Error('down')", 0), ("", 300)):
@@ -525,8 +525,7 @@ def test_refused_upload_lists_errors_and_names_stay_text(desktop, server, capsys
 
     # a 401 anywhere (here: the session is gone) returns to the login view
     page.context.clear_cookies()
-    page.click(".tab[data-tab=settings]")
-    page.click("#settings-reload")
+    page.click(".tab[data-tab=settings]")  # it reads the webhooks: answered 401
     page.wait_for_selector("#login-view:not([hidden])")
     assert page.locator("#app").is_hidden()
 

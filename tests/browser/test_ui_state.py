@@ -14,7 +14,7 @@ from tests.fixtures.pages import SQUARE_SVG, circles_svg, job_id, job_row, uploa
 
 pytestmark = pytest.mark.browser
 
-BADGE = "() => document.querySelector('#sum-state').textContent"
+BADGE = "() => document.querySelector('#sum-state').dataset.state"
 
 
 def api_job(server, name: str, data: bytes, start: bool = False) -> dict:
@@ -55,9 +55,10 @@ def test_stop_shows_on_every_page_and_goes_with_its_cause(two_pages, server, plo
 
     here.click("#estop")
     here.wait_for_selector("#estop-panel[data-phase=stopped]")
-    assert here.locator("#estop-title").text_content() == "Machine stopped"
+    assert here.locator("#estop-title").text_content() == "The plotter stopped"
     there.wait_for_selector("#estop-panel[data-phase=stopped]")
-    assert there.locator("#estop-title").text_content() == "Machine stopped from another browser"
+    title = there.locator("#estop-title").text_content()
+    assert title == "The plotter stopped from another browser"
     server.wait_job(long["id"], "stopped", timeout=10)
     screenshot(there, "desktop-stopped-elsewhere")
 
@@ -76,7 +77,7 @@ def test_stop_shows_on_every_page_and_goes_with_its_cause(two_pages, server, plo
     # the server goes away: both headers say so instead of the last state; it comes back
     server.stop()
     for page in (here, there):
-        page.wait_for_function(f"() => ({BADGE})() === 'connection lost'", timeout=20_000)
+        page.wait_for_function(f"() => ({BADGE})() === 'Lost'", timeout=20_000)
         assert page.locator("#sum-pos").text_content() == ""
         assert page.evaluate("window.plotbridge.preview.pen") is None  # no stale carriage
         page.locator("#banners .banner", has_text="does not answer").wait_for()
@@ -255,6 +256,14 @@ def test_settings_ranges_switches_sticky_save_try_and_leave_guard(phone, server)
     assert "500 to 2500" in row61.locator(".range").text_content()
     assert page.locator("#setting-22").get_attribute("type") == "checkbox"
     assert page.locator("#setting-2 input[type=checkbox]").count() == 2
+    # grouped under headings; the spindle, probe, laser and Z rows only when asked
+    headings = page.locator("#settings-body tr.group-head").all_text_contents()
+    assert headings[:4] == ["Motion", "Pen", "Switches and homing", "Work area"], headings
+    assert page.locator("#setting-30").count() == 0
+    page.check("#settings-all")
+    page.wait_for_selector("#setting-30")
+    page.uncheck("#settings-all")
+    page.wait_for_selector("#setting-30", state="detached")
 
     # out of range: the server refuses it with the range; the board keeps its value
     before = board_setting(server, 61)

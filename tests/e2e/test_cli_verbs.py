@@ -67,6 +67,10 @@ def test_verbs_report_failures_clearly(server_virtual):
                                server_virtual.url], env=env, capture_output=True, text=True,
                               timeout=60)  # fmt: skip
     assert no_token.returncode == 2 and "no token" in no_token.stderr
+    nowhere = subprocess.run([sys.executable, "-m", "plotbridge", "status", "--url",
+                              "http://127.0.0.1:9", "--token", "a-token-of-enough-length"],
+                             capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert nowhere.returncode == 2 and "cannot reach" in nowhere.stderr  # no server: 2
     unknown = run_cli(server_virtual, "home", "--plotter", "nope")
     # 404 from a server with several plotters; 405 from one without per-plotter paths
     assert unknown.returncode == 1 and re.search(r"homing failed \(40[45]\)", unknown.stderr)

@@ -74,21 +74,22 @@ def near(p, q, tol: float = TOL) -> bool:
     return math.dist(p[:2], q) <= tol
 
 
-def test_resume_from_a_picked_vertex_with_overlap(server, plotter):
+def test_resume_from_a_picked_point_with_overlap(server, plotter):
     server.home()
     job = plotted(server, plotter, TWO_STROKES)
     plotter.clear()
-    # a click near the L's corner picks the vertex (60, 20); 1 mm back along the stroke
+    # a click near the L's corner picks the nearest point on its edge, (59.2, 20), not the
+    # corner; 1 mm back along the stroke
     resume(server, job["id"], {"from": {"x": 59.2, "y": 20.6}, "overlap": 1})
     finish(server, job["id"])
     trace = plotter.trace()
     strokes = trace["strokes"]
     assert len(strokes) == 2, strokes
-    assert near(strokes[0][0], (59.0, 20.0)), strokes[0][:2]  # the new stroke: 1 mm before
+    assert near(strokes[0][0], (58.2, 20.0)), strokes[0][:2]  # the new stroke: 1 mm before
     assert near(strokes[0][-1], (60.0, 40.0)) and near(strokes[1][-1], (120.0, 20.0))
-    # nothing before (59, 20) drawn again: 1 + 20 mm of the L, the 40 mm bar
-    assert abs(trace["draw_mm"] - 61.0) <= 2 * TOL, trace["draw_mm"]
-    assert all(p[0] >= 59.0 - TOL for p in strokes[0])
+    # nothing before (58.2, 20) drawn again: 1.8 + 20 mm of the L, the 40 mm bar
+    assert abs(trace["draw_mm"] - 61.8) <= 2 * TOL, trace["draw_mm"]
+    assert all(p[0] >= 58.2 - TOL for p in strokes[0])
 
 
 def test_resume_from_a_layer_and_bad_points(server, plotter):

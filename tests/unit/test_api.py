@@ -68,7 +68,15 @@ async def test_login_link_redirects_with_cookie(api):
     response = await api.client.get(f"/login?token={TOKEN}")
     assert response.status_code == 303 and response.headers["location"] == "/"
     assert "plotbridge_session" in response.cookies
-    assert (await api.client.get("/login?token=bad")).status_code == 401
+    stale = await api.client.get("/login?token=bad")  # the login page, saying why
+    assert stale.status_code == 303 and stale.headers["location"] == "/?link=stale"
+    assert "plotbridge_session" not in stale.cookies
+
+
+async def test_session_says_whether_logged_in(api):
+    assert (await api.client.get("/api/session")).json() == {"logged_in": False}
+    await api.client.get(f"/login?token={TOKEN}")
+    assert (await api.client.get("/api/session")).json() == {"logged_in": True}
 
 
 async def test_no_cors_headers(api):
@@ -889,3 +897,19 @@ async def test_restart_runs_an_interrupted_job_from_its_first_line(api):
     assert [n for n, _ in again] == list(range(1, len(again) + 1))
     # a running job cannot be restarted; an unknown one is 404
     assert (await api.client.post("/api/jobs/nope/restart")).status_code == 404
+
+
+async def test_openapi_declares_auth_and_groups_by_tag(api):
+    schema = (await api.client.get("/openapi.json")).json()
+    assert set(schema["components"]["securitySchemes"]) == {"token", "session"}
+    assert schema["components"]["securitySchemes"]["token"]["scheme"] == "bearer"
+    assert schema["security"] == [{"token": []}, {"session": []}]
+    operations = {(path, method): op for path, ops in schema["paths"].items()
+                  for method, op in ops.items()}  # fmt: skip
+    untagged = [key for key, op in operations.items() if op.get("tags") in (None, [], ["default"])]
+    assert untagged == []
+    assert operations[("/api/jobs", "post")]["tags"] == ["jobs"]
+    assert operations[("/api/pens", "get")]["tags"] == ["pens"]
+    assert operations[("/api/health", "get")]["security"] == []
+    assert "security" not in operations[("/api/jobs", "get")]  # the document's default
+    assert {t["name"] for t in schema["tags"]} >= {"jobs", "pens", "plotters", "session"}

@@ -1,4 +1,4 @@
-"""Resume points: a picked vertex, line or layer with an overlap back along the stroke,
+"""Resume points: a picked point on a stroke, a line or layer with an overlap back along the stroke,
 mid-arc splits, where a dead server's board ran out, and which lines a layer selection
 plots (plotbridge.resume, pure logic on program files)."""
 
@@ -41,9 +41,13 @@ def close(a, b, eps=1e-6):
         a.at is None or math.dist(a.at, b.at) < eps)
 
 
-def test_a_picked_point_resolves_to_the_nearest_stroke_vertex(program):
-    assert pick(program, LAYERS, 18, {"x": 19.0, "y": 19.4}) == ResumePoint(7, (20.0, 20.0))
-    # the end of a stroke is a vertex too (the end of its last move)
+def test_a_picked_point_resolves_to_the_nearest_point_on_a_stroke(program):
+    # mid-edge: the foot of the perpendicular on the nearest move, not a vertex
+    assert close(pick(program, LAYERS, 18, {"x": 19.0, "y": 19.4}), ResumePoint(8, (19.0, 20.0)))
+    assert close(pick(program, LAYERS, 18, {"x": 15.3, "y": 9.0}), ResumePoint(6, (15.3, 10.0)))
+    # on an arc: the point of the arc, not of its chord (the arc's top, above its centre)
+    assert close(pick(program, LAYERS, 18, {"x": 60, "y": 21}), ResumePoint(12, (60.0, 20.0)))
+    # past a stroke's end: its end
     assert pick(program, LAYERS, 18, {"x": 9, "y": 21}) == ResumePoint(8, (10.0, 20.0))
     # pen-up travel ends are not vertices
     assert pick(program, LAYERS, 18, {"x": 50, "y": 50}).at != (50.0, 50.0)

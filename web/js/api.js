@@ -1,8 +1,11 @@
-// REST calls. Every 401 goes to the login view through onUnauthorized.
+// REST calls. Every 401 goes to the login view through onUnauthorized. Error messages
+// tell the board's error and alarm numbers in words (words.js).
+
+import { errorText } from "./words.js";
 
 export class ApiError extends Error {
   constructor(status, detail) {
-    super(describeDetail(status, detail));
+    super(errorText(describeDetail(status, detail)));
     this.status = status;
     this.detail = detail;
   }

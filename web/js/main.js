@@ -5,21 +5,21 @@ import { api, setUnauthorizedHandler } from "./api.js";
 import { $, setDisabled, setHidden, setText } from "./dom.js";
 import { createEstop } from "./estop.js";
 import { PreviewCanvas } from "./preview.js";
-import { nearestVertex, paperRect, pointsDone, refineWithPen } from "./preview-data.js";
+import { isActive, isResumable } from "./job-actions.js";
+import { paperRect, pointsDone, refineWithPen } from "./preview-data.js";
 import { createSocket } from "./socket.js";
 import { createStore, initialState, previewJob } from "./store.js";
 import { bindConsole, renderConsole } from "./views/console.js";
 import { bindControl, renderControl } from "./views/control.js";
+import { bindHistory, renderHistory } from "./views/history.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
-import { bindPens, createPenActions, renderPens } from "./views/pens.js";
+import { bindPens, penName, renderPens } from "./views/pens.js";
 import { bindPlotters, renderPlotters } from "./views/plotters.js";
-import { PICKABLE, bindResume, renderResume } from "./views/resume.js";
+import { bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
-const TABS = ["plot", "control", "pens", "settings", "console"];
-const DRAWN_STATES = new Set(["running", "paused", "pen_change", "stopped", "interrupted", "failed", "cancelled"]);
-const LIVE_STATES = new Set(["running", "paused"]);
+const TABS = ["plot", "history", "control", "pens", "settings", "console"];
 
 let preview = null;
 let noticeTimer = null;
@@ -48,22 +48,35 @@ function renderPreview(state) {
   preview.setPen(pen);
   const pick = state.resumePick;
   preview.setPicked(job && pick && pick.jobId === job.id ? pick : null);
+  // The drawn overlay: what the pen has done (the server's lines_done, which stops at the
+  // resume point) while a job runs or can be resumed; a finished job keeps its layer colours.
   let done = 0;
   let tail = null;
-  if (geom && job) {
-    if (job.state === "done") done = geom.strokes.count;
-    else if (DRAWN_STATES.has(job.state)) {
-      done = pointsDone(geom, job.lines_done || 0, job.lines_total || 0);
-      if (LIVE_STATES.has(job.state) && pen) {
-        const found = refineWithPen(geom, done, pen);
-        if (found !== null) {
-          done = found;
-          tail = pen.down ? pen : null;
-        }
+  if (geom && job && (isActive(job) || isResumable(job))) {
+    done = pointsDone(geom, job.lines_done || 0, job.lines_total || 0);
+    if (isActive(job) && pen) {
+      const found = refineWithPen(geom, done, pen);
+      if (found !== null) {
+        done = found;
+        tail = pen.down ? pen : null;
       }
     }
   }
   preview.setDone(done, tail);
+}
+
+/** Before a start: load the pen its first layer needs (named, never a colour code). */
+function renderPenPrompt(state) {
+  const p = state.penPrompt;
+  setHidden($("#pen-prompt"), !p);
+  if (!p) return;
+  const job = state.jobs.find((j) => String(j.id) === String(p.jobId));
+  const name = (id) => penName(state.pens.list, id);
+  const on = p.plotter ? ` on ${p.plotter}` : "";
+  const last = p.loaded === null || p.loaded === undefined
+    ? "plotbridge does not know which pen is loaded"
+    : `the plotter last drew with “${name(p.loaded)}”`;
+  setText($("#pen-prompt-text"), `“${job ? job.name : "the job"}” starts with layer ${p.layer} “${p.layerName}”: load pen “${name(p.pen)}”${on} (${last}).`);
 }
 
 function renderNotice(state) {
@@ -88,6 +101,7 @@ function render(state) {
   setHidden($("#app"), !inApp);
   if (!inApp) {
     setText($("#login-error"), state.login.error);
+    setText($("#login-notice"), state.loginNotice);
     setDisabled($("#login-submit"), state.login.busy);
     return;
   }
@@ -101,11 +115,13 @@ function render(state) {
   renderMachine(state);
   renderPlotters(state);
   renderNotice(state);
+  renderPenPrompt(state);
   if (state.tab === "plot") {
     renderJobs(state);
     renderPreview(state);
     renderResume(state);
-  } else if (state.tab === "control") renderControl(state);
+  } else if (state.tab === "history") renderHistory(state);
+  else if (state.tab === "control") renderControl(state);
   else if (state.tab === "pens") renderPens(state);
   else if (state.tab === "settings") renderSettings(state);
   else renderConsole(state);
@@ -144,6 +160,7 @@ function tabFromHash() {
   store.update((st) => {
     st.tab = tab;
   });
+  if (tab === "settings" && store.state.view === "app") actions.loadWebhooks();
 }
 
 function bind() {
@@ -201,7 +218,12 @@ function bind() {
   bindPlotters(actions);
   bindJobs(actions);
   bindControl(actions);
-  bindPens(createPenActions(store));
+  bindPens(actions.pens);
+  bindHistory(actions, () => store.state);
+  $("#pen-prompt").addEventListener("click", (e) => {
+    const button = e.target.closest("button[data-answer]");
+    if (button) actions.penPromptAnswer(button.dataset.answer === "loaded");
+  });
   bindSettings(actions);
   bindConsole(actions);
   bindResume(actions);
@@ -210,12 +232,7 @@ function bind() {
 async function start() {
   bind();
   preview = new PreviewCanvas($("#preview"));
-  preview.onPick = (p) => {
-    const job = previewJob(store.state);
-    const entry = job && store.state.previews[job.id];
-    const vertex = entry && entry.geom && PICKABLE.has(job.state) ? nearestVertex(entry.geom, p.x, p.y) : null;
-    if (vertex) actions.pickResumePoint(job.id, vertex);
-  };
+  preview.onPick = (p) => actions.pickAt(p);
   // A login link's token (#token=...) is exchanged for a session at once and taken
   // out of the address bar and the history.
   const linkToken = new URLSearchParams(location.hash.slice(1)).get("token");
@@ -224,18 +241,26 @@ async function start() {
   // for debugging in the browser console, and for the browser tests' measurements
   window.plotbridge = { store, actions, preview };
   if (linkToken) {
-    await actions.login(linkToken);
+    await actions.login(linkToken, true);
     return;
   }
+  // A stale login link (/login?token=OLD) lands here with ?link=stale: the login page says why.
+  const stale = new URLSearchParams(location.search).get("link") === "stale";
+  if (stale) history.replaceState(null, "", location.pathname + location.hash);
   try {
-    await api.get("/api/machine");
-    actions.enterApp();
-  } catch (err) {
-    if (err.status !== 401) actions.enterApp(); // logged in; the banners tell what is wrong
-    else store.update((st) => {
-      st.view = "login";
-    });
+    const session = await api.get("/api/session");
+    if (session.logged_in) {
+      actions.enterApp();
+      return;
+    }
+  } catch {
+    actions.enterApp(); // the server does not answer: the banners say so, and it retries
+    return;
   }
+  store.update((st) => {
+    st.view = "login";
+    if (stale) st.loginNotice = "That login link is no longer valid (the server's token changed). Enter the current token, or open the new link that `plotbridge token` prints.";
+  });
 }
 
 start();

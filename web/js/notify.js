@@ -2,7 +2,9 @@
 // job ended. Permission is asked once, from the click that starts a job (browsers refuse
 // a prompt without a user gesture, and a refusal is never asked again).
 
-const ACTIVE = new Set(["running", "paused", "pen_change"]);
+import { isActive } from "./job-actions.js";
+import { penChangeText } from "./views/machine.js";
+
 const ENDED = { done: "is done", failed: "failed", stopped: "was stopped", cancelled: "was cancelled", interrupted: "was interrupted" };
 
 let asked = false;
@@ -14,10 +16,10 @@ export function jobNotice(before, job) {
   const was = before ? before.state : null;
   if (was === job.state) return null;
   if (job.state === "pen_change") {
-    const body = job.pen_change && job.pen_change.message ? job.pen_change.message : `“${job.name}” waits for a pen change`;
+    const body = job.pen_change ? `“${job.name}”, ${penChangeText(job)}` : `“${job.name}” waits for a pen change`;
     return { title: "plotbridge: change the pen", body, tag: `pen-${job.id}` };
   }
-  if (ENDED[job.state] && ACTIVE.has(was)) {
+  if (ENDED[job.state] && before && isActive(before)) {
     const body = job.error || (job.state === "done" ? "The plot is finished." : "");
     return { title: `plotbridge: “${job.name}” ${ENDED[job.state]}`, body, tag: `job-${job.id}` };
   }

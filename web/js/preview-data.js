@@ -203,6 +203,46 @@ export function paperRect(placement) {
   return { x: 0, y: 0, w, h };
 }
 
+/**
+ * The point of any stroke nearest to (x, y) mm, on a segment (not only at vertices), within
+ * `tolerance` mm: {x, y, stroke (index), along (mm from the stroke's start), length (the
+ * stroke's mm), line (the stroke's first program line, when the preview has them)}, or null.
+ */
+export function nearestOnStroke(geom, x, y, tolerance = Infinity) {
+  const strokes = geom && geom.strokes;
+  if (!strokes || strokes.count < 1) return null;
+  const { coords, starts } = strokes;
+  let best = null, bestD = tolerance * tolerance;
+  for (let s = 0; s + 1 < starts.length; s++) {
+    const from = starts[s], to = starts[s + 1];
+    let run = 0;
+    for (let i = from; i < to; i++) {
+      const ax = coords[2 * i], ay = coords[2 * i + 1];
+      const bx = i + 1 < to ? coords[2 * i + 2] : ax, by = i + 1 < to ? coords[2 * i + 3] : ay;
+      const vx = bx - ax, vy = by - ay;
+      const len2 = vx * vx + vy * vy;
+      const t = len2 > 0 ? Math.max(0, Math.min(1, ((x - ax) * vx + (y - ay) * vy) / len2)) : 0;
+      const px = ax + t * vx, py = ay + t * vy;
+      const d = (px - x) ** 2 + (py - y) ** 2;
+      if (d < bestD || (best === null && d <= bestD)) {
+        bestD = d;
+        best = { x: px, y: py, stroke: s, along: run + t * Math.sqrt(len2) };
+      }
+      run += Math.sqrt(len2);
+    }
+    if (best && best.stroke === s) best.length = run;
+  }
+  if (best && geom.lines) best.line = geom.lines.first[best.stroke];
+  return best;
+}
+
+/** The 1-based layer of `layers` (a job's) that program line `line` lies in, or 0. */
+export function layerOfLine(layers, line) {
+  if (!Array.isArray(layers) || !Number.isFinite(line)) return 0;
+  const i = layers.findIndex((l) => line >= l.first_line && line <= l.last_line);
+  return i + 1;
+}
+
 /** The stroke vertex nearest to (x, y) mm, as {x, y}, or null when nothing is drawn. */
 export function nearestVertex(geom, x, y) {
   const coords = geom && geom.strokes ? geom.strokes.coords : null;

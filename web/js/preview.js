@@ -26,6 +26,7 @@ const COLORS = {
   filled: "rgba(28, 63, 148, 0.12)",
 };
 const CLICK_PX = 4; // a press that moves less than this is a click (picks a point), not a pan
+const PICK_PX = 10; // a click picks the stroke within this many CSS pixels
 const SETTLE_MS = 120; // after the last pan/zoom event, re-render crisp
 const FRAME_BUDGET_MS = 8; // static-layer rebuilding per frame
 const MIN_PX = 0.6; // device pixels: closer points are not visible apart
@@ -490,7 +491,7 @@ export class PreviewCanvas {
       up(e);
       if (from && this.view && this.onPick && Math.hypot(p.x - from.x, p.y - from.y) < CLICK_PX) {
         const v = this.view;
-        this.onPick({ x: (p.x - v.ox) / v.scale, y: (v.oy - p.y) / v.scale });
+        this.onPick({ x: (p.x - v.ox) / v.scale, y: (v.oy - p.y) / v.scale, tolerance: PICK_PX / v.scale });
       }
     });
     c.addEventListener("pointercancel", up);

@@ -2,7 +2,8 @@
 // state (a new object; the one passed in is not changed). Side effects (fetching a
 // preview, notifications, reading settings) stay in actions.js.
 
-import { DEFAULT_PLACEMENT, MOVING_STATES, estopConfirmed, jobActive, previewJob } from "./store.js";
+import { isActive } from "./job-actions.js";
+import { DEFAULT_PLACEMENT, MOVING_STATES, estopConfirmed, previewJob, seqNow } from "./store.js";
 
 const sameId = (a, b) => String(a) === String(b);
 const body = (msg, key) => (msg[key] && typeof msg[key] === "object" ? msg[key] : msg);
@@ -55,6 +56,7 @@ function onMachine(state, name, m) {
       ...state,
       plotterOrder: state.plotterOrder.includes(name) ? state.plotterOrder : [...state.plotterOrder, name],
       plotters: { ...state.plotters, [name]: m },
+      plotterSeq: { ...state.plotterSeq, [name]: (state.plotterSeq[name] || 0) + 1 },
       plotter: state.plotter ?? name,
     };
   }
@@ -67,23 +69,33 @@ function upsertJob(state, job) {
   const jobs = i >= 0 ? state.jobs.map((j, k) => (k === i ? { ...j, ...job } : j)) : [...state.jobs, job];
   const next = { ...state, jobs };
   // a job started (here or elsewhere) ends the stopped state the panel is about
-  if (state.estop && state.estop.acked && job.state === "running" && (!before || before.state !== "running")) {
+  if (state.estop && state.estop.acked && isActive(next.jobs[i >= 0 ? i : jobs.length - 1]) && !(before && isActive(before))) {
     next.estop = null;
   }
   return next;
 }
 
-/** Another page (or client) stopped the machine: this page shows the stop too, saying so. */
+/** A plotter was stopped. By this page: its panel is up already. By another page or
+ * client: this page shows the stop too, naming the plotter and saying where it came from. */
 function onStopped(state, msg) {
-  if (state.plotter && msg.plotter && msg.plotter !== state.plotter) return state;
+  if (state.plotter && msg.plotter && msg.plotter !== state.plotter && !(state.estop && state.estop.remote)) {
+    return state; // another plotter's: its card shows it
+  }
   if (msg.origin && msg.origin === state.pageId) return state; // ours: the panel is up
   if (state.estop && !state.estop.remote) return state; // this page stopped it too
+  const names = msg.plotter ? [msg.plotter] : [];
+  if (state.estop && state.estop.remote) {
+    const all = [...new Set([...(state.estop.names || []), ...names])];
+    return { ...state, estop: { ...state.estop, names: all } };
+  }
   const m = state.machine;
+  const job = state.jobs.find((j) => isActive(j) && (!msg.plotter || j.plotter === msg.plotter));
   return {
     ...state,
     estop: {
       phase: "sent", acked: true, remote: msg.origin ? "browser" : "client", at: 0, error: "",
-      seqAtClick: state.machineSeq, wasMoving: jobActive(state) || Boolean(m && MOVING_STATES.has(m.state)),
+      scope: "plotter", names, seqAtClick: seqNow(state, names),
+      wasMoving: Boolean(job) || Boolean(m && MOVING_STATES.has(m.state)),
     },
   };
 }

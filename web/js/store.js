@@ -1,24 +1,26 @@
 // The one state object of the page, and the render loop that follows it.
 // Actions mutate state through update(); renderers read it; a frame renders once.
 
+import { can, isActive, isResumable } from "./job-actions.js";
+
+// Machine states (the board's, not a job's): moving ones, and the ones a hold stops.
 export const MOVING_STATES = new Set(["Run", "Jog", "Home"]);
-export const ACTIVE_JOB_STATES = new Set(["running", "paused", "pen_change"]);
-// A job in one of these wants the user's eyes: its preview is shown unless one is selected.
-const ATTENTION_STATES = new Set(["stopped", "interrupted"]);
-export const DEFAULT_PLACEMENT = { paper: "", landscape: false, margin: 10, fit: false, rotate: 0, scale: 1, dx: 0, dy: 0 };
 const HOLDABLE_STATES = new Set(["Run", "Jog"]);
+export const DEFAULT_PLACEMENT = { paper: "", landscape: false, margin: 10, fit: false, rotate: 0, scale: 1, dx: 0, dy: 0 };
 
 export function initialState() {
   return {
     view: "login",            // "login" | "app"
-    tab: "plot",              // "plot" | "control" | "pens" | "settings" | "console"
+    tab: "plot",              // "plot" | "history" | "control" | "pens" | "settings" | "console"
     login: { busy: false, error: "" },
+    loginNotice: "",          // why the login page shows (a stale link)
     socket: { status: "closed" },   // "open" | "connecting" | "closed"
     serverLost: false,        // the socket is down and REST cannot reach the server either
     pageId: "",               // this page's random id: tells our stops from other browsers'
     machine: null,            // the machine object of the selected plotter
     machineSeq: 0,            // counts machine reports (machine.seq)
     plotters: {},             // plotter name -> its machine object
+    plotterSeq: {},           // plotter name -> machine reports heard
     plotterOrder: [],         // plotter names, the server's order (the first is the default)
     plotter: null,            // the selected plotter's name
     server: null,             // GET /api/server
@@ -36,9 +38,15 @@ export function initialState() {
     pens: { list: [], form: null, busy: false, error: "", message: "" },  // views/pens.js
     log: [],                  // { seq, direction, line }
     logSeq: 0,
-    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via, remote }
+    estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via, remote, scope, names }
     notice: null,             // { text, error }
-    resumePick: null,         // { jobId, x, y }: the stroke vertex picked to resume from
+    resumePick: null,         // { jobId, x, y, stroke, along, length, layer }: the point picked
+    layerChoice: {},          // job id -> { ticked: [1-based layers], start }: what a start plots
+    history: { sort: "finished", desc: true },
+    webhooks: { data: null, draft: null, busy: false, message: "", error: "" }, // GET /api/webhooks; draft: the edited text
+    settingsAll: false,       // Settings: rows that do not apply to a pen plotter shown too
+    penPrompt: null,          // { jobId, action, plotter, pen, loaded, layer }: the pen to load before a start
+    loadedPens: {},           // plotter name ("" for the only one) -> the pen id the user said is loaded
     resumeOverlap: 1,         // mm back along the stroke from the picked point
   };
 }
@@ -66,37 +74,70 @@ export function createStore(state, render) {
   };
 }
 
-/** The job whose preview is shown: the selected one, else the running (or paused) one,
- * else the last stopped or interrupted one, else the first waiting; never an unrelated
- * finished job. */
+/** The job whose preview is shown: the selected one, else the selected plotter's active
+ * one, else the last one that can be resumed, else the first in the queue; never an
+ * unrelated finished job. */
 export function previewJob(state) {
   const byId = state.jobs.find((j) => String(j.id) === String(state.selectedJobId));
-  return byId ?? state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state))
-    ?? state.jobs.findLast((j) => ATTENTION_STATES.has(j.state))
-    ?? state.jobs.find((j) => j.state === "queued" || j.state === "waiting") ?? null;
+  return byId ?? plotterJob(state, state.plotter)
+    ?? state.jobs.findLast(isResumable)
+    ?? state.jobs.find((j) => can(j, "move")) ?? null;
 }
 
+/** A plotter's job: the active one on it, else its last stopped or interrupted one, else
+ * the first waiting for it. `name` null: any plotter's. */
+export function plotterJob(state, name) {
+  const on = (j) => !name || !j.plotter || j.plotter === name;
+  const onlyOn = (j) => !name || j.plotter === name || j.target === name;
+  return state.jobs.find((j) => isActive(j) && on(j))
+    ?? state.jobs.findLast((j) => isResumable(j) && onlyOn(j))
+    ?? state.jobs.find((j) => j.waiting && onlyOn(j)) ?? null;
+}
+
+/** A job of the selected plotter runs (or is held, or waits for a pen). */
 export function jobActive(state) {
-  return state.jobs.some((j) => ACTIVE_JOB_STATES.has(j.state));
+  const job = plotterJob(state, state.plotter);
+  return Boolean(job && isActive(job));
 }
 
-/** What the big Hold button does for the selected plotter: "hold", "continue" or null. */
+/** What the big Hold button does for the selected plotter: "hold", "continue" or null.
+ * A job on it offers what its actions say; without one, the board's own hold. */
 export function holdAction(state) {
   const m = state.machine;
   if (!m || !m.connected) return null;
-  const mine = (j) => !state.plotter || !j.plotter || j.plotter === state.plotter;
-  const job = state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state) && mine(j));
-  if (m.state === "Hold" || (job && job.state !== "running")) return "continue";
-  if (HOLDABLE_STATES.has(m.state) || job) return "hold";
+  const job = plotterJob(state, state.plotter);
+  if (job && can(job, "continue")) return "continue";
+  if (job && can(job, "hold")) return "hold";
+  if (m.state === "Hold") return "continue";
+  if (HOLDABLE_STATES.has(m.state)) return "hold";
   return null;
 }
 
-/** Whether the stop is confirmed: acknowledged, and the board reports a non-moving state. */
+/** A plotter's machine report as the stop sees it: {state, seq}. */
+function machineOf(state, name) {
+  if (!name || name === state.plotter) return state.machine;
+  const m = state.plotters[name];
+  return m && { ...m, seq: state.plotterSeq[name] || 0 };
+}
+
+/** Whether the stop is confirmed: acknowledged, and every plotter it stopped reports a
+ * non-moving state (newer than the click, if it was moving). */
 export function estopConfirmed(state) {
   const e = state.estop;
   if (!e || !e.acked) return false;
-  const m = state.machine;
-  if (!m || MOVING_STATES.has(m.state)) return false;
-  // If it was moving, wait for a machine report newer than the click.
-  return !e.wasMoving || m.seq > e.seqAtClick;
+  const names = e.names && e.names.length ? e.names : [null];
+  return names.every((name) => {
+    const m = machineOf(state, name);
+    if (!m || MOVING_STATES.has(m.state)) return false;
+    const before = (e.seqAtClick && typeof e.seqAtClick === "object") ? e.seqAtClick[name ?? ""] : e.seqAtClick;
+    return !e.wasMoving || (m.seq || 0) > (before || 0);
+  });
+}
+
+/** The seq of each plotter's last report now (for estopConfirmed), keyed by name ("" for
+ * the selected one when there is one plotter). */
+export function seqNow(state, names) {
+  const out = {};
+  for (const name of names.length ? names : [null]) out[name ?? ""] = (machineOf(state, name) || {}).seq || 0;
+  return out;
 }

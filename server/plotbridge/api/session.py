@@ -8,7 +8,7 @@ from fastapi import APIRouter, HTTPException, Request
 from fastapi.responses import RedirectResponse, Response
 
 from plotbridge import __version__
-from plotbridge.api.deps import GUARD, Parts, error
+from plotbridge.api.deps import GUARD, Parts
 from plotbridge.auth import COOKIE, SESSION_TTL
 from plotbridge.models import LoginBody
 
@@ -25,6 +25,13 @@ async def health() -> dict[str, str]:
     return {"status": "ok"}
 
 
+@router.get("/api/session")
+async def session(request: Request, c: Parts) -> dict[str, bool]:
+    """Whether this browser's session cookie is valid (no authentication: the page asks
+    before it shows the login form or the app)."""
+    return {"logged_in": c.auth.check_session(request.cookies.get(COOKIE))}
+
+
 @router.post("/api/login", status_code=204)
 async def login(body: LoginBody, c: Parts) -> Response:
     if not c.auth.check_token(body.token):
@@ -36,8 +43,8 @@ async def login(body: LoginBody, c: Parts) -> Response:
 
 @router.get("/login")
 async def login_link(c: Parts, token: str = "") -> Response:
-    if not c.auth.check_token(token):
-        return error(401, "wrong or missing token in the login link")
+    if not c.auth.check_token(token):  # a stale link: the login page says so
+        return RedirectResponse("/?link=stale", status_code=303)
     response = RedirectResponse("/", status_code=303)
     _set_cookie(response, c.auth.new_session())
     return response

@@ -309,6 +309,7 @@ class Plotter:
                 "name": meta.name if meta else None, "unit": meta.unit if meta else None,
                 "description": meta.description if meta else None,
                 "range": limits.public() if limits else None,
+                "group": settings_meta.group(number),
             })  # fmt: skip
         return view
 

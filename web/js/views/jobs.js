@@ -1,56 +1,55 @@
 // Adding jobs (file, drop, pattern), upload progress and errors, placement, the queue.
 
 import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
-import { bytes, duration, length, percent } from "../format.js";
-import { ACTIVE_JOB_STATES, previewJob } from "../store.js";
-import { renderLayerPens } from "./pens.js";
-
-// The server resumes stopped and interrupted jobs from their resume line.
-const RESUMABLE = new Set(["paused", "interrupted", "stopped"]);
-const DELETABLE = new Set(["queued", "done", "failed", "cancelled", "stopped", "interrupted"]);
-const STARTABLE = new Set(["queued", "done", "cancelled"]);
-// A job started while another runs (or the machine is not ready) waits for its turn.
-const CANCELLABLE = new Set(["running", "paused", "pen_change", "interrupted", "waiting"]);
-// Started again from the first line, without a new upload.
-const RESTARTABLE = new Set(["stopped", "interrupted", "failed"]);
-
-/** Which buttons a job row offers, in the order shown. Pure. */
-export function jobButtons(job, waitingIndex, waitingCount, anyActive) {
-  const b = [];
-  if (STARTABLE.has(job.state)) b.push({ verb: "start", label: anyActive ? "Start next" : "Start" });
-  if (job.state === "running") b.push({ verb: "pause", label: "Pause" });
-  if (job.state === "pen_change") b.push({ verb: "resume", label: "Continue", aria: "Pen loaded: continue" });
-  if (RESUMABLE.has(job.state)) b.push({ verb: "resume", label: "Resume", disabled: anyActive && job.state !== "paused" });
-  if (RESTARTABLE.has(job.state)) b.push({ verb: "restart", label: "Restart from the beginning", disabled: anyActive });
-  if (CANCELLABLE.has(job.state)) b.push({ verb: "cancel", label: "Cancel" });
-  if (job.bounds && !ACTIVE_JOB_STATES.has(job.state)) b.push({ verb: "frame", label: "Frame", aria: "Trace the frame (pen up)", disabled: anyActive });
-  if (waitingIndex >= 0) {
-    b.push({ verb: "up", label: "↑", aria: "Move up", disabled: waitingIndex === 0 });
-    b.push({ verb: "down", label: "↓", aria: "Move down", disabled: waitingIndex === waitingCount - 1 });
-  }
-  if (DELETABLE.has(job.state)) b.push({ verb: "delete", label: "Delete" });
-  return b;
-}
+import { layerChoice } from "../actions/jobs.js";
+import { bytes, duration, length, mm, percent } from "../format.js";
+import { can, isActive, jobButtons } from "../job-actions.js";
+import { previewJob } from "../store.js";
+import { errorText, jobStateText } from "../words.js";
+import { penName } from "./pens.js";
 
 const COLOUR = /^#[0-9a-f]{3,8}$/i;
 
-/** A job's layers as the view shows them (none for a single layer: the job's own bar says
- * it all): name, colour, progress and what it takes; `current` is the one being drawn
- * (or whose pen is due). Pure. */
-export function layerRows(job) {
+/** A job that belongs in the queue (something can be done with it now: start, move,
+ * continue, stop, resume) rather than in the history. Pure. */
+export const inQueue = (job) => ["start", "move", "stop", "resume"].some((a) => can(job, a));
+
+/** A job's layers as its row shows them: name, colour, pen, progress, what it takes,
+ * whether it is ticked to plot and where the plot starts; `current` is the one being
+ * drawn (or whose pen is due). Pure. */
+export function layerRows(job, choice, pens = []) {
   const layers = job.layers || [];
-  if (layers.length < 2) return [];
-  const active = ACTIVE_JOB_STATES.has(job.state);
-  const due = job.state === "pen_change" && job.pen_change ? job.pen_change.layer - 1 : -1;
-  const drawing = active && due < 0 ? layers.findIndex((l) => (l.progress || 0) < 1) : -1;
+  const due = job.pen_change ? job.pen_change.layer - 1 : -1;
+  const drawing = isActive(job) && due < 0 ? layers.findIndex((l) => (l.progress || 0) < 1) : -1;
   return layers.map((l, i) => ({
     key: `${i}:${l.first_line}`,
+    number: i + 1,
     name: l.name || `layer ${i + 1}`,
     colour: COLOUR.test(l.colour || "") ? l.colour : "",
+    pen: l.pen ?? null,
+    penName: l.pen === null || l.pen === undefined ? "" : penName(pens, l.pen),
     progress: l.progress || 0,
     info: `${percent(l.progress || 0)} · est. ${duration(l.estimate_s)} · ${length(l.pen_down_mm)}`,
     current: i === due || i === drawing,
+    ticked: !choice || choice.ticked.includes(i + 1),
+    start: (choice ? choice.start : 1) === i + 1,
   }));
+}
+
+/** The row's one-line summary: format, estimate, plotter, why it waits, where it is. Pure. */
+export function jobMeta(job) {
+  const where = job.plotter || job.target;
+  return [
+    job.format, `est. ${duration(job.estimate_s)}`, where ? `on ${where}` : "",
+    job.waiting ? `waiting: ${job.waiting}` : "",
+    job.summary || (job.done_point && !isActive(job) ? stoppedAt(job) : ""),
+  ].filter(Boolean).join(" · ");
+}
+
+function stoppedAt(job) {
+  const p = job.done_point;
+  const layer = p.layer ? `layer ${p.layer}${p.layer_name ? ` “${p.layer_name}”` : ""} ` : "";
+  return `stopped in ${layer}at X ${mm(p.x, 1)} Y ${mm(p.y, 1)}`;
 }
 
 export function bindJobs(actions) {
@@ -93,10 +92,23 @@ export function bindJobs(actions) {
   });
   $("#place-here").addEventListener("click", () => actions.placeHere());
   $("#queue").addEventListener("click", (e) => {
+    const row = e.target.closest("li.job[data-key]");
+    if (!row || e.target.closest("input, select, label")) return;
     const button = e.target.closest("button[data-verb]");
-    const row = e.target.closest("li[data-key]");
-    if (button) actions.jobVerb(row.dataset.key, button.dataset.verb);
-    else if (row) actions.selectJob(row.dataset.key);
+    if (button && button.dataset.verb !== "select") actions.jobAction(row.dataset.key, button.dataset.verb);
+    else actions.selectJob(row.dataset.key);
+  });
+  $("#queue").addEventListener("change", (e) => {
+    const row = e.target.closest("li.job[data-key]");
+    const layer = e.target.closest("li.layer");
+    if (!row || !layer) return;
+    const n = Number(layer.dataset.number);
+    const job = row.dataset.key;
+    if (e.target.matches("input.tick")) actions.chooseLayers(job, { tickedChange: [n, e.target.checked] });
+    else if (e.target.matches("input.start")) actions.chooseLayers(job, { start: n });
+    else if (e.target.matches("select.layer-pen")) {
+      actions.pens.setLayerPen(job, String(n), e.target.value === "" ? null : Number(e.target.value));
+    }
   });
   for (const list of [$("#uploads"), $("#upload-errors")]) {
     list.addEventListener("click", (e) => {
@@ -138,7 +150,7 @@ function renderPlacement(state) {
   const job = previewJob(state);
   const m = state.machine;
   setDisabled($("#place-here"), state.serverLost || !(job && job.bounds && m && m.connected && m.position));
-  setText($("#place-target"), job && job.state === "queued"
+  setText($("#place-target"), job && can(job, "edit")
     ? `Applies to new uploads and to the queued job “${job.name}”.`
     : "Applies to new uploads.");
 }
@@ -180,11 +192,11 @@ function renderUploadList(list, uploads) {
 }
 
 function renderQueue(state) {
-  const waiting = state.jobs.filter((j) => j.state === "queued");
-  const anyActive = state.jobs.some((j) => ACTIVE_JOB_STATES.has(j.state));
+  const jobs = state.jobs.filter(inQueue);
+  const movable = state.jobs.filter((j) => can(j, "move"));
   const shown = previewJob(state);
-  setHidden($("#queue-empty"), state.jobs.length > 0);
-  syncList($("#queue"), state.jobs, (j) => j.id,
+  setHidden($("#queue-empty"), jobs.length > 0);
+  syncList($("#queue"), jobs, (j) => j.id,
     () => el("li", { className: "job", tabIndex: -1 },
       el("div", { className: "job-head" },
         el("button", { type: "button", className: "link name", "data-verb": "select" }),
@@ -193,7 +205,6 @@ function renderQueue(state) {
       el("div", { className: "job-progress" }, el("progress", { max: 1 }), el("span", { className: "pct" })),
       el("ol", { className: "job-layers", "aria-label": "Layers" }),
       el("p", { className: "error job-error" }),
-      el("div", { className: "row wrap layer-pens" }),
       el("div", { className: "row wrap actions" })),
     (node, job) => {
       node.classList.toggle("selected", shown === job);
@@ -201,53 +212,80 @@ function renderQueue(state) {
       setText(name, job.name);
       name.setAttribute("aria-pressed", String(shown === job));
       const badge = node.querySelector(".badge");
-      setText(badge, job.state);
+      setText(badge, jobStateText(job.state));
       badge.dataset.state = job.state;
-      const lines = job.lines_total ? `${job.lines_total} lines` : "";
-      const from = job.resume_line && RESUMABLE.has(job.state) && job.state !== "paused" ? `resumes at line ${job.resume_line}` : "";
-      const where = job.plotter || job.target;
-      const on = where ? `on ${where}` : "";
-      const wait = job.state === "waiting" && job.waiting ? `waiting: ${job.waiting}` : "";
-      setText(node.querySelector(".job-meta"), [job.format, lines, `est. ${duration(job.estimate_s)}`, from, on, wait].filter(Boolean).join(" · "));
-      const showProgress = ["running", "paused", "interrupted", "stopped"].includes(job.state);
+      setText(node.querySelector(".job-meta"), jobMeta(job));
+      const showProgress = (job.progress || 0) > 0 || isActive(job);
       const prog = node.querySelector(".job-progress");
       setHidden(prog, !showProgress);
       if (showProgress) {
         prog.querySelector("progress").value = job.progress || 0;
-        const eta = job.state === "running" && !state.serverLost ? ` · ${duration(job.eta_s)} left` : "";
-        setText(prog.querySelector(".pct"), `${percent(job.progress)} (${job.lines_done ?? 0}/${job.lines_total ?? "?"})${eta}`);
+        const eta = can(job, "hold") && !state.serverLost ? ` · ${duration(job.eta_s)} left` : "";
+        const drawn = Number.isFinite(job.drawn_mm) ? ` · ${length(job.drawn_mm)} drawn` : "";
+        setText(prog.querySelector(".pct"), `${percent(job.progress)}${drawn}${eta}`);
       }
-      renderLayers(node.querySelector(".job-layers"), job);
+      renderLayers(node.querySelector(".job-layers"), job, state);
       const err = node.querySelector(".job-error");
-      setText(err, job.error ? (typeof job.error === "string" ? job.error : JSON.stringify(job.error)) : "");
+      setText(err, job.error ? (typeof job.error === "string" ? errorText(job.error) : JSON.stringify(job.error)) : "");
       setHidden(err, !job.error);
-      renderLayerPens(node.querySelector(".layer-pens"), job, state.pens.list);
-      const idx = waiting.indexOf(job);
-      const buttons = jobButtons(job, idx, waiting.length, anyActive);
-      const row = node.querySelector(".actions");
-      syncList(row, buttons, (b) => b.verb,
-        (b) => el("button", { type: "button", "data-verb": b.verb, "aria-label": b.aria }, b.label),
-        (btn, b) => setDisabled(btn, Boolean(b.disabled)));
+      const buttons = jobButtons(job, movable.indexOf(job), movable.length);
+      syncList(node.querySelector(".actions"), buttons, (b) => b.verb,
+        (b) => el("button", { type: "button", "data-verb": b.verb, className: b.verb === "stop" ? "estop-small" : "" }, b.label),
+        (btn, b) => {
+          setDisabled(btn, Boolean(b.disabled));
+          setAttr(btn, "aria-label", b.aria);
+        });
     });
 }
 
-function renderLayers(list, job) {
-  const rows = layerRows(job);
-  setHidden(list, rows.length === 0);
+/** The job's layers: tick which to plot and the one to start at (when it can start or be
+ * plotted again), each layer's pen (while it does not run). */
+function renderLayers(list, job, state) {
+  const choosing = (can(job, "start") || can(job, "restart")) && (job.layers || []).length > 1;
+  const pens = state.pens.list;
+  const rows = layerRows(job, choosing ? layerChoice(state, job) : null, pens);
+  setHidden(list, rows.length === 0 || (rows.length === 1 && pens.length === 0));
+  list.classList.toggle("choosing", choosing);
+  const penEditable = !isActive(job) && pens.length > 0;
   syncList(list, rows, (r) => r.key,
-    () => el("li", { className: "layer" },
+    (r) => el("li", { className: "layer", "data-number": r.number },
+      el("input", { type: "checkbox", className: "tick", "aria-label": `Plot layer ${r.number}` }),
       el("span", { className: "swatch", "aria-hidden": "true" }),
       el("span", { className: "layer-name" }),
+      el("label", { className: "start-at" },
+        el("input", { type: "radio", className: "start", name: `start-${job.id}` }), "start here"),
       el("progress", { max: 1 }),
-      el("span", { className: "layer-info" })),
+      el("span", { className: "layer-info" }),
+      el("select", { className: "layer-pen" }),
+      el("span", { className: "layer-pen-name" })),
     (li, r) => {
       li.querySelector(".swatch").style.backgroundColor = r.colour;
       setText(li.querySelector(".layer-name"), r.name);
+      const tick = li.querySelector(".tick");
+      setHidden(tick, !choosing);
+      if (tick.checked !== r.ticked) tick.checked = r.ticked;
+      const start = li.querySelector(".start");
+      setHidden(li.querySelector(".start-at"), !choosing);
+      if (start.checked !== r.start) start.checked = r.start;
+      start.setAttribute("aria-label", `Start at layer ${r.number}`);
+      li.classList.toggle("skipped", choosing && !r.ticked);
       const bar = li.querySelector("progress");
       bar.value = r.progress;
+      setHidden(bar, !isActive(job) && !r.progress);
       setAttr(bar, "aria-label", `${r.name}: ${percent(r.progress)}`);
       setText(li.querySelector(".layer-info"), r.info);
       setAttr(li, "aria-current", r.current ? "step" : null);
+      const select = li.querySelector(".layer-pen");
+      setHidden(select, !penEditable);
+      setText(li.querySelector(".layer-pen-name"), penEditable ? "" : r.penName ? `pen “${r.penName}”` : "");
+      if (penEditable) {
+        select.setAttribute("aria-label", `Pen for layer ${r.number} (${r.name})`);
+        syncList(select, [{ id: "", name: "no pen" }, ...pens], (pen) => pen.id,
+          (pen) => el("option", { value: String(pen.id) }),
+          (option, pen) => setText(option, pen.name));
+        const value = r.pen === null ? "" : String(r.pen);
+        if (document.activeElement !== select && select.value !== value) select.value = value;
+      }
     });
 }
 

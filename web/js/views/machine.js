@@ -1,13 +1,29 @@
 // Header summary, the machine panel, the banners and the emergency-stop panel.
 
 import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
-import { ALARMS, duration, mm, percent } from "../format.js";
-import { ACTIVE_JOB_STATES, estopConfirmed, holdAction } from "../store.js";
+import { duration, mm, percent } from "../format.js";
+import { can, isActive } from "../job-actions.js";
+import { estopConfirmed, holdAction, plotterJob } from "../store.js";
+import { ALARMS, machineStateText } from "../words.js";
+import { penName } from "./pens.js";
 
 function machineLabel(m) {
   if (!m) return "…";
   if (!m.connected) return "Disconnected";
   return m.state || "Unknown";
+}
+
+/** "plotter2: " when there are several plotters, else "". */
+const whose = (state, name = state.plotter) => (state.plotterOrder.length > 1 && name ? `${name}: ` : "");
+
+/** The pen prompt of a job at a pen change, in words: names the pen, never its colour code. */
+export function penChangeText(job, pens = []) {
+  const p = job.pen_change || {};
+  if (p.reason === "reink") return p.message || "re-ink the pen, then continue";
+  const pen = p.pen || (job.layers && job.layers[p.layer - 1] && job.layers[p.layer - 1].pen !== null
+    && job.layers[p.layer - 1].pen !== undefined ? penName(pens, job.layers[p.layer - 1].pen) : null);
+  const layer = `layer ${p.layer} of ${p.layers}${p.name ? ` “${p.name}”` : ""}`;
+  return `${layer}: ${pen ? `load pen “${pen}”` : "load the pen for this layer"}, then continue`;
 }
 
 /** The header's summary. While the server is unreachable it says so instead of the last
@@ -16,11 +32,13 @@ export function headerSummary(state) {
   if (state.serverLost) return { state: "connection lost", badge: "Lost", pos: "", pen: "", job: "" };
   const m = state.machine;
   const label = machineLabel(m);
-  const job = state.jobs.find((j) => ACTIVE_JOB_STATES.has(j.state));
-  const eta = job && job.state === "running" && job.eta_s ? ` · ${duration(job.eta_s)} left` : "";
+  const job = plotterJob(state, state.plotter); // the selected plotter's, never another's
+  const shown = job && isActive(job) ? job : null;
+  const eta = shown && can(shown, "hold") && shown.eta_s ? ` · ${duration(shown.eta_s)} left` : "";
+  const text = m && m.connected ? machineStateText(label) : machineStateText(label);
   return {
-    state: label, badge: label, pos: positionText(m), pen: m ? `pen ${m.pen}` : "",
-    job: job ? `${job.name} ${percent(job.progress)}${eta}` : "",
+    state: whose(state) + text, badge: label, pos: positionText(m), pen: m ? `pen ${m.pen}` : "",
+    job: shown ? `${shown.name} ${percent(shown.progress)}${eta}` : "",
   };
 }
 
@@ -47,34 +65,36 @@ export function bannersFor(state) {
   if (m && !m.connected) {
     out.push({
       key: "link", level: "error",
-      text: "The plotter is not connected (serial link lost). Check its USB cable and power; the server reconnects by itself.",
+      text: `${whose(state)}the plotter is not connected (serial link lost). Check its USB cable and power; the server reconnects by itself.`,
       actions: [],
     });
   } else if (m && m.state === "Alarm" && !state.estop) {
     const why = ALARMS[m.alarm] ? `: ${ALARMS[m.alarm]}` : "";
     out.push({
       key: "alarm", level: "error",
-      text: `Alarm${m.alarm ? ` ${m.alarm}` : ""}${why}. Home the machine, or unlock it to continue without homing.`,
+      text: `${whose(state)}alarm${m.alarm ? ` ${m.alarm}` : ""}${why}. Home the plotter, or unlock it to go on without homing.`,
       actions: [{ label: "Home", action: "home" }, { label: "Unlock", action: "unlock" }],
     });
   } else if (m && m.state === "Hold") {
     out.push({
-      key: "hold", level: "warn", text: "Paused (feed hold).",
-      actions: [{ label: "Resume", action: "resume" }],
+      key: "hold", level: "warn", text: `${whose(state)}on hold: the pen is up, the position kept.`,
+      actions: [{ label: "Continue", action: plotterJob(state, state.plotter) ? "continue" : "continue-machine", id: (plotterJob(state, state.plotter) || {}).id }],
     });
   }
   for (const job of state.jobs) {
-    if (job.state === "pen_change" && job.pen_change) {
+    if (job.pen_change && can(job, "continue")) {
       out.push({
-        key: `pen-${job.id}`, level: "warn", text: `“${job.name}”: ${job.pen_change.message}.`,
-        actions: [{ label: "Continue", action: "resume-job", id: job.id }],
+        key: `pen-${job.id}`, level: "warn", text: `${whose(state, job.plotter)}“${job.name}”, ${penChangeText(job, state.pens.list)}.`,
+        actions: [{ label: "Continue", action: "continue", id: job.id }],
       });
     }
     if (job.state === "interrupted") {
+      const where = job.summary ? ` ${job.summary}` : "";
       out.push({
         key: `int-${job.id}`, level: "warn",
-        text: `“${job.name}” was interrupted${job.resume_line ? ` at line ${job.resume_line}` : ""} (link lost or server restarted).`,
-        actions: [{ label: "Resume", action: "resume-job", id: job.id }],
+        text: `${whose(state, job.plotter)}“${job.name}” was interrupted (link lost or server restarted).${where}`,
+        actions: ["resume", "home_then_resume"].filter((a) => can(job, a))
+          .map((a) => ({ label: a === "resume" ? "Resume" : "Home, then resume", action: a, id: job.id })),
       });
     }
   }
@@ -86,8 +106,11 @@ export function bindMachine(actions) {
     const button = e.target.closest("button[data-action]");
     if (button) actions.bannerAction(button.dataset.action, button.dataset.id);
   });
-  $("#estop-home").addEventListener("click", () => actions.home());
-  $("#estop-unlock").addEventListener("click", () => actions.unlock());
+  $("#estop-home").addEventListener("click", (e) => {
+    if (e.currentTarget.dataset.all) actions.homeAll();
+    else actions.homeStopped();
+  });
+  $("#estop-unlock").addEventListener("click", () => actions.unlockStopped());
   $("#estop-close").addEventListener("click", () => actions.dismissEstop());
   $("#hold").addEventListener("click", () => actions.holdOrContinue());
   document.addEventListener("keydown", (e) => {
@@ -112,7 +135,7 @@ export function renderMachine(state) {
   setText($("#sum-job"), sum.job);
 
   setText($("#m-conn"), !m ? "…" : m.connected ? "connected" : "not connected");
-  setText($("#m-state"), label + (m && m.alarm ? ` (alarm ${m.alarm})` : ""));
+  setText($("#m-state"), machineStateText(label) + (m && m.alarm ? ` (alarm ${m.alarm}: ${ALARMS[m.alarm] || "see the manual"})` : ""));
   setText($("#m-pos"), positionText(m) || "–");
   setText($("#m-pen"), m ? m.pen : "–");
   setText($("#m-fw"), (m && m.firmware) || "–");
@@ -144,6 +167,14 @@ function renderHold(state) {
   setAttr(button, "aria-disabled", String(!what));
 }
 
+/** What the stop panel calls what it stopped: "plotter2", "all plotters", "the plotter". Pure. */
+export function stoppedWhat(state, e) {
+  const names = e.names || [];
+  if (e.scope === "all" || names.length > 1) return names.length ? `all plotters (${names.join(", ")})` : "all plotters";
+  if (names.length === 1 && state.plotterOrder.length > 1) return names[0];
+  return "the plotter";
+}
+
 function renderEstop(state) {
   const e = state.estop;
   const panel = $("#estop-panel");
@@ -156,21 +187,29 @@ function renderEstop(state) {
   const confirmed = estopConfirmed(state);
   const phase = e.phase === "failed" ? "failed" : confirmed ? "stopped" : "stopping";
   setAttr(panel, "data-phase", phase);
-  const m = state.machine;
+  const what = stoppedWhat(state, e);
+  const several = (e.names || []).length > 1;
+  const m = e.names && e.names.length === 1 && e.names[0] !== state.plotter ? state.plotters[e.names[0]] : state.machine;
   if (phase === "failed") {
-    setText($("#estop-title"), "Stop could not be sent");
-    setText($("#estop-text"), "The server did not answer. Use the stop button on the machine or cut its power.");
+    setText($("#estop-title"), `Stop of ${what} could not be sent`);
+    setText($("#estop-text"), "The server did not answer. Use the stop button on the plotter or cut its power.");
   } else if (phase === "stopping") {
-    setText($("#estop-title"), "Stopping…");
-    setText($("#estop-text"), "Emergency stop sent; waiting for the machine to confirm.");
+    setText($("#estop-title"), `Stopping ${what}…`);
+    setText($("#estop-text"), "Emergency stop sent; waiting for the plotter to confirm.");
   } else {
-    setText($("#estop-title"), e.remote ? `Machine stopped from another ${e.remote}` : "Machine stopped");
-    setText($("#estop-text"), m && m.state === "Alarm"
-      ? "Motion was cut, so the position may be lost. Home the machine (recommended), or unlock it to continue from here. The stopped job can be resumed from the queue."
-      : "Everything queued was dropped. You can start a job again, or home the machine first.");
+    const named = what.startsWith("the ") || what.startsWith("all ") ? what.charAt(0).toUpperCase() + what.slice(1) : what;
+    const title = `${named} stopped`;
+    setText($("#estop-title"), e.remote ? `${title} from another ${e.remote}` : title);
+    setText($("#estop-text"), several || (m && m.state === "Alarm")
+      ? "Motion was cut, so the position may be lost. Home (recommended), or unlock to go on from here. A stopped job can be resumed from its card or the queue."
+      : "Everything queued was dropped. You can start a job again, or home the plotter first.");
   }
   setText($("#estop-error"), e.error || "");
   const busy = phase === "stopping";
-  setDisabled($("#estop-home"), busy);
+  const home = $("#estop-home");
+  setText(home, several ? "Home all" : e.names && e.names.length === 1 && state.plotterOrder.length > 1 ? `Home ${e.names[0]}` : "Home");
+  home.dataset.all = several ? "1" : "";
+  setDisabled(home, busy);
+  setHidden($("#estop-unlock"), several);
   setDisabled($("#estop-unlock"), busy);
 }

@@ -6,7 +6,40 @@ import { $, el, setDisabled, setHidden, setText, syncList } from "../dom.js";
 import { jobActive } from "../store.js";
 
 const SERVO_MIN = 500, SERVO_MAX = 2500; // the firmware's range for $60/$61 (µs)
-const EDITABLE_JOB_STATES = new Set(["queued", "waiting", "done", "cancelled", "failed", "stopped", "interrupted"]);
+
+/** The pen id a plotter holds now: the one the user said is loaded, else the pen of the
+ * last layer the plotter's latest job drew; null when nobody knows. Pure. */
+export function loadedPen(state, plotter) {
+  const key = plotter || "";
+  if (key in state.loadedPens) return state.loadedPens[key];
+  const ran = state.jobs.filter((j) => j.started_at && (!plotter || j.plotter === plotter))
+    .sort((a, b) => b.started_at - a.started_at);
+  for (const job of ran) {
+    const drawn = (job.layers || []).filter((l) => (l.progress || 0) > 0 && l.pen !== null && l.pen !== undefined);
+    if (drawn.length) return drawn[drawn.length - 1].pen;
+  }
+  return null;
+}
+
+/** Before a start: the pen its first plotted layer needs, when the plotter holds another
+ * (or nobody knows which): {pen, loaded, layer, layerName, plotter}; null when no pen is
+ * named or it is loaded. Pure. */
+export function penNeeded(state, job, choice) {
+  const layers = job.layers || [];
+  const first = choice && choice.ticked.length ? Math.max(choice.start || 1, choice.ticked.find((n) => n >= (choice.start || 1)) || 1) : 1;
+  const layer = layers[first - 1];
+  if (!layer || layer.pen === null || layer.pen === undefined) return null;
+  const plotter = job.target || job.plotter || state.plotter || null;
+  const loaded = loadedPen(state, state.plotterOrder.length > 1 ? plotter : null);
+  if (loaded === layer.pen) return null;
+  return { pen: layer.pen, loaded, layer: first, layerName: layer.name || `layer ${first}`, plotter: state.plotterOrder.length > 1 ? plotter : "" };
+}
+
+/** A pen's name from its id (never its colour code). */
+export function penName(pens, id) {
+  const pen = pens.find((p) => p.id === id);
+  return pen ? pen.name : `pen ${id}`;
+}
 
 /** The edit form's fields (strings) for a pen, or for a new one. Pure. */
 export function penForm(pen) {
@@ -109,6 +142,7 @@ export function createPenActions(store) {
       if (error) {
         store.update((st) => {
           st.pens.error = error;
+          st.pens.message = ""; // never beside an earlier "Saved"
         });
         return;
       }
@@ -155,7 +189,7 @@ export function bindPens(actions) {
   $("#pens-add").addEventListener("click", () => actions.edit("new"));
   $("#pens-list").addEventListener("click", (e) => {
     const button = e.target.closest("button[data-verb]");
-    const row = e.target.closest("tr[data-key]");
+    const row = e.target.closest("li[data-key]");
     if (!button || !row) return;
     const id = Number(row.dataset.key);
     const verb = button.dataset.verb;
@@ -173,13 +207,6 @@ export function bindPens(actions) {
     actions.save();
   });
   $("#pen-cancel").addEventListener("click", () => actions.cancel());
-  // the per-layer pen pickers in the job rows
-  $("#queue").addEventListener("change", (e) => {
-    const select = e.target.closest("select[data-layer]");
-    const row = e.target.closest("li[data-key]");
-    if (!select || !row) return;
-    actions.setLayerPen(row.dataset.key, select.dataset.layer, select.value === "" ? null : Number(select.value));
-  });
 }
 
 const metres = (m) => `${(m || 0).toFixed(m >= 100 ? 0 : 2)} m`;
@@ -191,17 +218,18 @@ export function renderPens(state) {
   setText($("#pens-error"), p.error);
   setHidden($("#pens-empty"), p.list.length > 0);
   syncList($("#pens-list"), p.list, (pen) => pen.id,
-    () => el("tr", {},
-      el("td", {}, el("span", { className: "swatch" }), el("span", { className: "name" })),
-      el("td", { className: "mono servo" }),
-      el("td", { className: "mono speed" }),
-      el("td", { className: "mono odometer" }),
-      el("td", { className: "row wrap actions" },
-        el("button", { type: "button", "data-verb": "try-up" }, "Try up"),
-        el("button", { type: "button", "data-verb": "try-down" }, "Try down"),
-        el("button", { type: "button", "data-verb": "edit" }, "Edit"),
-        el("button", { type: "button", "data-verb": "reset" }, "Reset odometer"),
-        el("button", { type: "button", "data-verb": "delete" }, "Delete"))),
+    () => el("li", { className: "pen" },
+      el("div", { className: "pen-head" }, el("span", { className: "swatch" }), el("strong", { className: "name" })),
+      el("dl", { className: "pen-facts" },
+        el("dt", {}, "Up / down"), el("dd", { className: "mono servo" }),
+        el("dt", {}, "Speed"), el("dd", { className: "mono speed" }),
+        el("dt", {}, "Drawn"), el("dd", { className: "mono odometer" })),
+      el("div", { className: "row wrap actions" },
+        el("button", { type: "button", className: "small", "data-verb": "try-up" }, "Try up"),
+        el("button", { type: "button", className: "small", "data-verb": "try-down" }, "Try down"),
+        el("button", { type: "button", className: "small", "data-verb": "edit" }, "Edit"),
+        el("button", { type: "button", className: "small", "data-verb": "reset" }, "Reset odometer"),
+        el("button", { type: "button", className: "small", "data-verb": "delete" }, "Delete"))),
     (row, pen) => {
       row.querySelector(".swatch").style.background = pen.colour || "transparent";
       setText(row.querySelector(".name"), pen.name);
@@ -230,28 +258,4 @@ export function renderPens(state) {
     }
     setDisabled($("#pen-save"), busy);
   }
-}
-
-/** The per-layer pen pickers of a job row (`container`), from the job and the pens. */
-export function renderLayerPens(container, job, pens) {
-  const layers = job.layers || [];
-  const shown = pens.length > 0 && layers.length > 0;
-  setHidden(container, !shown);
-  if (!shown) return;
-  const editable = EDITABLE_JOB_STATES.has(job.state);
-  syncList(container, layers, (layer) => layer.first_line,
-    () => el("label", { className: "layer-pen" }, el("span", { className: "layer-name" }), el("select", {})),
-    (label, layer) => {
-      const number = layers.indexOf(layer) + 1;
-      setText(label.querySelector(".layer-name"), `${number}. ${layer.name || "layer"}`);
-      const select = label.querySelector("select");
-      select.dataset.layer = String(number);
-      select.setAttribute("aria-label", `Pen for layer ${number} (${layer.name || "layer"})`);
-      syncList(select, [{ id: "", name: "no pen" }, ...pens], (pen) => pen.id,
-        (pen) => el("option", { value: String(pen.id) }),
-        (option, pen) => setText(option, pen.name));
-      const value = layer.pen === null || layer.pen === undefined ? "" : String(layer.pen);
-      if (document.activeElement !== select && select.value !== value) select.value = value;
-      setDisabled(select, !editable);
-    });
 }

@@ -9,6 +9,25 @@ const SERVER_LABELS = {
 };
 
 const PEN_POSITIONS = new Set([60, 61]); // pen-up and pen-down servo pulses: "Try it"
+// settings_meta.GROUPS: what a plotter user means by each setting, in this order
+const GROUPS = [
+  ["motion", "Motion"], ["pen", "Pen"], ["switches", "Switches and homing"], ["area", "Work area"],
+  ["board", "Electronics"], ["other", "Not used by a pen plotter (spindle, probe, laser, Z)"],
+];
+
+/** The rows to show: each group's heading, then its settings (in the board's order);
+ * the "other" group only when asked. Pure. */
+export function settingRows(list, showAll) {
+  const out = [];
+  for (const [group, title] of GROUPS) {
+    if (group === "other" && !showAll) continue;
+    const rows = (list || []).filter((s) => (s.group || "other") === group);
+    if (!rows.length) continue;
+    out.push({ key: `g:${group}`, heading: title });
+    for (const s of rows) out.push({ key: String(s.id), setting: s });
+  }
+  return out;
+}
 const MASK_BITS = ["X", "Y"]; // bit 0, bit 1 of the mask settings (settings_meta.MASK_BITS)
 
 /** A row's value as the board takes it: the number typed, 0/1 for a switch, the sum of
@@ -36,6 +55,13 @@ export function bindSettings(actions) {
     if (button) actions.tryPen(button.dataset.try);
   });
   $("#settings-save").addEventListener("click", () => actions.saveSettings());
+  $("#settings-all").addEventListener("change", (e) => actions.showAllSettings(e.target.checked));
+  $("#webhooks-form").addEventListener("input", (e) => actions.editWebhookDraft(e.target.value));
+  $("#webhooks-form").addEventListener("submit", (e) => {
+    e.preventDefault();
+    const urls = $("#webhooks-urls").value.split("\n").map((u) => u.trim()).filter(Boolean);
+    actions.saveWebhooks(urls);
+  });
   $("#settings-reload").addEventListener("click", () => actions.loadSettings(true));
 }
 
@@ -47,11 +73,16 @@ export function renderSettings(state) {
   setDisabled($("#settings-save"), st.busy || changed === 0);
   for (const button of document.querySelectorAll("#settings-body button[data-try]")) setDisabled(button, st.busy);
   $("#settings-save").textContent = changed ? `Save ${changed} change${changed > 1 ? "s" : ""}` : "Save changes";
-  syncList($("#settings-body"), st.list || [], (s) => s.id, createRow,
-    (row, s) => {
+  const hidden = (st.list || []).filter((s) => (s.group || "other") === "other").length;
+  setText($("#settings-all-count"), hidden ? `(${hidden})` : "");
+  syncList($("#settings-body"), settingRows(st.list, state.settingsAll), (r) => r.key,
+    (r) => (r.heading ? el("tr", { className: "group-head" }, el("th", { colSpan: 2, scope: "colgroup" }, r.heading)) : createRow(r.setting)),
+    (row, r) => {
+      if (r.heading) return;
+      const s = r.setting;
       setText(row.querySelector(".name"), s.name || `$${s.id}`);
       setText(row.querySelector(".desc"), s.description || "");
-      setText(row.querySelector(".unit"), s.unit && s.unit !== "bool" && s.unit !== "mask" ? s.unit : "");
+      setText(row.querySelector(".unit"), s.unit && s.unit !== "bool" && s.unit !== "mask" && s.unit !== "enum" ? s.unit : "");
       setText(row.querySelector(".range"), s.range ? s.range.text : "");
       const key = String(s.id);
       const value = key in st.edits ? st.edits[key] : String(s.value);
@@ -63,6 +94,7 @@ export function renderSettings(state) {
         input.title = err || "";
       }
     });
+  renderWebhooks(state.webhooks);
   const server = state.server || {};
   renderServer(server);
 }
@@ -86,8 +118,7 @@ function createRow(s) {
   }
   const label = kind === "mask" ? el("span", { className: "name" }) : el("label", { for: inputId, className: "name" });
   return el("tr", { "data-kind": kind },
-    el("td", { className: "mono" }, `$${s.id}`),
-    el("td", {}, label, el("div", { className: "hint desc" })),
+    el("td", {}, label, el("span", { className: "grbl mono" }, `$${s.id}`), el("div", { className: "hint desc" })),
     el("td", { className: "value" }, value, el("span", { className: "unit" }), el("span", { className: "range hint" }),
       PEN_POSITIONS.has(s.id) ? el("button", { type: "button", className: "small", "data-try": s.id,
         title: "Save this value and move the pen there" }, "Try it") : null));
@@ -118,5 +149,22 @@ function renderServer(server) {
       setText(node, k.startsWith("dt") ? SERVER_LABELS[name] || name
         : typeof v === "boolean" ? (v ? "yes" : "no") : v === null || v === undefined ? "–"
           : name === "upload_limit" ? bytes(v) : String(v));
+    });
+}
+
+function renderWebhooks(w) {
+  const data = w.data || { urls: [], fixed: [], webhooks: [] };
+  const area = $("#webhooks-urls");
+  const text = w.draft ?? data.urls.join("\n");
+  if (document.activeElement !== area && area.value !== text) area.value = text;
+  setText($("#webhooks-message"), w.busy ? "Saving…" : w.message);
+  setText($("#webhooks-error"), w.error);
+  setDisabled($("#webhooks-save"), w.busy);
+  setText($("#webhooks-fixed"), data.fixed.length ? `Also sent to (from the server's command line): ${data.fixed.join(", ")}` : "");
+  syncList($("#webhooks-status"), data.webhooks, (h) => h.url,
+    () => el("li", {}, el("span", { className: "url mono" }), el("span", { className: "hint counts" })),
+    (li, h) => {
+      setText(li.querySelector(".url"), h.url);
+      setText(li.querySelector(".counts"), ` ${h.delivered} delivered, ${h.queued} queued, ${h.dropped} dropped${h.last_error ? ` · last error: ${h.last_error}` : ""}`);
     });
 }
