@@ -1,0 +1,94 @@
+"""The server verbs MQTT calls: the same ones the REST routes call (api/plotters.py,
+api/jobs.py). This is the one module of the MQTT component that knows the queue and the
+plotters, so a change of their interface is a change here only."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from plotbridge.errors import Refused
+from plotbridge.jobs.model import Job
+from plotbridge.queue import JobQueue
+
+# a job's `actions` (the lifecycle's list) that a plotter-level verb needs, when the job has one
+NEEDS_ACTION = {"hold": "hold", "continue": "continue"}
+
+
+class Verbs:
+    def __init__(self, queue: JobQueue) -> None:
+        self.queue = queue
+
+    @property
+    def plotters(self) -> list[str]:
+        return list(self.queue.plotters)
+
+    def snapshot(self) -> list[dict[str, Any]]:
+        return self.queue.snapshot_messages()
+
+    # ---- stops: synchronous, nothing before the reset byte ------------------------------
+
+    def estop(self, plotter: str, source: str) -> None:
+        self.queue.plotter(plotter).estop(source)
+
+    def estop_all(self, source: str) -> None:
+        self.queue.estop_all(source)
+
+    # ---- the other buttons ------------------------------------------------------------
+
+    def refused_by_job(self, plotter: str, verb: str) -> str | None:
+        """Why the plotter's job does not allow `verb` now (its `actions`), or None."""
+        job = self.queue.plotter(plotter).job
+        actions = getattr(job, "actions", None) if job is not None else None
+        needed = NEEDS_ACTION.get(verb)
+        if needed and isinstance(actions, list) and needed not in actions:
+            return f"{plotter}'s job {job.id} allows {', '.join(actions) or 'nothing'} now"  # type: ignore[union-attr]
+        return None
+
+    def hold(self, plotter: str) -> None:
+        self.queue.pause(plotter=plotter)
+
+    def go_on(self, plotter: str) -> None:
+        self.queue.resume(plotter=plotter)
+
+    async def home(self, plotter: str) -> None:
+        await self.queue.plotter(plotter).send("home", "$H", wait=120)
+
+    # ---- fleet jobs ---------------------------------------------------------------------
+
+    def job(self, job_id: str) -> Job | None:
+        return self.queue.jobs.get(job_id)
+
+    def free_plotter(self, bounds: dict[str, float] | None) -> str | None:
+        """A plotter that could start a job of these bounds now, or None."""
+        for unit in self.queue.plotters.values():
+            area = unit.work_area
+            fits = bounds is None or area is None or (
+                bounds["min_x"] >= 0 and bounds["min_y"] >= 0
+                and bounds["max_x"] <= area.width + 1e-6 and bounds["max_y"] <= area.height + 1e-6)
+            if fits and unit.not_ready() is None and not self._waiting_for(unit.name):
+                return unit.name
+        return None
+
+    def _waiting_for(self, plotter: str) -> bool:
+        """A local job waits to start (it goes first: the fleet takes what is left)."""
+        return any(job.state == "waiting" and job.target in (None, plotter)
+                   for job in self.queue.jobs.values())  # fmt: skip
+
+    async def create(self, path: Path, filename: str, name: str, options: dict[str, Any],
+                     placement: dict[str, Any], plotter: str | None) -> Job:  # fmt: skip
+        return await self.queue.create(kind="file", source=path, filename=filename, name=name,
+                                       options=options, placement=placement, target=plotter)
+
+    def start(self, job_id: str, plotter: str) -> Job:
+        return self.queue.start(job_id, plotter)
+
+    async def delete(self, job_id: str) -> None:
+        await self.queue.delete(job_id)
+
+    def source(self, job_id: str) -> tuple[Path, str, dict[str, Any], dict[str, Any]]:
+        """A job's uploaded file, its name, import options and placement."""
+        job = self.queue.get(job_id)
+        if job.kind != "file":
+            raise Refused(422, "a fleet job must be an uploaded file, not a pattern")
+        return Path(job.source), job.filename, dict(job.options), dict(job.placement)
