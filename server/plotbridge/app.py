@@ -82,7 +82,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     queue = JobQueue(units, store, importer, events, auto_start=config.auto_start,
                      pens=library)  # fmt: skip
     queue.load()
-    mqtt = (MqttService(config.mqtt, Verbs(queue), events, public_url(config))  # type: ignore[arg-type]
+    mqtt = (MqttService(config.mqtt, Verbs(queue), events, public_url(config),  # type: ignore[arg-type]
+                        config.data_dir)
             if config.mqtt else None)  # fmt: skip
 
     @asynccontextmanager

@@ -5,10 +5,12 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Request
+from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
-from plotbridge.api.deps import GUARD, Parts
+from plotbridge.api.deps import GUARD, Parts, upload_error
 from plotbridge.errors import Refused
+from plotbridge.jobs.model import Job
 from plotbridge.mqtt.service import MqttService
 
 router = APIRouter(prefix="/api/fleet", dependencies=GUARD)
@@ -54,3 +56,20 @@ async def stop_everything(request: Request, c: Parts) -> dict[str, Any]:
         c.queue.estop_all("REST, STOP EVERYTHING (no fleet: MQTT is off)")
         return {"status": "stopped", "fleet": False}
     return {"status": "stopped", "fleet": await service.stop_everything()}
+
+
+async def fleet_upload(request: Request, params: dict[str, str], job: Job) -> JSONResponse | None:
+    """An upload's `fleet` field: true hands the imported job to the fleet's queue (the
+    answer says so); absent or false: None, the upload stays a local job."""
+    flag = params.get("fleet", "").strip().lower()
+    if flag in ("", "0", "false", "no", "off"):
+        return None
+    c = request.app.state.components
+    if flag not in ("1", "true", "yes", "on"):
+        await c.queue.delete(job.id)
+        return upload_error(422, f"fleet: expected true or false, got {params['fleet']!r}")
+    service = _service(request)
+    if service is None:
+        await c.queue.delete(job.id)
+        return upload_error(409, "fleet=true needs MQTT: start the server with --mqtt URL")
+    return JSONResponse(await service.jobs.offer(job.public()), status_code=201)

@@ -12,6 +12,7 @@ import asyncio
 import json
 import logging
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 from aiomqtt import Message
@@ -21,6 +22,7 @@ from plotbridge.events import EventHub
 from plotbridge.mqtt.connection import Connection
 from plotbridge.mqtt.discovery import Discovery
 from plotbridge.mqtt.fleet import FleetView
+from plotbridge.mqtt.fleet_jobs import FleetJobs
 from plotbridge.mqtt.settings import MqttSettings
 from plotbridge.mqtt.telemetry import Telemetry
 from plotbridge.mqtt.topics import PLOTTER_VERBS, Topics
@@ -31,7 +33,7 @@ log = logging.getLogger("plotbridge.mqtt")
 
 class MqttService:
     def __init__(self, settings: MqttSettings, verbs: Verbs, events: EventHub,
-                 public_url: str) -> None:  # fmt: skip
+                 public_url: str, data_dir: Path) -> None:  # fmt: skip
         self.settings = settings
         self.verbs = verbs
         self.events = events
@@ -46,6 +48,7 @@ class MqttService:
             subscriptions=[*self.topics.subscriptions(), self.discovery.our_configs],
         )  # fmt: skip
         self.fleet = FleetView(self.connection.problems)
+        self.jobs = FleetJobs(settings, self.topics, self.connection, verbs, data_dir / "fleet")
         self._configs = self.discovery.configs(verbs.plotters)
         self._unsubscribe: Callable[[], None] | None = None
         self._tasks: set[asyncio.Task[None]] = set()
@@ -55,8 +58,9 @@ class MqttService:
     def start(self) -> None:
         for message in self.verbs.snapshot():
             self.telemetry.on_event(message)
-        self._unsubscribe = self.events.subscribe(self.telemetry.on_event)
+        self._unsubscribe = self.events.subscribe(self._on_event)
         self.connection.start()
+        self.jobs.start()
         log.info("MQTT: bridge %s of fleet %s, broker %s", self.settings.bridge,
                  self.settings.fleet, self.connection.where)  # fmt: skip
 
@@ -64,7 +68,12 @@ class MqttService:
         if self._unsubscribe:
             self._unsubscribe()
         self.telemetry.close()
+        await self.jobs.close()
         await self.connection.close()
+
+    def _on_event(self, message: dict[str, Any]) -> None:
+        self.telemetry.on_event(message)
+        self.jobs.on_event(message)
 
     async def _connected(self) -> None:
         """Everything retained, again: the bridge, its configs, its plotters' states."""
@@ -74,6 +83,7 @@ class MqttService:
         for topic, config in self._configs.items():
             publish(topic, config)
         self.telemetry.resend()
+        self.jobs.recover()
 
     def _send_state(self, plotter: str, payload: str) -> None:
         self.connection.publish(self.topics.state(plotter), payload)
@@ -121,13 +131,24 @@ class MqttService:
         levels = self.topics.parse(topic)
         if levels is None:
             return
+        own = self.settings.bridge
         if len(levels) == 2 and levels[1] == "status":
             self.fleet.status(levels[0], payload)
+            if payload == b"offline":
+                self.jobs.bridge_offline(levels[0])
+        elif len(levels) == 2 and levels[0] == "jobs":
+            self.jobs.offered(levels[1], payload)
+        elif levels == [own, "claim"] and not message.retain:
+            self.jobs.to_origin(payload)
+        elif levels == [own, "grant"] and not message.retain:
+            self.jobs.to_taker(payload)
+        elif len(levels) == 3 and levels[:2] == [own, "jobs"]:
+            self.jobs.placed(levels[2], payload)
         elif len(levels) == 2 and levels[1] == "info":
             self.fleet.info(levels[0], payload)
         elif len(levels) == 4 and levels[1] == "plotter" and levels[3] == "state":
             self.fleet.state(levels[0], levels[2], payload)
-        elif (len(levels) == 5 and levels[0] == self.settings.bridge and levels[3] == "cmd"
+        elif (len(levels) == 5 and levels[0] == own and levels[3] == "cmd"
               and not message.retain):
             self._command(levels[2], levels[4])
 
@@ -186,7 +207,8 @@ class MqttService:
 
     def describe(self) -> dict[str, Any]:
         return {"enabled": True, "bridge": self.settings.bridge, "fleet": self.settings.fleet,
-                "connected": self.connection.connected, "bridges": self.fleet.describe()}
+                "connected": self.connection.connected, "bridges": self.fleet.describe(),
+                "jobs": self.jobs.describe()}
 
 
 def _sender(payload: Any) -> str | None:

@@ -22,6 +22,7 @@ from plotbridge.config import NAME_CHARS, PLOTTERS_FILE, ConfigError
 COMMANDS = ("stop", "hold", "continue", "home", "start")
 """What the broker may ask for. `stop` (a plotter's, a bridge's, the fleet's) is always
 allowed; `start` (taking fleet jobs) is off unless listed."""
+RESERVED = frozenset({"cmd", "jobs"})  # levels of plotbridge/FLEET/... that are not bridges
 DEFAULT_ACCEPT = frozenset({"stop", "hold", "continue", "home"})
 TABLE_KEYS = frozenset({"url", "username", "password_file", "credentials_file", "fleet",
                         "bridge", "discovery_prefix", "accept", "keepalive", "ca_file",
@@ -165,6 +166,8 @@ def _accept(names: list[Any], where: str) -> frozenset[str]:
 def _name(name: str, what: str) -> str:
     if not 1 <= len(name) <= 64 or not set(name) <= NAME_CHARS:
         raise ConfigError(f"MQTT {what} name {name!r}: use 1-64 letters, digits, - or _")
+    if name in RESERVED:
+        raise ConfigError(f"MQTT {what} name {name!r} is taken by the topics; choose another")
     return name
 
 

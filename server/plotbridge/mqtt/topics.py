@@ -8,10 +8,10 @@
     plotbridge/FLEET/BRIDGE/cmd/stop_all            every plotter of the bridge
     plotbridge/FLEET/cmd/stop_all                   every plotter of the fleet
     plotbridge/FLEET/jobs/ID                        a fleet job on offer (retained while it is)
-    plotbridge/FLEET/BRIDGE/claim                   bridges ask the origin for its jobs
-    plotbridge/FLEET/BRIDGE/grant                   the origin gives one bridge a job, with its file
-    plotbridge/FLEET/BRIDGE/taken                   the taker tells the origin it started it
-    plotbridge/FLEET/BRIDGE/jobs/ID                 where a fleet job runs, its progress (retained)
+    plotbridge/FLEET/ORIGIN/claim                   to the origin: a claim, or "taken" (imported)
+    plotbridge/FLEET/TAKER/grant                    to the taker: grant (with the file), deny,
+                                                    go or revoke
+    plotbridge/FLEET/ORIGIN/jobs/ID                 where a fleet job runs, its progress (retained)
 """
 
 from __future__ import annotations
@@ -65,9 +65,6 @@ class Topics:
     def grant(self, taker: str) -> str:
         return f"{self.base(taker)}/grant"
 
-    def taken(self, origin: str) -> str:
-        return f"{self.base(origin)}/taken"
-
     def placed(self, job: str, origin: str | None = None) -> str:
         return f"{self.base(origin)}/jobs/{job}"
 
@@ -77,8 +74,7 @@ class Topics:
         root, own = self.fleet_root, self.base()
         return [f"{own}/plotter/+/cmd/+", f"{own}/cmd/+", f"{root}/cmd/+",
                 f"{root}/+/status", f"{root}/+/info", f"{root}/+/plotter/+/state",
-                f"{root}/jobs/+", f"{own}/claim", f"{own}/grant", f"{own}/taken",
-                f"{root}/+/jobs/+"]  # fmt: skip
+                f"{root}/jobs/+", f"{own}/claim", f"{own}/grant", f"{own}/jobs/+"]
 
     def parse(self, topic: str) -> list[str] | None:
         """The levels after plotbridge/FLEET/, or None for a topic outside the fleet."""

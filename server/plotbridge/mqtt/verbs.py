@@ -7,7 +7,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from plotbridge.errors import Refused
 from plotbridge.jobs.model import Job
 from plotbridge.queue import JobQueue
 
@@ -75,9 +74,11 @@ class Verbs:
         return any(job.state == "waiting" and job.target in (None, plotter)
                    for job in self.queue.jobs.values())  # fmt: skip
 
-    async def create(self, path: Path, filename: str, name: str, options: dict[str, Any],
-                     placement: dict[str, Any], plotter: str | None) -> Job:  # fmt: skip
-        return await self.queue.create(kind="file", source=path, filename=filename, name=name,
+    async def create(self, kind: str, source: Path | str, filename: str, name: str,
+                     options: dict[str, Any], placement: dict[str, Any],
+                     plotter: str | None) -> Job:  # fmt: skip
+        """A new queued job from a file (moved into the job) or a pattern's name."""
+        return await self.queue.create(kind=kind, source=source, filename=filename, name=name,
                                        options=options, placement=placement, target=plotter)
 
     def start(self, job_id: str, plotter: str) -> Job:
@@ -86,9 +87,10 @@ class Verbs:
     async def delete(self, job_id: str) -> None:
         await self.queue.delete(job_id)
 
-    def source(self, job_id: str) -> tuple[Path, str, dict[str, Any], dict[str, Any]]:
-        """A job's uploaded file, its name, import options and placement."""
+    def source(self, job_id: str) -> tuple[str, str, str, dict[str, Any], dict[str, Any]]:
+        """What a job was made from: its kind, its original file's path (or the pattern's
+        name), the file's name, the import options and the placement."""
         job = self.queue.get(job_id)
-        if job.kind != "file":
-            raise Refused(422, "a fleet job must be an uploaded file, not a pattern")
-        return Path(job.source), job.filename, dict(job.options), dict(job.placement)
+        source = str(self.queue.importer.jobs_dir / job.id / job.source) if job.kind == "file" \
+            else job.source
+        return job.kind, source, job.filename, dict(job.options), dict(job.placement)
