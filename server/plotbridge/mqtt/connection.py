@@ -34,7 +34,7 @@ PAHO_LOG.setLevel(logging.INFO)
 EVENTS_KEPT = 64  # events waiting while the broker is slow or away
 INBOX = 1000  # incoming messages waiting to be handled
 PUBLISH_TIMEOUT = 10.0  # s a publish may wait for the broker before the link counts as broken
-BACKOFF = (0.5, 30.0)  # s, first and longest wait between connection attempts
+BACKOFF = (0.5, 15.0)  # s, first and longest wait between connection attempts
 PROTOCOL_REFUSED = (1, 132)  # CONNACK: unacceptable protocol version (3.1.1, 5)
 
 
@@ -160,6 +160,8 @@ class Connection:
                 self._down(f"MQTT: {self.where} refused us: {exc}")
             except (aiomqtt.MqttError, OSError, ssl.SSLError) as exc:
                 self._down(f"MQTT: no connection to {self.where}: {exc or type(exc).__name__}")
+            except Exception:  # a bug: the connection must outlive it
+                log.exception("MQTT: the session with %s failed", self.where)
             else:
                 delay = BACKOFF[0]
             if self.connected:  # it had connected: start over quickly
@@ -199,9 +201,16 @@ class Connection:
                 await client.subscribe(topic, qos=1)
             await client.publish(self.will_topic, "online", qos=1, retain=True)
             await self.on_connected()
-            async with asyncio.TaskGroup() as group:
-                group.create_task(self._read(client))
-                group.create_task(self._write(client))
+            tasks = {asyncio.create_task(self._read(client)),
+                     asyncio.create_task(self._write(client))}
+            try:
+                done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+            finally:
+                for task in tasks:
+                    task.cancel()
+                await asyncio.gather(*tasks, return_exceptions=True)
+            for task in done:
+                task.result()  # the reason the session ended
 
     async def _read(self, client: aiomqtt.Client) -> None:
         async for message in client.messages:
