@@ -4,11 +4,13 @@ the simulator): the fleet view, STOP EVERYTHING across bridges, the fleet queue
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 
 import pytest
 
+from tests.fixtures.cli import run_cli
 from tests.fixtures.drawings import drawing
 from tests.fixtures.mqtt_bridges import bridge_server
 from tests.fixtures.waits import wait_until
@@ -77,7 +79,11 @@ def test_fleet_job_plots_once_on_the_free_bridge(two_bridges):
     a, b = two_bridges
     busy = a.submit(drawing(circles=20))  # real time: A stays busy for a while
     a.wait_progress(busy["id"], 20, timeout=60)
-    offered = fleet_upload(a, drawing(circles=2), "fleet-once")
+    path = a.data_dir.parent / "fleet-once.gcode"
+    path.write_text(drawing(circles=2))
+    submitted = run_cli(a, "submit", str(path), "--name", "fleet-once", "--fleet", "--json")
+    assert submitted.returncode == 0, submitted.stderr
+    offered = json.loads(submitted.stdout)
     assert offered["fleet"]["state"] == "offered"
     assert not jobs_named(a, "fleet-once"), "the fleet holds the job, not A's queue"
     wait_until(lambda: jobs_named(b, "fleet-once"), lambda jobs: jobs and all(

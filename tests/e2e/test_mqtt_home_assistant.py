@@ -28,7 +28,7 @@ def ha_bridge(broker, plotter, tmp_path):
 
 def test_discovery_configs_are_valid_and_complete(ha_bridge):
     server, listener = ha_bridge
-    configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) >= 14 and c,
+    configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) == 15 and c,
                             20, "the bridge's discovery configs")
     plotter_ids = {f"plotter1_{k}" for k in SENSORS | BUTTONS | {"connected", "pen_change"}}
     assert plotter_ids | {"stop_all", "online"} == set(configs)
@@ -56,7 +56,7 @@ def test_discovery_configs_are_valid_and_complete(ha_bridge):
 
 def test_stop_button_mid_job_and_progress_entities(ha_bridge, plotter):
     server, listener = ha_bridge
-    configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) >= 14 and c,
+    configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) == 15 and c,
                             20, "the bridge's discovery configs")
     server.home()
     job = server.submit(drawing(circles=6))
