@@ -10,6 +10,7 @@ import { createSocket } from "./socket.js";
 import { createStore, initialState, previewJob } from "./store.js";
 import { bindConsole, renderConsole } from "./views/console.js";
 import { bindControl, renderControl } from "./views/control.js";
+import { bindFleet, renderFleet } from "./views/fleet.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
 import { bindPens, createPenActions, renderPens } from "./views/pens.js";
@@ -17,7 +18,7 @@ import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { PICKABLE, bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
-const TABS = ["plot", "control", "pens", "settings", "console"];
+const TABS = ["plot", "control", "pens", "settings", "console", "fleet"];
 const DRAWN_STATES = new Set(["running", "paused", "pen_change", "stopped", "interrupted", "failed", "cancelled"]);
 const LIVE_STATES = new Set(["running", "paused"]);
 
@@ -108,6 +109,7 @@ function render(state) {
   } else if (state.tab === "control") renderControl(state);
   else if (state.tab === "pens") renderPens(state);
   else if (state.tab === "settings") renderSettings(state);
+  else if (state.tab === "fleet") renderFleet();
   else renderConsole(state);
 }
 
@@ -205,6 +207,7 @@ function bind() {
   bindSettings(actions);
   bindConsole(actions);
   bindResume(actions);
+  bindFleet(() => store.state.tab === "fleet");
 }
 
 async function start() {
