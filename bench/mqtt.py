@@ -147,7 +147,7 @@ class Bench:
     def run(self) -> dict:
         self.broker.start()
         self.server.start()
-        listener = self.broker.listener("ha", ("homeassistant/#", "plotbridge/#"))
+        listener = self.broker.listener("homeassistant", ("homeassistant/#", "plotbridge/#"))
         try:
             deadline = time.monotonic() + 30
             configs = discovered(listener, "bench")

@@ -20,7 +20,7 @@ BUTTONS = {"stop", "hold", "continue", "home"}
 @pytest.fixture
 def ha_bridge(broker, plotter, tmp_path):
     server = bridge_server(tmp_path / "data", ["--serial", str(plotter.port)], broker, "A")
-    listener = broker.listener("ha", (f"{PREFIX}/#", "plotbridge/#"))
+    listener = broker.listener("homeassistant", (f"{PREFIX}/#", "plotbridge/#"))
     yield server, listener
     listener.close()
     server.close()
@@ -90,3 +90,27 @@ def test_killed_bridge_shows_unavailable(ha_bridge):
     server.kill()
     listener.wait(lambda lst: lst.latest.get("plotbridge/default/A/status") == b"offline", 20,
                   "the last will: offline")
+
+
+def test_configs_of_a_plotter_that_went_away_are_removed(broker, tmp_path):
+    listener = broker.listener("homeassistant", (f"{PREFIX}/#", "plotbridge/#"))
+    try:
+        server = bridge_server(tmp_path / "data", ["--virtual", "2", "--sim-speed", "0"],
+                               broker, "A")
+        listener.wait(lambda lst: len(discovered(lst, "A")) == 2 * 13 + 2, 30,
+                      "the configs of two plotters")
+        listener.wait(lambda lst: lst.json("plotbridge/default/A/plotter/plotter2/state"), 30,
+                      "plotter2's state")
+        server.stop()
+        server.link_args = ["--virtual", "1", "--sim-speed", "0"]
+        server.start()
+        try:
+            gone = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) == 15 and c,
+                                 30, "plotter2's configs removed")
+            assert not any(object_id.startswith("plotter2_") for object_id in gone)
+            listener.wait(lambda lst: not lst.json("plotbridge/default/A/plotter/plotter2/state"),
+                          10, "plotter2's retained state removed")
+        finally:
+            server.close()
+    finally:
+        listener.close()

@@ -44,7 +44,7 @@ def test_broker_down_then_up(plotter, tmp_path):
         assert log_count(server, "MQTT: no connection to") == 1, server.log()
         assert server.client.get("/api/fleet").json()["connected"] is False
         broker.start()
-        listener = broker.listener("ha", ("plotbridge/#",))
+        listener = broker.listener("homeassistant", ("plotbridge/#",))
         try:
             listener.wait(lambda lst: lst.latest.get("plotbridge/default/A/status") == b"online",
                           60, "the bridge connected once the broker is up")
@@ -58,7 +58,7 @@ def test_broker_down_then_up(plotter, tmp_path):
 
 def test_broker_refusing_credentials(plotter, broker, tmp_path):
     wrong = tmp_path / "wrong.credentials"
-    wrong.write_text("bridge:not-the-password\n")
+    wrong.write_text("plotbridge:not-the-password\n")
     args = ["--mqtt", broker.url, "--mqtt-credentials", str(wrong), "--mqtt-bridge", "A"]
     server = ServerProcess(tmp_path / "data", ["--serial", str(plotter.port)], args)
     server.start()
@@ -109,7 +109,7 @@ def test_retained_garbage_flood_changes_nothing(plotter, broker, tmp_path):
         flooding.join(10)
         plot_one(server)  # and jobs still finish
         # the stale discovery config was removed; the retained command never acted
-        ha = broker.listener("ha", ("homeassistant/#",))
+        ha = broker.listener("homeassistant", ("homeassistant/#",))
         try:
             time.sleep(1)
             assert not ha.matching(lambda t: "stale_thing" in t)
@@ -129,7 +129,7 @@ def test_retained_garbage_flood_changes_nothing(plotter, broker, tmp_path):
 
 def test_broker_restarted_mid_job(broker, tmp_path):
     server = bridge_server(tmp_path / "data", ["--virtual", "--sim-speed", "1"], broker, "A")
-    listener = broker.listener("ha", ("plotbridge/#",))
+    listener = broker.listener("homeassistant", ("plotbridge/#",))
     state = "plotbridge/default/A/plotter/plotter1/state"
     try:
         server.home()
@@ -138,7 +138,7 @@ def test_broker_restarted_mid_job(broker, tmp_path):
                       "the job running on the broker")
         listener.close()
         broker.restart()  # no persistence: the retained state is gone with it
-        listener = broker.listener("ha", ("plotbridge/#",))
+        listener = broker.listener("homeassistant", ("plotbridge/#",))
         done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
         assert done["state"] == "done", done
         listener.wait(lambda lst: (s := lst.json(state)) and s["job_state"] == "done"

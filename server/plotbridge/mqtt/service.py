@@ -147,6 +147,8 @@ class MqttService:
         elif len(levels) == 2 and levels[1] == "info":
             self.fleet.info(levels[0], payload)
         elif len(levels) == 4 and levels[1] == "plotter" and levels[3] == "state":
+            if levels[0] == own and levels[2] not in self.verbs.plotters and payload:
+                self.connection.publish(topic, b"")  # a plotter this bridge no longer has
             self.fleet.state(levels[0], levels[2], payload)
         elif (len(levels) == 5 and levels[0] == own and levels[3] == "cmd"
               and not message.retain):
