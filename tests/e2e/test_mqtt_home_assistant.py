@@ -5,9 +5,11 @@ lets it read and send commands)."""
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
-from tests.fixtures.drawings import drawing
+from tests.fixtures.drawings import THREE_LAYERS, drawing
 from tests.fixtures.mqtt_bridges import PREFIX, bridge_server, discovered, state
 from tests.fixtures.trace import assert_stopped, stop_clock
 
@@ -81,6 +83,34 @@ def test_stop_button_mid_job_and_progress_entities(ha_bridge, plotter):
     assert_stopped(server, plotter, job["id"], sent)
     listener.wait(lambda lst: (s := state(lst, progress)) and s["job_state"] == "stopped"
                   and s["state"] == "Alarm", 10, "the entities to show the stop")
+
+
+def test_pen_change_prompt_event_and_continue_button(ha_bridge):
+    server, listener = ha_bridge
+    configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) == 15 and c,
+                            20, "the bridge's discovery configs")
+    server.home()
+    response = server.client.post("/api/jobs", files={"file": ("layers.svg", THREE_LAYERS)},
+                                  data={"start": "true"})  # fmt: skip
+    assert response.status_code == 201, response.text
+    job = response.json()
+    server.wait_pen_change(job["id"], 2)
+    prompt = listener.wait(lambda lst: (s := state(lst, configs["plotter1_pen_prompt"]))
+                           and s["pen_prompt"] and s, 10, "the pen-change prompt")
+    assert prompt["pen_prompt"].startswith("Layer 2 of 3, 'shade'")
+    event_topic = configs["plotter1_pen_change"]["state_topic"]
+    events = [json.loads(p) for _, t, p, _ in listener.messages if t == event_topic]
+    assert [e["event_type"] for e in events] == ["pen_change"]
+    assert events[0]["message"] == prompt["pen_prompt"] and events[0]["layer"] == 2
+    go_on = configs["plotter1_continue"]
+    listener.publish(go_on["command_topic"], go_on["payload_press"])  # Continue
+    server.wait_pen_change(job["id"], 3)
+    listener.publish(go_on["command_topic"], go_on["payload_press"])
+    done = server.wait_job(job["id"], ("done", "failed", "stopped", "interrupted"), 120)
+    assert done["state"] == "done", done
+    listener.wait(lambda lst: (s := state(lst, configs["plotter1_pen_prompt"]))
+                  and s["job_state"] == "done" and s["pen_prompt"] == "", 10,
+                  "the prompt cleared")
 
 
 def test_killed_bridge_shows_unavailable(ha_bridge):
