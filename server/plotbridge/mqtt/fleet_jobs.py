@@ -281,7 +281,12 @@ class FleetJobs:
             message = ToTaker.model_validate_json(payload)
         except ValidationError as exc:
             return self._garbage("grant", exc)
-        if message.type == "grant" and self.settings.allows("start"):
+        if message.type == "grant":
+            if not self.settings.allows("start") or self._claim is None \
+                    or self._claim[0] != message.job:
+                return self._garbage("grant", ValueError(f"a grant of {message.job} we did "
+                                                         "not claim"))
+            self._claim = (message.job, time.monotonic() + GRANT_TIMEOUT)  # no other claim
             self._spawn(self._take(message))
         elif message.type == "deny":
             if self._claim and self._claim[0] == message.job:
