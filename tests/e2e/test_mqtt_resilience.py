@@ -146,3 +146,24 @@ def test_broker_restarted_mid_job(broker, tmp_path):
     finally:
         listener.close()
         server.close()
+
+
+def test_mqtts_with_the_data_directorys_table(tmp_path):
+    broker = Broker(tmp_path / "broker", tls=True)
+    broker.start()
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "plotters.toml").write_text(
+        f'[mqtt]\nurl = "{broker.url}"\nca_file = "{broker.ca_file}"\nbridge = "T"\n'
+        f'credentials_file = "{broker.credentials()}"\n')
+    server = ServerProcess(data, ["--virtual", "--sim-speed", "0"])
+    listener = broker.listener("homeassistant", ("plotbridge/#",))
+    try:
+        server.start()
+        listener.wait(lambda lst: lst.latest.get("plotbridge/default/T/status") == b"online",
+                      30, "the bridge online over TLS")
+        assert "(MQTT 5)" in server.log() and "mqtts://127.0.0.1" in server.log()
+    finally:
+        listener.close()
+        server.close()
+        broker.stop()
