@@ -13,6 +13,7 @@ from plotbridge.mqtt.discovery import Discovery
 from plotbridge.mqtt.fleet import FleetView
 from plotbridge.mqtt.telemetry import Telemetry
 from plotbridge.mqtt.topics import Topics
+from plotbridge.mqtt.verbs import Verbs
 
 from tests.fixtures.fake_app import serve_args
 
@@ -142,3 +143,29 @@ def test_fleet_view_keeps_valid_messages_and_drops_garbage(caplog):
     assert sum("malformed" in r.message for r in caplog.records) == 1
     view.state("B", "p", b"")  # a cleared retained state: the plotter went away
     assert view.describe()[0]["plotters"] == []
+
+
+def test_hold_and_continue_follow_the_jobs_actions():
+    class Job:
+        id = "j1"
+
+        def __init__(self) -> None:
+            self.actions: list[str] | None = ["stop", "continue"]
+
+        def public(self) -> dict:
+            return {} if self.actions is None else {"actions": self.actions}
+
+    class Unit:
+        job = Job()
+
+    class Queue:
+        def plotter(self, name: str) -> Unit:
+            assert name == "p"
+            return Unit()
+
+    verbs = Verbs(Queue())  # type: ignore[arg-type]
+    assert verbs.refused_by_job("p", "hold") == "p's job j1 allows stop, continue now"
+    assert verbs.refused_by_job("p", "continue") is None
+    assert verbs.refused_by_job("p", "home") is None
+    Unit.job.actions = None  # a job without the lifecycle's list: the queue decides
+    assert verbs.refused_by_job("p", "hold") is None

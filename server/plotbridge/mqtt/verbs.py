@@ -38,10 +38,12 @@ class Verbs:
     def refused_by_job(self, plotter: str, verb: str) -> str | None:
         """Why the plotter's job does not allow `verb` now (its `actions`), or None."""
         job = self.queue.plotter(plotter).job
-        actions = getattr(job, "actions", None) if job is not None else None
         needed = NEEDS_ACTION.get(verb)
-        if needed and isinstance(actions, list) and needed not in actions:
-            return f"{plotter}'s job {job.id} allows {', '.join(actions) or 'nothing'} now"  # type: ignore[union-attr]
+        if job is None or needed is None:
+            return None
+        actions = job.public().get("actions")  # the lifecycle's list, where jobs carry one
+        if isinstance(actions, list) and needed not in actions:
+            return f"{plotter}'s job {job.id} allows {', '.join(actions) or 'nothing'} now"
         return None
 
     def hold(self, plotter: str) -> None:
