@@ -43,6 +43,7 @@ log = logging.getLogger("plotbridge.mqtt.fleet")
 
 CLAIM_TIMEOUT = 10.0  # s a claim waits for the origin's answer
 GRANT_TIMEOUT = 120.0  # s a granted job may take to be imported and taken
+KEPT = 50  # finished fleet jobs an origin remembers
 NAME = r"^[A-Za-z0-9_-]{1,64}$"
 
 
@@ -241,6 +242,17 @@ class FleetJobs:
         except (ValueError, KeyError, TypeError):
             return self._garbage("jobs", ValueError("needs state and progress"))
         record.update(job_state=state[:32], progress=progress)
+        if state in FINISHED:
+            self._forget_old()
+            self._save()
+
+    def _forget_old(self) -> None:
+        """Keep the records of the last KEPT finished fleet jobs (the Fleet tab lists them)."""
+        finished = [r for r in sorted(self.own.values(), key=lambda r: r["created_at"])
+                    if r["state"] == "committed" and r["job_state"] in FINISHED]
+        for record in finished[:-KEPT]:
+            del self.own[record["id"]]
+            self.connection.publish(self.topics.placed(record["id"]), b"")
 
     # ---- taker --------------------------------------------------------------------------
 
