@@ -96,7 +96,7 @@ class MqttService:
     def _urgent(self, message: Message) -> bool:
         """The stops, acted on as they come off the socket; True: handled (or dropped)."""
         levels = self.topics.parse(message.topic.value)
-        if levels is None or "cmd" not in levels:
+        if levels is None or not _is_command(levels):
             return False
         if message.retain:
             self.connection.problems.warn(
@@ -124,8 +124,9 @@ class MqttService:
             message.payload or "").encode()
         if topic.startswith(self.settings.discovery_prefix + "/"):
             if payload and topic not in self._configs:
-                log.info("MQTT: removing the retained discovery config %s (no such entity "
-                         "now)", topic)
+                self.connection.problems.warn("stale-configs", "MQTT: removing retained "
+                                              "discovery configs this bridge does not publish "
+                                              "(the first: %s)", topic)  # fmt: skip
                 self.connection.publish(topic, b"")
             return
         levels = self.topics.parse(topic)
@@ -211,6 +212,12 @@ class MqttService:
         return {"enabled": True, "bridge": self.settings.bridge, "fleet": self.settings.fleet,
                 "connected": self.connection.connected, "bridges": self.fleet.describe(),
                 "jobs": self.jobs.describe()}
+
+
+def _is_command(levels: list[str]) -> bool:
+    """plotbridge/F/cmd/X, plotbridge/F/B/cmd/X or plotbridge/F/B/plotter/P/cmd/X."""
+    return ((len(levels) == 2 and levels[0] == "cmd") or (len(levels) == 3 and levels[1] == "cmd")
+            or (len(levels) == 5 and levels[1] == "plotter" and levels[3] == "cmd"))
 
 
 def _sender(payload: Any) -> str | None:
