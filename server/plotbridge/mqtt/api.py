@@ -72,4 +72,4 @@ async def fleet_upload(request: Request, params: dict[str, str], job: Job) -> JS
     if service is None:
         await c.queue.delete(job.id)
         return upload_error(409, "fleet=true needs MQTT: start the server with --mqtt URL")
-    return JSONResponse(await service.jobs.offer(job.public()), status_code=201)
+    return JSONResponse(await service.origin.offer(job.public()), status_code=201)

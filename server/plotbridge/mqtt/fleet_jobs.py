@@ -79,7 +79,12 @@ class ToTaker(Edge):
     data: str = ""  # the file, base64 (kind "file"), or the pattern's name
 
 
-class FleetJobs:
+class Party:
+    """What the origin and the taker share: the settings, the link, their records on disk
+    (written by one writer task, the latest version wins) and their background tasks."""
+
+    FILE = ""
+
     def __init__(self, settings: MqttSettings, topics: Topics, connection: Connection,
                  verbs: Verbs, folder: Path) -> None:  # fmt: skip
         self.settings = settings
@@ -87,18 +92,13 @@ class FleetJobs:
         self.connection = connection
         self.verbs = verbs
         self.folder = folder
-        self.offers: dict[str, Offer] = {}  # every job on offer in the fleet
-        self.own: dict[str, dict[str, Any]] = self._load("own.json")  # ours, as origin
-        self.taken: dict[str, dict[str, Any]] = self._load("taken.json")  # ours, as taker
-        self._claim: tuple[str, float] | None = None  # (job, when) of our open claim
-        self._declined: set[str] = set()  # jobs we could not import: not claimed again
+        self.records: dict[str, dict[str, Any]] = self._load()
         self._tasks: set[asyncio.Task[None]] = set()
-        self._ticker: asyncio.Task[None] | None = None
+        self._dirty = False
+        self._writer: asyncio.Task[None] | None = None
 
-    # ---- storage ----------------------------------------------------------------------
-
-    def _load(self, name: str) -> dict[str, dict[str, Any]]:
-        path = self.folder / name
+    def _load(self) -> dict[str, dict[str, Any]]:
+        path = self.folder / self.FILE
         try:
             data = json.loads(path.read_text()) if path.exists() else {}
         except (OSError, ValueError) as exc:
@@ -107,16 +107,14 @@ class FleetJobs:
         return data if isinstance(data, dict) else {}
 
     def _save(self) -> None:
-        own, taken = json.dumps(self.own), json.dumps(self.taken)
+        self._dirty = True
+        if self._writer is None or self._writer.done():
+            self._writer = asyncio.create_task(self._write())
 
-        def write() -> None:
-            self.folder.mkdir(parents=True, exist_ok=True)
-            for name, text in (("own.json", own), ("taken.json", taken)):
-                partial = self.folder / f".{name}"
-                partial.write_text(text)
-                partial.replace(self.folder / name)
-
-        self._spawn(asyncio.to_thread(write))
+    async def _write(self) -> None:
+        while self._dirty:
+            self._dirty = False
+            await asyncio.to_thread(_replace, self.folder / self.FILE, json.dumps(self.records))
 
     def _spawn(self, work: Any) -> None:
         task = asyncio.create_task(work)
@@ -128,20 +126,20 @@ class FleetJobs:
         if not task.cancelled() and task.exception() is not None:
             log.error("fleet jobs: %s", task.exception())
 
-    def start(self) -> None:
-        self._ticker = asyncio.create_task(self._tick(), name="fleet-jobs")
+    def close(self) -> None:
+        for task in self._tasks:
+            task.cancel()
 
-    async def close(self) -> None:
-        for task in [self._ticker, *self._tasks]:
-            if task is not None:
-                task.cancel()
+    def _garbage(self, where: str, exc: Exception) -> None:
+        self.connection.problems.warn(f"fleet-{where}", "MQTT: ignoring a malformed fleet "
+                                      "message on %s (%s); further ones are not logged", where,
+                                      str(exc).splitlines()[0])  # fmt: skip
 
-    async def _tick(self) -> None:
-        while True:
-            await asyncio.sleep(1.0)
-            self.poll()
 
-    # ---- origin -------------------------------------------------------------------------
+class FleetOrigin(Party):
+    """Our fleet jobs, as the one authority on them (steps 1, 3, 4 and taking back)."""
+
+    FILE = "own.json"
 
     async def offer(self, job: dict[str, Any]) -> dict[str, Any]:
         """Take an imported local job into the fleet's queue: its file moves to the fleet
@@ -157,7 +155,7 @@ class FleetJobs:
         else:
             record["pattern"] = source
         await self.verbs.delete(job["id"])
-        self.own[job["id"]] = record
+        self.records[job["id"]] = record
         self._save()
         self._publish_offer(record)
         log.info("fleet job %s (%s) offered to the fleet", job["id"], job["name"])
@@ -176,7 +174,7 @@ class FleetJobs:
             message = ToOrigin.model_validate_json(payload)
         except ValidationError as exc:
             return self._garbage("claim", exc)
-        record = self.own.get(message.job)
+        record = self.records.get(message.job)
         if record is None:
             return self._send(message.bridge, "deny", message.job)
         if message.type == "claim":
@@ -227,13 +225,13 @@ class FleetJobs:
         self._publish_offer(record)
 
     def bridge_offline(self, bridge: str) -> None:
-        for record in self.own.values():
+        for record in self.records.values():
             if record["state"] == "granted" and record["bridge"] == bridge:
                 self._reoffer(record, f"{bridge} went offline before starting it")
 
     def placed(self, job: str, payload: bytes) -> None:
         """The taker's report on one of our jobs: where it runs, its state and progress."""
-        record = self.own.get(job)
+        record = self.records.get(job)
         if record is None or not payload:
             return
         try:
@@ -248,13 +246,45 @@ class FleetJobs:
 
     def _forget_old(self) -> None:
         """Keep the records of the last KEPT finished fleet jobs (the Fleet tab lists them)."""
-        finished = [r for r in sorted(self.own.values(), key=lambda r: r["created_at"])
+        finished = [r for r in sorted(self.records.values(), key=lambda r: r["created_at"])
                     if r["state"] == "committed" and r["job_state"] in FINISHED]
         for record in finished[:-KEPT]:
-            del self.own[record["id"]]
+            del self.records[record["id"]]
             self.connection.publish(self.topics.placed(record["id"]), b"")
 
-    # ---- taker --------------------------------------------------------------------------
+    def poll(self) -> None:
+        """Take back what was granted and not taken in time."""
+        for record in list(self.records.values()):
+            if record["state"] == "granted" and time.time() - record["since"] > GRANT_TIMEOUT:
+                self._reoffer(record, f"no answer in {GRANT_TIMEOUT:g} s")
+
+    def recover(self) -> None:
+        """After a (re)connection: our jobs on offer, offered again."""
+        for record in self.records.values():
+            if record["state"] == "offered":
+                self._publish_offer(record)
+
+    # ---- views ---------------------------------------------------------------------------
+
+    def public(self, record: dict[str, Any]) -> dict[str, Any]:
+        keep = ("id", "name", "state", "bridge", "plotter", "job_state", "progress")
+        return {key: record.get(key) for key in keep}
+
+    def describe(self) -> list[dict[str, Any]]:
+        ordered = sorted(self.records.values(), key=lambda r: r["created_at"])
+        return [self.public(record) for record in ordered]
+
+
+class FleetTaker(Party):
+    """Other bridges' (and our own) fleet jobs, as a bridge that may take them (2, 4, 5)."""
+
+    FILE = "taken.json"
+
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.offers: dict[str, Offer] = {}  # every job on offer in the fleet
+        self._claim: tuple[str, float] | None = None  # (job, when) of our open claim
+        self._declined: set[str] = set()  # jobs we could not import: not claimed again
 
     def offered(self, job: str, payload: bytes) -> None:
         if not payload:
@@ -268,16 +298,13 @@ class FleetJobs:
     def poll(self) -> None:
         """Claim the fleet's oldest job that fits a free plotter of ours (one at a time)."""
         now = time.monotonic()
-        for record in list(self.own.values()):
-            if record["state"] == "granted" and time.time() - record["since"] > GRANT_TIMEOUT:
-                self._reoffer(record, f"no answer in {GRANT_TIMEOUT:g} s")
         if self._claim is not None and now - self._claim[1] < CLAIM_TIMEOUT:
             return
         self._claim = None
         if not self.settings.allows("start") or not self.connection.connected:
             return
         for offer in sorted(self.offers.values(), key=lambda o: (o.created_at, o.id)):
-            if offer.id in self.taken or offer.id in self._declined:
+            if offer.id in self.records or offer.id in self._declined:
                 continue
             plotter = self.verbs.free_plotter(offer.bounds)
             if plotter is None:
@@ -329,19 +356,19 @@ class FleetJobs:
                                plotter=grant.plotter or "any")  # fmt: skip
             self.connection.event(self.topics.claim(grant.origin), message.model_dump_json())
             return
-        self.taken[grant.job] = {"origin": grant.origin, "local": job.id,
+        self.records[grant.job] = {"origin": grant.origin, "local": job.id,
                                  "plotter": grant.plotter, "phase": "imported"}  # fmt: skip
         self._save()
         self._ask(grant.job)
 
     def _ask(self, job: str) -> None:
-        record = self.taken[job]
+        record = self.records[job]
         message = ToOrigin(type="taken", job=job, bridge=self.settings.bridge,
                            plotter=record["plotter"] or "any")  # fmt: skip
         self.connection.event(self.topics.claim(record["origin"]), message.model_dump_json())
 
     async def _go(self, job: str) -> None:
-        record = self.taken.get(job)
+        record = self.records.get(job)
         self._claim = None
         if record is None:
             return
@@ -354,7 +381,7 @@ class FleetJobs:
                      record["plotter"])  # fmt: skip
 
     async def _drop(self, job: str) -> None:
-        record = self.taken.pop(job, None)
+        record = self.records.pop(job, None)
         self._claim = None
         if record is not None:
             self._save()
@@ -363,47 +390,37 @@ class FleetJobs:
 
     def recover(self) -> None:
         """After a (re)connection: ask again about imported jobs, start those told to go."""
-        for job, record in list(self.taken.items()):
+        for job, record in list(self.records.items()):
             local = self.verbs.job(record["local"])
             if local is None:
-                del self.taken[job]
+                del self.records[job]
                 self._save()
             elif record["phase"] == "imported":
                 self._ask(job)
             elif local.state == "queued":
                 self.verbs.start(local.id, record["plotter"])
-        for record in self.own.values():
-            if record["state"] == "offered":
-                self._publish_offer(record)
 
     def on_event(self, message: dict[str, Any]) -> None:
         """Our local copies' progress, reported to their origins."""
         if message.get("type") != "job":
             return
         job = message["job"]
-        for fleet_id, record in list(self.taken.items()):
+        for fleet_id, record in list(self.records.items()):
             if record["local"] == job["id"] and record["phase"] == "go":
                 report = {"bridge": self.settings.bridge, "plotter": job.get("plotter"),
                           "state": job["state"], "progress": job.get("progress", 0)}
                 self.connection.publish(self.topics.placed(fleet_id, record["origin"]),
                                         json.dumps(report))  # fmt: skip
                 if job["state"] in FINISHED - {"stopped"}:
-                    del self.taken[fleet_id]
+                    del self.records[fleet_id]
                     self._save()
 
-    # ---- views ---------------------------------------------------------------------------
 
-    def public(self, record: dict[str, Any]) -> dict[str, Any]:
-        keep = ("id", "name", "state", "bridge", "plotter", "job_state", "progress")
-        return {key: record.get(key) for key in keep}
-
-    def describe(self) -> list[dict[str, Any]]:
-        return [self.public(r) for r in sorted(self.own.values(), key=lambda r: r["created_at"])]
-
-    def _garbage(self, where: str, exc: Exception) -> None:
-        self.connection.problems.warn(f"fleet-{where}", "MQTT: ignoring a malformed fleet "
-                                      "message on %s (%s); further ones are not logged", where,
-                                      str(exc).splitlines()[0])  # fmt: skip
+def _replace(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(f".{path.name}")
+    partial.write_text(text)
+    partial.replace(path)
 
 
 def _copy(source: Path, target: Path) -> None:

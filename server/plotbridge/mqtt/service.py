@@ -22,7 +22,7 @@ from plotbridge.events import EventHub
 from plotbridge.mqtt.connection import Connection
 from plotbridge.mqtt.discovery import Discovery
 from plotbridge.mqtt.fleet import FleetView
-from plotbridge.mqtt.fleet_jobs import FleetJobs
+from plotbridge.mqtt.fleet_jobs import FleetOrigin, FleetTaker
 from plotbridge.mqtt.settings import MqttSettings
 from plotbridge.mqtt.telemetry import Telemetry
 from plotbridge.mqtt.topics import PLOTTER_VERBS, Topics
@@ -48,7 +48,9 @@ class MqttService:
             subscriptions=[*self.topics.subscriptions(), self.discovery.our_configs],
         )  # fmt: skip
         self.fleet = FleetView(self.connection.problems)
-        self.jobs = FleetJobs(settings, self.topics, self.connection, verbs, data_dir / "fleet")
+        parts = (settings, self.topics, self.connection, verbs, data_dir / "fleet")
+        self.origin, self.taker = FleetOrigin(*parts), FleetTaker(*parts)
+        self._ticker: asyncio.Task[None] | None = None
         self._configs = self.discovery.configs(verbs.plotters)
         self._unsubscribe: Callable[[], None] | None = None
         self._tasks: set[asyncio.Task[None]] = set()
@@ -60,7 +62,7 @@ class MqttService:
             self.telemetry.on_event(message)
         self._unsubscribe = self.events.subscribe(self._on_event)
         self.connection.start()
-        self.jobs.start()
+        self._ticker = asyncio.create_task(self._tick(), name="fleet-jobs")
         log.info("MQTT: bridge %s of fleet %s, broker %s", self.settings.bridge,
                  self.settings.fleet, self.connection.where)  # fmt: skip
 
@@ -68,12 +70,21 @@ class MqttService:
         if self._unsubscribe:
             self._unsubscribe()
         self.telemetry.close()
-        await self.jobs.close()
+        if self._ticker is not None:
+            self._ticker.cancel()
+        self.origin.close()
+        self.taker.close()
         await self.connection.close()
+
+    async def _tick(self) -> None:
+        while True:
+            await asyncio.sleep(1.0)
+            self.origin.poll()
+            self.taker.poll()
 
     def _on_event(self, message: dict[str, Any]) -> None:
         self.telemetry.on_event(message)
-        self.jobs.on_event(message)
+        self.taker.on_event(message)
 
     async def _connected(self) -> None:
         """Everything retained, again: the bridge, its configs, its plotters' states."""
@@ -83,7 +94,8 @@ class MqttService:
         for topic, config in self._configs.items():
             publish(topic, config)
         self.telemetry.resend()
-        self.jobs.recover()
+        self.origin.recover()
+        self.taker.recover()
 
     def _send_state(self, plotter: str, payload: str) -> None:
         self.connection.publish(self.topics.state(plotter), payload)
@@ -136,15 +148,15 @@ class MqttService:
         if len(levels) == 2 and levels[1] == "status":
             self.fleet.status(levels[0], payload)
             if payload == b"offline":
-                self.jobs.bridge_offline(levels[0])
+                self.origin.bridge_offline(levels[0])
         elif len(levels) == 2 and levels[0] == "jobs":
-            self.jobs.offered(levels[1], payload)
+            self.taker.offered(levels[1], payload)
         elif levels == [own, "claim"] and not message.retain:
-            self.jobs.to_origin(payload)
+            self.origin.to_origin(payload)
         elif levels == [own, "grant"] and not message.retain:
-            self.jobs.to_taker(payload)
+            self.taker.to_taker(payload)
         elif len(levels) == 3 and levels[:2] == [own, "jobs"]:
-            self.jobs.placed(levels[2], payload)
+            self.origin.placed(levels[2], payload)
         elif len(levels) == 2 and levels[1] == "info":
             self.fleet.info(levels[0], payload)
         elif len(levels) == 4 and levels[1] == "plotter" and levels[3] == "state":
@@ -211,7 +223,7 @@ class MqttService:
     def describe(self) -> dict[str, Any]:
         return {"enabled": True, "bridge": self.settings.bridge, "fleet": self.settings.fleet,
                 "connected": self.connection.connected, "bridges": self.fleet.describe(),
-                "jobs": self.jobs.describe()}
+                "jobs": self.origin.describe()}
 
 
 def _is_command(levels: list[str]) -> bool:
