@@ -4,7 +4,8 @@ import pytest
 
 from tests.fixtures.artifacts import MEASUREMENTS
 
-pytest_plugins = ["tests.fixtures.plotsim", "tests.fixtures.server", "tests.fixtures.grbl"]
+pytest_plugins = ["tests.fixtures.plotsim", "tests.fixtures.server", "tests.fixtures.grbl",
+                  "tests.fixtures.mosquitto"]
 
 
 def pytest_sessionstart(session: pytest.Session) -> None:

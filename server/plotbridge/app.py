@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import socket
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
@@ -29,6 +30,9 @@ from plotbridge.jobs.imports import Importer
 from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.store import JobStore
 from plotbridge.models import ERROR_RESPONSES
+from plotbridge.mqtt.api import router as fleet_router
+from plotbridge.mqtt.service import MqttService
+from plotbridge.mqtt.verbs import Verbs
 from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.link import Link
@@ -51,6 +55,12 @@ class Board:
     virtual: VirtualPlotter | None = None
     work_area: WorkArea | None = None
     profile: str | None = None  # its board profile (firmware/src/boards/NAME.h)
+
+
+def public_url(config: Config) -> str:
+    """Where other machines reach this server's pages (the fleet view links there)."""
+    host = socket.gethostname() if config.host in ("0.0.0.0", "::", "") else config.host
+    return f"http://{host}:{config.port}/"
 
 
 def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
@@ -79,15 +89,22 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
                      pens=library)  # fmt: skip
     queue.load()
     actions = JobActions(queue, lifecycle)
+    mqtt = (MqttService(config.mqtt, Verbs(queue, actions), events, public_url(config),  # type: ignore[arg-type]
+                        config.data_dir)
+            if config.mqtt else None)  # fmt: skip
 
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         await webhooks.start()
         for plotter in units:
             plotter.start()
+        if mqtt:
+            mqtt.start()
         try:
             yield
         finally:
+            if mqtt:
+                await mqtt.close()
             for plotter in units:
                 await plotter.stop()
             await webhooks.close()
@@ -104,6 +121,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     checks = Checks(auth, config.allowed_hosts)
     app.add_middleware(Guard, checks=checks, upload_limit=config.upload_limit)
     LANE.bind(checks, partial(emergency_stop, queue))  # the real server's stop lane
+    app.state.mqtt = mqtt
     app.state.components = Components(config, auth, events, queue, actions, clients, library,
                                       webhooks)
 
@@ -129,7 +147,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         return error(500, f"internal error: {type(exc).__name__}: {exc}")
 
     for router in (session.router, plotters.router, jobs.router, pens.router, notify.router,
-                   ws.router):
+                   ws.router, fleet_router):
         app.include_router(router)
     if config.web_dir is not None and config.web_dir.is_dir():
         app.mount("/", StaticFiles(directory=config.web_dir, html=True), name="web")

@@ -26,6 +26,7 @@ from plotbridge.config import (
     read_plotters_file,
 )
 from plotbridge.jobs.model import AFTER_JOB
+from plotbridge.mqtt import settings as mqtt_settings
 
 log = logging.getLogger("plotbridge")
 
@@ -178,6 +179,7 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
         "--log-level", default=_env("LOG_LEVEL", "info"), choices=logsetup.LEVELS,
         help="console log level",
     )  # fmt: skip
+    mqtt_settings.add_arguments(parser)
 
 
 IMPORT_LIMITS = (  # flag, type, default, most, help: the defaults keep a 2 GB Pi 4 responsive
@@ -241,6 +243,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         log_level=args.log_level,
         zeroconf=args.zeroconf,
         web_dir=find_web_dir(),
+        mqtt=mqtt_settings.from_args(args, data_dir, args.port),
         import_limits=Limits(
             workers=max(1, args.import_workers), time_limit=args.import_time_limit,
             memory_mb=args.import_memory_mb, job_quota_mb=args.job_quota_mb,

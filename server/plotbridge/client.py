@@ -234,13 +234,16 @@ class Plotbridge:
         plotter: str | None = None,
         start: bool = False,
         pens: dict[str, str | int | None] | None = None,
+        fleet: bool = False,
         **placement: Any,
     ) -> Job:
         """Upload a file (a path), or a drawing in memory (bytes or a binary file object,
         with `filename` naming its format: "art.svg"). `layers` imports only those SVG
         layers (labels, ids or stroke colours); `pens` names the pen of some layers
-        ({layer number or name: pen name or id}). Placement keywords: paper, margin, fit,
-        rotate, scale, dx, dy, optimize, pen_dialect. The new job."""
+        ({layer number or name: pen name or id}); `fleet` hands it to the MQTT fleet's
+        queue (the first free fitting plotter of any bridge; its `fleet` says where it is).
+        Placement keywords: paper, margin, fit, rotate, scale, dx, dy, optimize,
+        pen_dialect. The new job."""
         unknown = set(placement) - set(PLACEMENT)
         if unknown:
             raise TypeError(f"unknown placement option(s): {', '.join(sorted(unknown))}")
@@ -256,6 +259,8 @@ class Plotbridge:
             fields["pens"] = json.dumps(pens)
         if start:
             fields["start"] = "true"
+        if fleet:
+            fields["fleet"] = "true"
         if isinstance(source, (str, os.PathLike)):
             path = Path(source)
             if not path.is_file():
@@ -306,6 +311,10 @@ class Plotbridge:
         """The jobs a plotter runs now (running, held, or waiting for a pen): those that
         can be stopped."""
         return [job for job in self.jobs() if "stop" in job.get("actions", ())]
+
+    def fleet(self) -> dict[str, Any]:
+        """The MQTT fleet as this server sees it: bridges, plotters, its fleet jobs."""
+        return self.request("GET", "/api/fleet", "read the fleet")
 
     def active_job(self) -> Job | None:
         """The first job a plotter runs now, if any."""

@@ -166,6 +166,7 @@ class Config:
     webhooks: tuple[str, ...] = ()  # --webhook URLs (more in DATA_DIR/webhooks.json)
     web_dir: Path | None = None
     import_limits: Limits = field(default_factory=Limits)
+    mqtt: object | None = None  # plotbridge.mqtt.settings.MqttSettings; None: MQTT is off
 
     @property
     def virtual(self) -> bool:

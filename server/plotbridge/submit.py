@@ -21,6 +21,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--name", help="job name (default: the file name)")
     parser.add_argument("--plotter", help="plotter to run it on (default: any)")
     parser.add_argument("--start", action="store_true", help="start the job after upload")
+    parser.add_argument("--fleet", action="store_true",
+                        help="send it to the MQTT fleet's queue: the first free plotter of any "
+                             "bridge whose work area fits it")
     parser.add_argument("--wait", action="store_true", help="follow the job until it ends")
     parser.add_argument("--paper", help="fit onto a paper size: A6..A3, letter (-landscape)")
     parser.add_argument("--margin", type=float, help="paper margin in mm")
@@ -58,7 +61,8 @@ def send(pb: Plotbridge, args: argparse.Namespace) -> dict[str, Any]:
     numbers = [int(p) for p in layers] if layers and all(p.isdecimal() for p in layers) else None
     pens: dict[str, str | int | None] = dict(args.pen)
     job = pb.upload(args.file, name=args.name, layers=None if numbers else layers,
-                    plotter=args.plotter, pens=pens or None, **placement)  # fmt: skip
+                    plotter=args.plotter, pens=pens or None, fleet=args.fleet,
+                    **placement)  # fmt: skip
     if args.start:
         job = pb.start(job["id"], layers=numbers)
     if args.wait:
@@ -76,6 +80,10 @@ def run(args: argparse.Namespace) -> int:
         print("plotbridge submit: --layers with numbers picks the layers a start plots: "
               "add --start", file=sys.stderr)  # fmt: skip
         return 2
+    if args.fleet and (args.start or args.wait or args.plotter):
+        print("plotbridge submit: --fleet lets the fleet pick the plotter and start it: "
+              "drop --start, --wait and --plotter", file=sys.stderr)  # fmt: skip
+        return 2
     try:
         with connect(args) as pb:
             job = send(pb, args)
@@ -85,7 +93,9 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(job, indent=2))
     else:
         estimate = job.get("estimate_s") or 0
-        print(f"job {job['id']} '{job['name']}': {job['state']} (estimate {estimate:.0f} s)")
+        where = " in the fleet's queue" if job.get("fleet") else ""
+        print(f"job {job['id']} '{job['name']}': {job['state']}{where} "
+              f"(estimate {estimate:.0f} s)")
     if args.wait and job["state"] != "done":
         if job.get("error"):
             print(f"plotbridge submit: {job['error']}", file=sys.stderr)

@@ -11,6 +11,7 @@ import { createSocket } from "./socket.js";
 import { createStore, initialState, previewJob } from "./store.js";
 import { bindConsole, renderConsole } from "./views/console.js";
 import { bindControl, renderControl } from "./views/control.js";
+import { bindFleet, renderFleet } from "./views/fleet.js";
 import { bindHistory, renderHistory } from "./views/history.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
@@ -19,7 +20,7 @@ import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
 
-const TABS = ["plot", "history", "control", "pens", "settings", "console"];
+const TABS = ["plot", "history", "control", "pens", "settings", "console", "fleet"];
 
 let preview = null;
 let noticeTimer = null;
@@ -124,6 +125,7 @@ function render(state) {
   else if (state.tab === "control") renderControl(state);
   else if (state.tab === "pens") renderPens(state);
   else if (state.tab === "settings") renderSettings(state);
+  else if (state.tab === "fleet") renderFleet();
   else renderConsole(state);
 }
 
@@ -227,6 +229,7 @@ function bind() {
   bindSettings(actions);
   bindConsole(actions);
   bindResume(actions);
+  bindFleet(() => store.state.tab === "fleet");
 }
 
 async function start() {

@@ -13,6 +13,7 @@ from plotbridge.api.deps import GUARD, Parts, upload_error
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
 from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, upload_openapi
+from plotbridge.mqtt.api import fleet_upload
 from plotbridge.pens.model import parse_layer_pens
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
@@ -75,6 +76,8 @@ async def _upload(request: Request, c: Parts) -> Any:
     finally:
         if path is not None:
             path.unlink(missing_ok=True)
+    if (offered := await fleet_upload(request, params, job)) is not None:  # MQTT fleet
+        return offered
     answer = job.public()
     if start and job.state == "queued":
         try:
