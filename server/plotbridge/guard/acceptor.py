@@ -27,11 +27,10 @@ import socket
 from collections.abc import Callable
 from typing import Any
 
-from plotbridge.guard.stoplane import BODY_MAX, LANE, NEED_MORE
+from plotbridge.guard.stoplane import BODY_MAX, HEAD_MAX, LANE, NEED_MORE
 
 log = logging.getLogger("plotbridge.guard")
 
-MAX_HEADER_BYTES = 16 * 1024
 PROBATION = 64  # connections over the caps waiting to show whether they are a stop
 PROBATION_TIMEOUT = 2.0  # s such a connection has to send its stop
 PER_WAKE = 256  # connections accepted per call, so the loop's other work goes on between
@@ -136,9 +135,9 @@ class Acceptor:
         """Answers a complete stop, refuses what cannot be one; False: wait for more."""
         head = entry.head
         if not head or (may_be_stop(head) and b"\r\n\r\n" not in head):
-            return len(head) > MAX_HEADER_BYTES and self._refuse(entry)
+            return len(head) > HEAD_MAX and self._refuse(entry)
         answer = LANE.answer(head) if head.startswith(_STOP_PREFIX) else None
-        if answer == NEED_MORE and len(head) <= MAX_HEADER_BYTES + BODY_MAX:
+        if answer == NEED_MORE and len(head) <= HEAD_MAX + BODY_MAX:
             return False
         if not answer:
             return self._refuse(entry)
@@ -186,7 +185,7 @@ class Acceptor:
 def _receive(sock: socket.socket, head: bytes) -> bytes | None:
     """`head` and what has arrived since; None when the peer closed."""
     try:
-        data = sock.recv(MAX_HEADER_BYTES + BODY_MAX)
+        data = sock.recv(HEAD_MAX + BODY_MAX)
     except (BlockingIOError, InterruptedError):
         return head
     except OSError:

@@ -28,12 +28,12 @@ import uvicorn
 from uvicorn.protocols.http.h11_impl import H11Protocol
 
 from plotbridge.guard.acceptor import PROBATION, Acceptor, may_be_stop
-from plotbridge.guard.stoplane import BODY_MAX, LANE, NEED_MORE
+from plotbridge.guard.stoplane import BODY_MAX, HEAD_MAX, LANE, NEED_MORE
 
 log = logging.getLogger("plotbridge.guard")
 
 HEADER_TIMEOUT = 10.0  # s for a request line and headers to arrive
-MAX_HEADER_BYTES = 16 * 1024  # h11's incomplete-event bound: bigger headers get 400
+MAX_HEADER_BYTES = HEAD_MAX  # h11's incomplete-event bound: bigger headers get 400
 BACKLOG = 128  # asyncio's accept burst (unused: the Acceptor accepts) and first listen queue
 LISTEN_QUEUE = 4096  # the kernel's queue of connections not yet accepted (somaxconn caps it)
 FILES_RESERVED = 128  # descriptors kept free of connections (database, programs, serial, pipes)

@@ -26,7 +26,7 @@ from plotbridge.guard.headers import security_headers
 
 log = logging.getLogger("plotbridge.guard")
 
-HEAD_MAX = 16 * 1024  # bytes; as h11's bound on a request's headers
+HEAD_MAX = 16 * 1024  # bytes of a request's head; h11 is given the same bound
 BODY_MAX = 1024  # a stop's body is not read: a larger declared one goes the usual way
 PAGE_HEADER = b"x-plotbridge-page"
 _PAGE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
