@@ -157,8 +157,8 @@ def check(number: int, value: float, settings: dict[int, float]) -> str | None:
         return f"{where}: ${number} is {limits.describe()} on this firmware"
     if value != value:
         return f"{where}: not a number"
-    if limits.kind != "number" and not float(value).is_integer():
-        return f"{where}: ${number} takes a whole number, {limits.describe()}"
+    if limits.kind != "number":
+        value = float(int(value))  # as GRBL: a whole-number setting drops the fraction
     below = value <= limits.low if limits.above else value < limits.low
     if below or value > limits.high:
         return f"{where} is out of range: ${number} takes {limits.describe()}"

@@ -148,24 +148,19 @@ def test_fleet_view_keeps_valid_messages_and_drops_garbage(caplog):
 def test_hold_and_continue_follow_the_jobs_actions():
     class Job:
         id = "j1"
-
-        def __init__(self) -> None:
-            self.actions: list[str] | None = ["stop", "continue"]
-
-        def public(self) -> dict:
-            return {} if self.actions is None else {"actions": self.actions}
+        actions = ["stop", "continue"]
 
     class Unit:
-        job = Job()
+        job: Job | None = Job()
 
     class Queue:
         def plotter(self, name: str) -> Unit:
             assert name == "p"
             return Unit()
 
-    verbs = Verbs(Queue())  # type: ignore[arg-type]
+    verbs = Verbs(Queue(), None)  # type: ignore[arg-type]
     assert verbs.refused_by_job("p", "hold") == "p's job j1 allows stop, continue now"
     assert verbs.refused_by_job("p", "continue") is None
     assert verbs.refused_by_job("p", "home") is None
-    Unit.job.actions = None  # a job without the lifecycle's list: the queue decides
+    Unit.job = None  # no job: the machine itself holds
     assert verbs.refused_by_job("p", "hold") is None

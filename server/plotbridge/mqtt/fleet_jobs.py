@@ -33,7 +33,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from plotbridge.errors import Refused
-from plotbridge.jobs.model import FINISHED
+from plotbridge.jobs.lifecycle import SETTLED
 from plotbridge.mqtt.connection import Connection
 from plotbridge.mqtt.settings import MqttSettings
 from plotbridge.mqtt.topics import Topics
@@ -240,14 +240,14 @@ class FleetOrigin(Party):
         except (ValueError, KeyError, TypeError):
             return self._garbage("jobs", ValueError("needs state and progress"))
         record.update(job_state=state[:32], progress=progress)
-        if state in FINISHED:
+        if state in SETTLED:
             self._forget_old()
             self._save()
 
     def _forget_old(self) -> None:
         """Keep the records of the last KEPT finished fleet jobs (the Fleet tab lists them)."""
         finished = [r for r in sorted(self.records.values(), key=lambda r: r["created_at"])
-                    if r["state"] == "committed" and r["job_state"] in FINISHED]
+                    if r["state"] == "committed" and r["job_state"] in SETTLED]
         for record in finished[:-KEPT]:
             del self.records[record["id"]]
             self.connection.publish(self.topics.placed(record["id"]), b"")
@@ -411,7 +411,7 @@ class FleetTaker(Party):
                           "state": job["state"], "progress": job.get("progress", 0)}
                 self.connection.publish(self.topics.placed(fleet_id, record["origin"]),
                                         json.dumps(report))  # fmt: skip
-                if job["state"] in FINISHED - {"stopped"}:
+                if job["state"] in SETTLED - {"stopped"}:
                     del self.records[fleet_id]
                     self._save()
 
