@@ -2,6 +2,7 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
+WHEELHOUSE := $(VENV)/wheelhouse
 HOST ?= 0.0.0.0
 PORT ?= 8000
 SERIAL ?=
@@ -58,7 +59,6 @@ $(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt requirements-inkex.txt
 
 # Wheels of the pins, vpype and the build backend, for the packaging test's offline installs
 # of ./server into fresh venvs (tests/e2e/test_packaging.py): no download at test time.
-WHEELHOUSE := $(VENV)/wheelhouse
 $(WHEELHOUSE)/.stamp: $(VENV)/.stamp-dev
 	$(PY) -m pip download -q --disable-pip-version-check --only-binary=:all: -d $(WHEELHOUSE) \
 	  -c requirements-dev.txt -r requirements.txt vpype setuptools

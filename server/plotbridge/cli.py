@@ -313,7 +313,11 @@ async def serve(config: Config) -> int:
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
         server = uvicorn.Server(settings)
-        if generated:  # later starts keep it out of logs: `plotbridge token` prints it
+        if generated and os.environ.get("JOURNAL_STREAM"):  # a service: the journal is
+            #   readable by more than the token's owner, so the link stays out of it
+            log.info("a new token is in %s; `plotbridge token --data-dir %s` prints the "
+                     "login link", config.token_file, config.data_dir)
+        elif generated:  # later starts keep it out of logs: `plotbridge token` prints it
             print_login(config.host, config.port, token)
         log.info(
             "serving on %s:%d, data in %s, open-file limit %d, plotters: %s",
