@@ -225,6 +225,16 @@ def _login_url(host: str, port: int, token: str) -> str:
     return f"http://{host}:{port}/login?token={token}"
 
 
+def _stdout_is_journal() -> bool:
+    """Standard output is systemd's journal (JOURNAL_STREAM names its device:inode; a child
+    that inherited the variable with its output elsewhere is not)."""
+    try:
+        st = os.fstat(sys.stdout.fileno())
+    except (OSError, ValueError):
+        return False
+    return os.environ.get("JOURNAL_STREAM") == f"{st.st_dev}:{st.st_ino}"
+
+
 def print_login(host: str, port: int, token: str) -> None:
     """The login link and its QR code (for a phone's camera) on the console."""
     import io
@@ -313,8 +323,8 @@ async def serve(config: Config) -> int:
         settings.load()  # imports the protocol modules now, before the freeze
         keep_pauses_short()
         server = uvicorn.Server(settings)
-        if generated and os.environ.get("JOURNAL_STREAM"):  # a service: the journal is
-            #   readable by more than the token's owner, so the link stays out of it
+        if generated and _stdout_is_journal():  # a service: the journal is readable
+            #   by more than the token's owner, so the link stays out of it
             log.info("a new token is in %s; `plotbridge token --data-dir %s` prints the "
                      "login link", config.token_file, config.data_dir)
         elif generated:  # later starts keep it out of logs: `plotbridge token` prints it

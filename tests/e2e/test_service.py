@@ -27,8 +27,10 @@ class ServiceProcess(ServerProcess):
 
 
 def test_the_journal_gets_no_token(tmp_path, monkeypatch):
-    monkeypatch.setenv("JOURNAL_STREAM", "8:12345")  # what systemd sets for the journal
     server = ServiceProcess(tmp_path / "data", VIRTUAL)
+    server.log_path.touch()  # the server's output, standing for the journal's stream:
+    st = server.log_path.stat()  # systemd names it in JOURNAL_STREAM as device:inode
+    monkeypatch.setenv("JOURNAL_STREAM", f"{st.st_dev}:{st.st_ino}")
     server.start()
     try:
         token = (tmp_path / "data" / "token").read_text().strip()
@@ -68,3 +70,30 @@ def test_acknowledged_jobs_survive_a_kill_and_a_dropped_page_cache(tmp_path):
         assert server.wait_job(last, ("done", "failed", "stopped"), 120)["state"] == "done"
         trace = server.client.get("/api/sim/trace").json()
         assert_same_drawing(server.preview(last)["strokes"], trace["strokes"])
+
+
+def test_a_board_unplugged_and_plugged_back_is_found_again(server, plotter):
+    """The server opens the board by a stable name (plotsim's --pty-link, as udev's
+    /dev/plotter/... link from deploy/70-plotbridge.rules): the name outlives the device."""
+    server.home()
+    plotter.kill()  # unplugged: the device behind the name is gone
+    server.wait_machine(lambda m: not m["connected"], 30)
+    plotter.restart()  # plugged back: a new device behind the same name
+    server.wait_machine(lambda m: m["connected"], 60)
+    server.home()
+    job = server.submit(TWO_STROKES)
+    assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
+    assert_same_drawing(server.preview(job["id"])["strokes"], plotter.trace()["strokes"])
+
+
+def test_a_stale_journal_variable_keeps_the_login_link(tmp_path, monkeypatch):
+    """Run by hand from a shell that inherited JOURNAL_STREAM, the link is printed."""
+    monkeypatch.setenv("JOURNAL_STREAM", "8:12345")
+    server = ServiceProcess(tmp_path / "data", VIRTUAL)
+    server.start()
+    try:
+        token = (tmp_path / "data" / "token").read_text().strip()
+        assert f"/login?token={token}" in server.log()
+    finally:
+        server.close()
+
