@@ -88,9 +88,10 @@ uninstall-service:
 	scripts/install-service --uninstall $(CURDIR)
 
 # Debian 12 on arm64 or armhf (a Raspberry Pi) in an emulated root: `make run` there, driven
-# from outside (scripts/pi-check). Slow (tens of minutes); not part of `make test`.
+# from outside (scripts/pi-check, its smoke test on the test fixtures: setup-test). Slow
+# (tens of minutes, more on a loaded machine); not part of `make test`.
 ARCH ?= arm64
-pi-check: setup
+pi-check: setup-test
 	scripts/setup-system pi-check
 	scripts/pi-check $(ARCH)
 
