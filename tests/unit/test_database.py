@@ -48,7 +48,7 @@ def test_an_import_is_synced_before_its_folder_is_published(tmp_path, monkeypatc
 
     renamed = events.index(("rename", str(folder)))
     synced_before = {path for kind, path in events[:renamed] if kind == "fsync"}
-    assert synced_before == {str(partial / n) for n in ("original.svg", "program.bin",
+    assert synced_before == {str(partial / n) for n in ("original.svg", "program.bin", "layers",
                                                          "layers/1.json")} | {str(partial)}
     assert events[renamed + 1:] == [("fsync", str(tmp_path / "jobs"))]
     assert (folder / "layers/1.json").read_text() == "layers/1.json"

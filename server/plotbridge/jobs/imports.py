@@ -164,9 +164,8 @@ def _fsync(path: Path) -> None:
 def _publish(partial: Path, folder: Path) -> None:
     """Rename a finished import's folder into place, its files on the disk first and the
     rename after (blocking): an acknowledged job keeps its files through a power cut."""
-    for path in partial.rglob("*"):
-        if path.is_file():
-            _fsync(path)
+    for path in partial.rglob("*"):  # files, and the folders that list them
+        _fsync(path)
     _fsync(partial)
     partial.rename(folder)
     _fsync(folder.parent)
