@@ -187,3 +187,10 @@ def test_shipping_files_raise_the_open_file_limit():
     unit = (ROOT / "deploy" / "plotbridge.service").read_text()
     assert int(re.search(r"^LimitNOFILE=(\d+)$", unit, re.M).group(1)) >= 4096
     assert re.search(r"^UMask=0077$", unit, re.M)
+
+
+def test_pi_check_refuses_an_unknown_architecture():
+    """`make pi-check ARCH=...` knows the Raspberry Pi's two Debian architectures."""
+    refused = subprocess.run([ROOT / "scripts/pi-check", "i386"], capture_output=True, text=True)
+    assert refused.returncode == 2
+    assert refused.stderr.strip() == "pi-check: ARCH is arm64 or armhf, not 'i386'"
