@@ -2,6 +2,7 @@
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
+WHEELHOUSE := $(VENV)/wheelhouse
 HOST ?= 0.0.0.0
 PORT ?= 8000
 SERIAL ?=
@@ -16,7 +17,8 @@ BOARDS := $(shell sed -n "s/^BOARDS := //p" firmware/Makefile)
 
 INKSCAPE_EXTENSIONS ?= $(HOME)/.config/inkscape/extensions
 
-.PHONY: run test setup setup-test native firmware boards sim lint flash install-service bench clean inkscape-extension screenshots
+.PHONY: run test setup setup-test native firmware boards sim lint flash install-service uninstall-service \
+        pi-check bench clean inkscape-extension screenshots
 
 run: setup firmware sim
 	$(VENV)/bin/plotbridge serve --host $(HOST) --port $(PORT) --data-dir $(DATA_DIR) \
@@ -28,7 +30,7 @@ test: setup-test sim
 	$(VENV)/bin/pytest -n $(TEST_JOBS) --dist loadfile
 
 setup: .stamps/system-run $(VENV)/.stamp native
-setup-test: .stamps/system-test $(VENV)/.stamp-dev native
+setup-test: .stamps/system-test $(VENV)/.stamp-dev $(WHEELHOUSE)/.stamp native
 
 # The server's C helpers (server/plotbridge/native/), loaded with ctypes.
 NATIVE_DIR := server/plotbridge/native
@@ -44,15 +46,22 @@ $(NATIVE_DIR)/build/lib%.so: $(NATIVE_DIR)/%.c $(NATIVE_DIR)/thousandths.h
 	scripts/setup-system $*
 	@mkdir -p .stamps && touch $@
 
-$(VENV)/.stamp: requirements.txt server/pyproject.toml
-	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install -q --disable-pip-version-check -r requirements.txt
-	$(PY) -m pip install -q --disable-pip-version-check --no-deps -e server
+# The pins as wheels, per architecture: on armhf Debian's numpy and shapely instead, and the
+# optional speed-ups without a wheel left out (requirements-nowheel.txt, with the reasons).
+$(VENV)/.stamp: requirements.txt requirements-nowheel.txt server/pyproject.toml scripts/setup-venv
+	scripts/setup-venv $(PYTHON) $(VENV)
 	touch $@
 
 $(VENV)/.stamp-dev: $(VENV)/.stamp requirements-dev.txt requirements-inkex.txt
 	$(PY) -m pip install -q --disable-pip-version-check -r requirements-dev.txt
 	$(PY) -m pip install -q --disable-pip-version-check --no-deps -r requirements-inkex.txt
+	touch $@
+
+# Wheels of the pins, vpype and the build backend, for the packaging test's offline installs
+# of ./server into fresh venvs (tests/e2e/test_packaging.py): no download at test time.
+$(WHEELHOUSE)/.stamp: $(VENV)/.stamp-dev
+	$(PY) -m pip download -q --disable-pip-version-check --only-binary=:all: -d $(WHEELHOUSE) \
+	  -c requirements-dev.txt -r requirements.txt vpype setuptools
 	touch $@
 
 firmware:
@@ -74,6 +83,17 @@ flash: .stamps/system-run firmware
 
 install-service: setup firmware sim
 	scripts/install-service $(CURDIR)
+
+uninstall-service:
+	scripts/install-service --uninstall $(CURDIR)
+
+# Debian 12 on arm64 or armhf (a Raspberry Pi) in an emulated root: `make run` there, driven
+# from outside (scripts/pi-check, its smoke test on the test fixtures: setup-test). Slow
+# (tens of minutes, more on a loaded machine); not part of `make test`.
+ARCH ?= arm64
+pi-check: setup-test
+	scripts/setup-system pi-check
+	scripts/pi-check $(ARCH)
 
 inkscape-extension:
 	mkdir -p "$(INKSCAPE_EXTENSIONS)"

@@ -267,6 +267,16 @@ def login_hosts(host: str) -> list[str]:
     return [*lan[:1], f"{socket.gethostname().split('.')[0]}.local"]
 
 
+def _stdout_is_journal() -> bool:
+    """Standard output is systemd's journal (JOURNAL_STREAM names its device:inode; a child
+    that inherited the variable with its output elsewhere is not)."""
+    try:
+        st = os.fstat(sys.stdout.fileno())
+    except (OSError, ValueError):
+        return False
+    return os.environ.get("JOURNAL_STREAM") == f"{st.st_dev}:{st.st_ino}"
+
+
 def print_login(host: str, port: int, token: str) -> None:
     """The login link and its QR code (for a phone's camera) on the console: by the LAN
     address where there is one (every phone resolves it), and by NAME.local."""
@@ -369,7 +379,11 @@ async def serve(config: Config) -> int:
         keep_pauses_short()
         server = connections.GuardedServer(settings)
         (config.data_dir / LISTEN_FILE).write_text(f"{config.host} {config.port}\n")
-        if generated:  # later starts keep it out of logs: `plotbridge token` prints it
+        if generated and _stdout_is_journal():  # a service: the journal is readable
+            #   by more than the token's owner, so the link stays out of it
+            log.info("a new token is in %s; `plotbridge token --data-dir %s` prints the "
+                     "login link", config.token_file, config.data_dir)
+        elif generated:  # later starts keep it out of logs: `plotbridge token` prints it
             print_login(config.host, config.port, token)
         log.info(
             "serving on %s:%d, data in %s, open-file limit %d, plotters: %s",

@@ -148,7 +148,7 @@ def test_fleet_view_keeps_valid_messages_and_drops_garbage(caplog):
 def test_hold_and_continue_follow_the_jobs_actions():
     class Job:
         id = "j1"
-        actions = ["stop", "continue"]
+        actions = ("stop", "continue")
 
     class Unit:
         job: Job | None = Job()

@@ -93,7 +93,7 @@ class Importer:
                     await asyncio.to_thread(shutil.move, str(source), original)
                     source_arg = str(original)
                 result = await self._import(kind, source_arg, filename, partial, options, board)
-                await asyncio.to_thread(partial.rename, self.jobs_dir / job_id)
+                await asyncio.to_thread(_publish, partial, self.jobs_dir / job_id)
             except BaseException:
                 await asyncio.to_thread(shutil.rmtree, partial, True)
                 raise
@@ -166,3 +166,21 @@ def _swap_dirs(new: Path, old: Path) -> None:
     old.rename(trash)
     new.rename(old)
     shutil.rmtree(trash, ignore_errors=True)
+
+
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _publish(partial: Path, folder: Path) -> None:
+    """Rename a finished import's folder into place, its files on the disk first and the
+    rename after (blocking): an acknowledged job keeps its files through a power cut."""
+    for path in partial.rglob("*"):  # files, and the folders that list them
+        _fsync(path)
+    _fsync(partial)
+    partial.rename(folder)
+    _fsync(folder.parent)
