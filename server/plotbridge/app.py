@@ -7,16 +7,15 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from dataclasses import dataclass
 
-from fastapi import FastAPI, Request
+from fastapi import Depends, FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from plotbridge import __version__
-from plotbridge.api import jobs, notify, pens, plotters, session, ws
-from plotbridge.api.deps import Components, error
+from plotbridge.api import jobs, notify, pens, people, plotters, session, ws
+from plotbridge.api.deps import Components, authorize, error
 from plotbridge.apidocs import mount_docs
-from plotbridge.auth import Auth
 from plotbridge.config import Config
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
@@ -26,6 +25,8 @@ from plotbridge.jobs.store import JobStore
 from plotbridge.models import ERROR_RESPONSES
 from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
+from plotbridge.people import Access, PeopleStore
+from plotbridge.people.migrate import take_old_sessions
 from plotbridge.plotter.link import Link
 from plotbridge.plotter.plotter import Plotter, WorkArea
 from plotbridge.queue import JobQueue
@@ -63,6 +64,9 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     importer = Importer(config.jobs_dir, limits=config.import_limits)
     importer.clean()
     library = PenLibrary(config.db_path, events)
+    people_store = PeopleStore(config.db_path)
+    take_old_sessions(config.data_dir / "sessions.json", people_store)
+    access = Access(people_store, token, config.token_file)
     units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
                      work_area=b.work_area, profile=b.profile,
                      home_on_connect=config.home_on_connect, after_job=config.after_job,
@@ -76,6 +80,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         await webhooks.start()
+        access.start()
         for plotter in units:
             plotter.start()
         try:
@@ -84,6 +89,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
             for plotter in units:
                 await plotter.stop()
             await webhooks.close()
+            await access.close()
             importer.close()
             library.close()
             store.close()
@@ -91,13 +97,13 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     app = FastAPI(
         title="plotbridge", version=__version__, lifespan=lifespan, docs_url=None,
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
+        dependencies=[Depends(authorize)],  # every route's role: plotbridge.access
     )  # fmt: skip
     mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
-    auth = Auth(token, config.token_file, config.data_dir / "sessions.json")
     app.add_middleware(
-        Guard, auth=auth, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
+        Guard, auth=access, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
     )
-    app.state.components = Components(config, auth, events, queue, clients, library,
+    app.state.components = Components(config, access, events, queue, clients, library,
                                       webhooks)
 
     @app.exception_handler(Refused)
@@ -122,7 +128,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         return error(500, f"internal error: {type(exc).__name__}: {exc}")
 
     for router in (session.router, plotters.router, jobs.router, pens.router, notify.router,
-                   ws.router):
+                   people.router, ws.router):
         app.include_router(router)
     if config.web_dir is not None and config.web_dir.is_dir():
         app.mount("/", StaticFiles(directory=config.web_dir, html=True), name="web")

@@ -29,7 +29,10 @@ LayerPens = dict[LayerRef, PenRef]
 
 
 class LoginBody(Strict):
-    token: str
+    """The token, or the code of a one-time login link (`plotbridge users add`)."""
+
+    token: str | None = Field(None, max_length=256)
+    link: str | None = Field(None, max_length=256)
 
 
 class PenBody(Strict):

@@ -8,11 +8,12 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Request
 from fastapi.responses import FileResponse, JSONResponse, Response
 
-from plotbridge.api.deps import GUARD, Parts, upload_error
+from plotbridge.api.deps import GUARD, Parts, Who, upload_error
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
 from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, StartBody, upload_openapi
 from plotbridge.pens.model import parse_layer_pens
+from plotbridge.people.views import job_view, jobs_view
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
 router = APIRouter(prefix="/api", dependencies=GUARD)
@@ -22,12 +23,14 @@ Target = Annotated[
 
 
 @router.get("/jobs", response_model=list[Job])
-async def list_jobs(c: Parts) -> list[dict[str, Any]]:
-    return c.queue.list()
+async def list_jobs(c: Parts, who: Who) -> list[dict[str, Any]]:
+    assert who is not None
+    return jobs_view(who, c.queue.list())
 
 
 @router.post("/jobs", status_code=201, response_model=Job, openapi_extra=upload_openapi())
-async def upload(request: Request, c: Parts) -> Any:
+async def upload(request: Request, c: Parts, who: Who) -> Any:
+    assert who is not None
     config = c.config
     try:
         path, filename, fields = await receive(request, config.tmp_dir, config.upload_limit)
@@ -60,12 +63,13 @@ async def upload(request: Request, c: Parts) -> Any:
         job = await c.queue.create(kind=kind, source=source, filename=filename, name=name,
                                    options=options, placement=placement,
                                    target=params.get("plotter") or None,
-                                   after=after, pens=pens)  # fmt: skip
+                                   after=after, pens=pens, owner=who.who)  # fmt: skip
     except UploadRefused as exc:
         return upload_error(exc.status, exc.message)
     finally:
         if path is not None:
             path.unlink(missing_ok=True)
+    request.state.audit = {"job": job.id, "name": name}
     answer = job.public()
     if start and job.state == "queued":
         try:
@@ -76,8 +80,9 @@ async def upload(request: Request, c: Parts) -> Any:
 
 
 @router.get("/jobs/{job_id}", response_model=Job)
-async def get_job(job_id: str, c: Parts) -> dict[str, Any]:
-    return c.queue.get(job_id).public()
+async def get_job(job_id: str, c: Parts, who: Who) -> dict[str, Any]:
+    assert who is not None
+    return job_view(who, c.queue.get(job_id).public()) or {}
 
 
 @router.patch("/jobs/{job_id}", response_model=Job)

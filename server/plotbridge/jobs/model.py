@@ -135,6 +135,8 @@ class Job(BaseModel):
     """What the plotter does once this job is done; None: the server's default."""
     plot_layers: list[int] | None = None
     """The 1-based numbers of the layers a start plots (the start's `layers`); None: all."""
+    owner: str | None = None
+    """Who uploaded it, as the audit log names them ("ann", "key ci", "token (first admin)")."""
     pen_change: dict[str, Any] | None = None
     """In `pen_change`: {"reason" ("layer" or "reink"), "layer" (1-based), "layers", "name",
     "colour", "pen" (its name or None), "message"}."""
