@@ -56,6 +56,7 @@ ROUTES: dict[tuple[str, str], Rule] = {
     ("GET", "/docs"): (PUBLIC, False),
     ("GET", "/docs/oauth2-redirect"): (PUBLIC, False),
     ("GET", "/redoc"): (PUBLIC, False),
+    ("GET", "/openapi.json"): (PUBLIC, False),
     ("GET", "/api/health"): (PUBLIC, False),
     ("GET", "/api/identity"): (PUBLIC, False),
     ("POST", "/api/login"): (PUBLIC, False),

@@ -9,7 +9,6 @@ import gc
 import logging
 import math
 import os
-import socket
 import sys
 from pathlib import Path
 from typing import Any
@@ -26,6 +25,7 @@ from plotbridge.config import (
     read_plotters_file,
 )
 from plotbridge.jobs.model import AFTER_JOB
+from plotbridge.people import cli as people_cli
 
 log = logging.getLogger("plotbridge")
 
@@ -219,22 +219,12 @@ def config_from_args(args: argparse.Namespace) -> Config:
     )
 
 
-def _login_url(host: str, port: int, token: str) -> str:
-    if host in ("0.0.0.0", "::", ""):
-        host = socket.gethostname()
-    return f"http://{host}:{port}/login?token={token}"
+def print_login(host: str, port: int, data_dir: Path) -> None:
+    """A one-time login link for the token's admin and its QR code, on the console (never
+    the token itself in a URL: the link becomes a session once opened)."""
+    from plotbridge.people.cli import print_link, token_link
 
-
-def print_login(host: str, port: int, token: str) -> None:
-    """The login link and its QR code (for a phone's camera) on the console."""
-    import io
-
-    import segno
-
-    url = _login_url(host, port, token)
-    qr = io.StringIO()
-    segno.make(url, error="l").terminal(out=qr, compact=True)
-    print(f"plotbridge: open {url}\n{qr.getvalue()}", flush=True)
+    print_link(token_link(data_dir, host, port), "the admin (the token)")
 
 
 def resolve_token(config: Config) -> tuple[str, bool]:
@@ -314,7 +304,7 @@ async def serve(config: Config) -> int:
         keep_pauses_short()
         server = uvicorn.Server(settings)
         if generated:  # later starts keep it out of logs: `plotbridge token` prints it
-            print_login(config.host, config.port, token)
+            print_login(config.host, config.port, config.data_dir)
         log.info(
             "serving on %s:%d, data in %s, open-file limit %d, plotters: %s",
             config.host, config.port, config.data_dir, file_limit,
@@ -355,15 +345,15 @@ def token_command(args: argparse.Namespace) -> int:
     try:
         if args.rotate:
             path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-            token = new_token()
-            write_private(path, token + "\n")
-            print(f"plotbridge: new token in {path}; every session has ended", flush=True)
+            write_private(path, new_token() + "\n")
+            print(f"plotbridge: new token in {path}; every session of the token has ended",
+                  flush=True)  # fmt: skip
         else:
-            token, _ = load_or_create_token(path)
+            load_or_create_token(path)
     except (OSError, TokenRefused) as exc:
         print(f"plotbridge token: {exc}", file=sys.stderr)
         return 1
-    print_login(args.host, args.port, token)
+    print_login(args.host, args.port, args.data_dir)
     return 0
 
 
@@ -375,6 +365,7 @@ def main(argv: list[str] | None = None) -> int:
     token_parser = commands.add_parser("token", help="print the login link, or --rotate the token")
     add_token_arguments(token_parser)
     submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
+    people_cli.add_commands(commands, Path(_env("DATA_DIR", default_data_dir())))
     if argv[:1] != ["serve"]:  # the client modules stay out of the server's process
         from plotbridge import commands as verbs
         from plotbridge import submit
@@ -386,6 +377,8 @@ def main(argv: list[str] | None = None) -> int:
         return submit.run(args)
     if args.command == "token":
         return token_command(args)
+    if args.command in ("keys", "users"):
+        return people_cli.run(args)
     if args.command != "serve":
         return verbs.run(args)
     logsetup.setup(args.log_level)

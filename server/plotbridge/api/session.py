@@ -47,9 +47,10 @@ async def login(body: LoginBody, c: Parts, request: Request) -> Response:
         made = await c.access.login_link(body.link)
         if made is not None:
             session, who = made
-    tried = body.token or body.link or ""
+    tried = body.token or body.link
     if session is None:
-        await c.access.failed(client_address(request.scope), tried)
+        if tried:
+            await c.access.failed(client_address(request.scope), tried)
         raise HTTPException(401, "wrong token, or a login link that is used up or expired")
     c.access.audit(None, "login", who, {"with": "token" if body.token else "link"})
     response = Response(status_code=204)
@@ -62,7 +63,8 @@ async def login_link(c: Parts, request: Request, token: str = "") -> Response:
     """The token's login link (as printed before people existed)."""
     session = c.access.login_token(token) if token else None
     if session is None:
-        await c.access.failed(client_address(request.scope), token)
+        if token:
+            await c.access.failed(client_address(request.scope), token)
         return error(401, "wrong or missing token in the login link")
     c.access.audit(None, "login", "token (first admin)", {"with": "token link"})
     response = RedirectResponse("/", status_code=303)
