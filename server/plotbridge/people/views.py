@@ -32,7 +32,9 @@ def jobs_view(identity: Identity, jobs: list[dict[str, Any]]) -> list[dict[str, 
 
 def message_view(identity: Identity, message: dict[str, Any]) -> dict[str, Any] | None:
     """A WebSocket event as `identity` sees it (None: not sent to them)."""
-    if message.get("type") != "job" or identity.role == Role.admin:
+    if identity.role == Role.admin or message.get("type") not in ("job", "jobs"):
         return message
+    if message["type"] == "jobs":
+        return {**message, "jobs": jobs_view(identity, message.get("jobs") or [])}
     shown = job_view(identity, message.get("job") or {})
     return None if shown is None else {**message, "job": shown}
