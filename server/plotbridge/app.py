@@ -54,7 +54,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     events = EventHub()
     clients = Hub()
     events.subscribe(clients.broadcast)
-    webhooks = Webhooks(list(config.webhooks), config.data_dir, config.db_path)
+    webhooks = Webhooks(list(config.webhooks), config.data_dir, config.db_path,
+                        allow_local=config.webhook_allow_local)  # fmt: skip
     events.subscribe(webhooks.publish)
     config.jobs_dir.mkdir(parents=True, exist_ok=True)
     config.tmp_dir.mkdir(exist_ok=True)

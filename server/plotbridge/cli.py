@@ -140,6 +140,10 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
              "comma-separated; more in the settings)",
     )  # fmt: skip
     parser.add_argument(
+        "--webhook-allow-local", action="store_true", default=_env_flag("WEBHOOK_ALLOW_LOCAL"),
+        help="let webhook URLs from the settings reach this machine or link-local addresses",
+    )  # fmt: skip
+    parser.add_argument(
         "--zeroconf", action=argparse.BooleanOptionalAction,
         default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
         help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
@@ -208,6 +212,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         after_job=args.after_job,
         park=args.park,
         webhooks=webhooks_from_args(args),
+        webhook_allow_local=args.webhook_allow_local,
         log_level=args.log_level,
         zeroconf=args.zeroconf,
         web_dir=find_web_dir(),
