@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import hashlib
 import hmac
 import logging
 import secrets
@@ -27,7 +26,8 @@ from typing import Any
 from plotbridge.access import Role
 from plotbridge.auth import SESSION_TTL, TokenRefused, read_token_file
 from plotbridge.people.failures import Failures
-from plotbridge.people.store import TOKEN_OWNER, PeopleStore, Snapshot, digest, key_id
+from plotbridge.people.proof import digest, server_proof
+from plotbridge.people.store import TOKEN_OWNER, PeopleStore, Snapshot
 
 log = logging.getLogger("plotbridge.people")
 
@@ -320,14 +320,7 @@ class Access:
         future.add_done_callback(_log_failure)
 
 
-def server_proof(key_digest: str, nonce: str, server_id: str) -> str:
-    return hmac.new(bytes.fromhex(key_digest), f"{nonce}:{server_id}".encode(),
-                    hashlib.sha256).hexdigest()  # fmt: skip
-
-
 def _log_failure(future: Any) -> None:
     if future.exception() is not None:
         log.error("people store: %s", future.exception())
 
-
-__all__ = ["Access", "Identity", "key_id", "server_proof"]

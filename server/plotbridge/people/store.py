@@ -12,7 +12,6 @@ it while a server runs; the server sees such a change through `PRAGMA data_versi
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 import secrets
@@ -26,6 +25,7 @@ from typing import Any
 from plotbridge.access import Role
 from plotbridge.database import connect
 from plotbridge.people.approval import MODES
+from plotbridge.people.proof import KEY_PREFIX, digest
 
 SCHEMA = (
     """CREATE TABLE IF NOT EXISTS people (
@@ -48,14 +48,9 @@ SCHEMA = (
 
 TOKEN_OWNER = "token"  # the data directory's token: the first admin
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9._@-]{0,63}")
-KEY_PREFIX = "pbk"
 LINK_TTL = 7 * 24 * 3600.0  # s a one-time login link stays usable
 AUDIT_KEPT = 10000  # entries; the oldest go past this
 AUDIT_TRIM_EVERY = 100  # entries written between trims
-
-
-def digest(secret: str) -> str:
-    return hashlib.sha256(secret.encode()).hexdigest()
 
 
 def check_name(name: str, what: str) -> str:
@@ -65,12 +60,6 @@ def check_name(name: str, what: str) -> str:
     if name.lower() == TOKEN_OWNER:
         raise ValueError(f"{what} name {name!r} is reserved for the server's token")
     return name
-
-
-def key_id(key: str) -> str | None:
-    """The public id inside an API key (`pbk_ID_SECRET`), or None for another credential."""
-    parts = key.split("_", 2)
-    return parts[1] if len(parts) == 3 and parts[0] == KEY_PREFIX else None
 
 
 @dataclass(frozen=True)
