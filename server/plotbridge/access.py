@@ -50,6 +50,7 @@ _MACHINE: dict[tuple[str, str], Role] = {
 
 Need = Role | None
 Rule = tuple[Need, bool]  # (least role, or PUBLIC; a submitter only on their own job)
+BY_ACTION: Rule = (A, False)  # a marker: the rule of the path's {action} in JOB_ACTIONS
 
 ROUTES: dict[tuple[str, str], Rule] = {
     # session, server, the API docs
@@ -77,12 +78,9 @@ ROUTES: dict[tuple[str, str], Rule] = {
     ("PATCH", "/api/jobs/{job_id}"): (S, True),
     ("DELETE", "/api/jobs/{job_id}"): (A, False),
     ("GET", "/api/jobs/{job_id}/preview"): (V, True),
-    ("POST", "/api/jobs/{job_id}/cancel"): (S, True),
-    ("POST", "/api/jobs/{job_id}/start"): (O, False),
-    ("POST", "/api/jobs/{job_id}/restart"): (O, False),
+    ("POST", "/api/jobs/{job_id}/{action}"): BY_ACTION,  # the action's rule: JOB_ACTIONS
     ("POST", "/api/jobs/{job_id}/pause"): (O, False),
     ("POST", "/api/jobs/{job_id}/resume"): (O, False),
-    ("POST", "/api/jobs/{job_id}/frame"): (O, False),
     ("POST", "/api/jobs/{job_id}/move"): (O, False),
     ("GET", "/api/patterns"): (V, False),
     # pens
@@ -139,9 +137,13 @@ JOB_ACTIONS: dict[str, Rule] = {
     "decline": (O, False),
 }  # fmt: skip
 
-def rule(method: str, template: str) -> Rule:
-    """The rule of a matched route; an unlisted route needs admin (and fails the tests)."""
-    return ROUTES.get((method, template), (A, False))
+def rule(method: str, template: str, action: str | None = None) -> Rule:
+    """The rule of a matched route (`action`: its {action} path part); an unlisted route
+    or action needs admin (and fails the tests)."""
+    found = ROUTES.get((method, template), (A, False))
+    if found is BY_ACTION:
+        return JOB_ACTIONS.get(action or "", (A, False))
+    return found
 
 
 def may(role: Role, need: Need, own: bool, owner_rule: bool) -> bool:

@@ -20,7 +20,9 @@ from plotbridge.config import Config
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
 from plotbridge.guard.middleware import Guard
+from plotbridge.jobs.actions import JobActions
 from plotbridge.jobs.imports import Importer
+from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.store import JobStore
 from plotbridge.models import ERROR_RESPONSES
 from plotbridge.notify import Webhooks
@@ -68,15 +70,17 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     people_store = PeopleStore(config.db_path)
     take_old_sessions(config.data_dir / "sessions.json", people_store)
     access = Access(people_store, token, config.token_file)
-    units = [Plotter(b.name, b.link, events, config.jobs_dir, virtual=b.virtual,
+    lifecycle = Lifecycle(store, events)
+    units = [Plotter(b.name, b.link, events, config.jobs_dir, lifecycle, virtual=b.virtual,
                      work_area=b.work_area, profile=b.profile,
                      home_on_connect=config.home_on_connect, after_job=config.after_job,
                      park=config.park,  # type: ignore[arg-type]
                      pens=library)
              for b in boards]  # fmt: skip
-    queue = JobQueue(units, store, importer, events, auto_start=config.auto_start,
+    queue = JobQueue(units, lifecycle, importer, events, auto_start=config.auto_start,
                      pens=library)  # fmt: skip
     queue.load()
+    actions = JobActions(queue, lifecycle)
 
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
@@ -104,7 +108,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     app.add_middleware(
         Guard, auth=access, upload_limit=config.upload_limit, allowed_hosts=config.allowed_hosts
     )
-    app.state.components = Components(config, access, events, queue, clients, library,
+    app.state.components = Components(config, access, events, queue, actions, clients, library,
                                       webhooks)
 
     @app.exception_handler(Refused)

@@ -14,40 +14,46 @@ from __future__ import annotations
 
 import asyncio
 import logging
-import time
-from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 from plotbridge.errors import Refused
-from plotbridge.events import EventHub
+from plotbridge.events import EventHub, Message
 from plotbridge.jobs.imports import Importer
-from plotbridge.jobs.model import ACTIVE, FINISHED, RESUMABLE, Job, Layer
-from plotbridge.jobs.store import JobStore
+from plotbridge.jobs.lifecycle import Lifecycle
+from plotbridge.jobs.model import ACTIVE, RESUMABLE, Job, Layer
 from plotbridge.papers import orient
 from plotbridge.pens import PenLibrary
-from plotbridge.plotter.plotter import HOMING_S, Plotter
-from plotbridge.resume import PickError, ResumePoint, first_line, pick
+from plotbridge.plotter.plotter import Plotter
+from plotbridge.resume import ResumePoint, first_line
 
 log = logging.getLogger("plotbridge.queue")
 
 
 class JobQueue:
-    def __init__(self, plotters: list[Plotter], store: JobStore, importer: Importer,
+    def __init__(self, plotters: list[Plotter], lifecycle: Lifecycle, importer: Importer,
                  events: EventHub, auto_start: bool = False,
                  pens: PenLibrary | None = None) -> None:  # fmt: skip
         if not plotters:
             raise ValueError("a server needs at least one plotter")
         self.plotters = {plotter.name: plotter for plotter in plotters}
-        self.store = store
+        self.lifecycle = lifecycle
+        self.store = lifecycle.store
         self.importer = importer
         self.events = events
         self.auto_start = auto_start
         self.pens = pens
-        self.jobs: dict[str, Job] = {}  # in queue order
-        for plotter in plotters:
-            plotter.on_ready = lambda _plotter: self.dispatch()
-            plotter.on_job = self._changed
+        events.subscribe(self._heard)
+
+    @property
+    def jobs(self) -> dict[str, Job]:
+        """Every job, in queue order (the lifecycle's registry)."""
+        return self.lifecycle.jobs
+
+    def _heard(self, message: Message) -> None:
+        """A plotter that became free takes what waits."""
+        if message.get("type") == "plotter" and message.get("free"):
+            self.dispatch()
 
     @property
     def first(self) -> Plotter:
@@ -68,13 +74,13 @@ class JobQueue:
     def load(self) -> None:
         """Read the store; a job that was running when the server died is interrupted."""
         for job in self.store.load_all():
+            job.claim = None
             if job.state in ACTIVE:
-                job.state = "interrupted"
                 job.resume_line = job.safe_line or 1
                 job.error = "the server stopped while this job was running"
                 if job.plotter in self.plotters:  # where its board ran out tells the rest
                     self.plotters[job.plotter].runner.orphaned(job)
-                self.store.write(job.record(), len(self.jobs))
+                self.lifecycle.restarted(job)
                 log.info("job %s (%s) interrupted by a server restart", job.id, job.name)
             elif job.state == "waiting":  # waits again once the plotters are there
                 job.waiting = "the server restarted"
@@ -96,13 +102,6 @@ class JobQueue:
         return self.importer.preview_path(job_id)
 
     # ---- changes -----------------------------------------------------------------------
-
-    def _changed(self, job: Job, save: bool = True) -> None:
-        if save and job.id in self.jobs:
-            self.store.save(job, list(self.jobs).index(job.id))
-        self.events.publish({"type": "job", "job": job.public()})
-        if job.state in FINISHED or job.state == "interrupted":
-            self.dispatch()
 
     async def create(self, *, kind: str, source: Path | str, filename: str, name: str,
                      options: dict[str, Any], placement: dict[str, Any],
@@ -129,7 +128,7 @@ class JobQueue:
         job.warnings += turned
         self.jobs[job_id] = job
         await asyncio.wrap_future(self.store.save(job, len(self.jobs) - 1))
-        self.events.publish({"type": "job", "job": job.public()})
+        self.lifecycle.publish(job, save=False)
         log.info("job %s (%s) queued: %d lines", job_id, name, job.lines_total)
         self.dispatch()
         return job
@@ -137,8 +136,7 @@ class JobQueue:
     async def reimport(self, job_id: str, name: str | None,
                        placement: dict[str, Any] | None) -> Job:  # fmt: skip
         job = self.get(job_id)
-        if job.state != "queued":
-            raise Refused(409, f"job {job_id} is {job.state}; only a queued job can be changed")
+        self.lifecycle.check(job, "edit")
         if placement is not None:
             plotter = self._planned_for(job.target)
             placement, turned = self._oriented({**job.placement, **placement}, plotter)
@@ -155,7 +153,7 @@ class JobQueue:
             job.placement = placement
         if name is not None:
             job.name = name
-        self._changed(job)
+        self.lifecycle.publish(job)
         return job
 
     def set_pens(self, job_id: str, pens: dict[str, Any]) -> Job:
@@ -164,7 +162,7 @@ class JobQueue:
         if job.active:
             raise Refused(409, f"job {job_id} is {job.state}; change its pens before it runs")
         self._assign_pens(job, pens, job.layers)
-        self._changed(job)
+        self.lifecycle.publish(job)
         return job
 
     def _assign_pens(self, job: Job, wanted: dict[str, Any] | None,
@@ -203,8 +201,7 @@ class JobQueue:
 
     def move(self, job_id: str, position: int) -> list[dict[str, Any]]:
         job = self.get(job_id)
-        if job.state not in ("queued", "waiting"):
-            raise Refused(409, f"job {job_id} is {job.state}; only waiting jobs can be moved")
+        self.lifecycle.check(job, "move")
         ids = list(self.jobs)
         movable = ("queued", "waiting")
         waiting = [i for i in ids if self.jobs[i].state in movable and i != job_id]
@@ -212,7 +209,7 @@ class JobQueue:
         waiting.insert(position, job_id)
         slots = iter(waiting)
         order = [next(slots) if self.jobs[i].state in movable else i for i in ids]
-        self.jobs = {i: self.jobs[i] for i in order}
+        self.lifecycle.jobs = {i: self.jobs[i] for i in order}
         self.store.set_order(order)
         self.events.publish({"type": "queue", "order": order})
         log.info("job %s moved to waiting position %d", job_id, position)
@@ -221,41 +218,31 @@ class JobQueue:
 
     async def delete(self, job_id: str) -> None:
         job = self.get(job_id)
-        if job.active:
-            raise Refused(409, f"job {job_id} is {job.state}; cancel it before deleting it")
-        del self.jobs[job_id]
+        self.lifecycle.check(job, "delete")
+        self.lifecycle.forget(job)
         await asyncio.wrap_future(self.store.delete(job_id))
         await self.importer.delete(job_id)
-        self.events.publish({"type": "job_deleted", "id": job_id})
         log.info("job %s deleted", job_id)
 
-    # ---- starting and dispatch -----------------------------------------------------------
+    # ---- placing and dispatch ----------------------------------------------------------
 
-    def start(self, job_id: str, target: str | None = None) -> Job:
-        """Start (or resume, when interrupted or stopped) a job; `target` names a plotter."""
-        job = self.get(job_id)
-        if job.active:
-            raise Refused(409, f"job {job_id} is already {job.state}")
-        if target is not None:
-            self.plotter(target)
-            job.target = target
+    def start(self, job: Job, cause: str, point: ResumePoint | None = None) -> None:
+        """Run `job` on the plotter it goes to now (`cause`: the action), or, for a start or
+        a restart no plotter can take now, let it wait; refused (409) what waiting cannot
+        cure: a job that fits no plotter, or a resume (it needs its plotter ready)."""
         plotter, reason = self._place(job)
         if plotter is not None:
-            self._begin(job, plotter)
-        elif job.state in RESUMABLE or not any(p.fits(job) for p in self._candidates(job)):
+            self._begin(job, plotter, cause, point)
+        elif cause not in ("start", "restart") or not any(
+                p.fits(job) for p in self.candidates(job)):  # fmt: skip
             raise Refused(409, reason)
         else:
-            job.state, job.waiting, job.error = "waiting", reason, None
-            self._changed(job)
+            self.lifecycle.move(job, "wait", waiting=reason, error=None)
             log.info("job %s waits: %s", job.id, reason)
-        return job
 
-    def select_layers(self, job_id: str, layers: list[int] | None,
+    def select_layers(self, job: Job, layers: list[int] | None,
                       start_layer: int | None) -> None:  # fmt: skip
         """The start options: plot `layers` (1-based; None: all) from `start_layer` on."""
-        job = self.get(job_id)
-        if job.active:
-            raise Refused(409, f"job {job_id} is already {job.state}")
         count = max(len(job.layers), 1)
         if layers is None and start_layer is None:
             job.plot_layers = None
@@ -263,7 +250,7 @@ class JobQueue:
         chosen = set(layers if layers is not None else range(1, count + 1))
         wrong = sorted(k for k in chosen | {start_layer or 1} if not 1 <= k <= count)
         if wrong:
-            raise Refused(422, f"layer {wrong[0]}: job {job_id} has {count} layer(s), "
+            raise Refused(422, f"layer {wrong[0]}: job {job.id} has {count} layer(s), "
                                f"numbered 1 to {count}")  # fmt: skip
         chosen = {k for k in chosen if k >= (start_layer or 1)}
         if not chosen:
@@ -271,78 +258,30 @@ class JobQueue:
                                f"every layer in {sorted(set(layers or []))}")  # fmt: skip
         job.plot_layers = sorted(chosen)
 
-    async def resume_from(self, job_id: str, target: str | None, where: dict[str, Any] | None,
-                          overlap: float, home: bool) -> Job:  # fmt: skip
-        """Plot a finished job again from a point (`where`, see `resume.pick`) with
-        `overlap` mm back along its stroke, or resume a stopped or interrupted one exactly;
-        with `home`, home its plotter first ($H, until Idle)."""
-        job = self.get(job_id)
-        if job.active or job.state in ("queued", "waiting"):
-            raise Refused(409, f"job {job_id} is {job.state}: only a stopped, interrupted or "
-                               "finished job resumes from a point")  # fmt: skip
-        if where is None and job.state not in RESUMABLE:
-            raise Refused(409, f"job {job_id} is {job.state}: say where to resume it from "
-                               "(from), or restart it")  # fmt: skip
-        point: ResumePoint | None = None
-        if where is not None:
-            program = self.importer.program_path(job_id)
-            try:
-                point = await asyncio.to_thread(pick, program, job.layers, job.lines_total,
-                                                where, overlap)  # fmt: skip
-            except PickError as exc:
-                raise Refused(422, f"from: {exc}") from exc
-            except OSError as exc:
-                raise Refused(409, f"job {job_id} has no program to resume: {exc}") from exc
-        if target is not None:
-            self.plotter(target)
-            job.target = target
-        if home:
-            unit = next(iter(self._candidates(job)))
-            log.info("job %s: homing %s before the resume", job_id, unit.name)
-            await unit.send("home", "$H", wait=HOMING_S)
-        plotter, reason = self._place(job)
-        if plotter is None:
-            raise Refused(409, reason)
-        if point is not None:
-            job.lines_done = point.line - 1
-        self._begin(job, plotter, point)
-        return job
-
-    def restart(self, job_id: str, target: str | None = None) -> Job:
-        """Start a finished job (stopped, interrupted, failed...) again from its first line,
-        without a new upload; refused, it keeps its resume line."""
-        job = self.get(job_id)
-        if job.active or job.state in ("queued", "waiting"):
-            raise Refused(409, f"job {job_id} is {job.state}: start it instead")
-        kept = job.resume_line
-        job.resume_line = None
-        try:
-            return self.start(job_id, target)
-        except Refused:
-            job.resume_line = kept
-            raise
-
     def dispatch(self) -> None:
         """Start what waits (and, with auto-start, what is queued) on free plotters, in order."""
         for job in list(self.jobs.values()):
-            if job.state == "waiting" or (self.auto_start and job.state == "queued"):
+            if job.claim is None and (job.state == "waiting"
+                                      or (self.auto_start and job.state == "queued")):
                 plotter, reason = self._place(job)
                 if plotter is not None:
-                    self._begin(job, plotter)
+                    self._begin(job, plotter, "dispatch")
                 elif job.state == "waiting" and reason != job.waiting:
                     job.waiting = reason
-                    self._changed(job, save=False)
+                    self.lifecycle.publish(job, save=False)
 
-    def _candidates(self, job: Job) -> Iterable[Plotter]:
+    def candidates(self, job: Job) -> list[Plotter]:
+        """The plotters `job` may run on: the one it names, else (resuming) the one it ran
+        on, else all."""
         if job.target is not None:
             return [self.plotter(job.target)]
         if job.state in RESUMABLE and job.plotter in self.plotters:
             return [self.plotters[job.plotter]]
-        return self.plotters.values()
+        return list(self.plotters.values())
 
     def _place(self, job: Job) -> tuple[Plotter | None, str]:
         """The plotter to run `job` on now, or None and why not."""
-        candidates = list(self._candidates(job))
+        candidates = self.candidates(job)
         reasons = []
         for plotter in candidates:
             if not plotter.fits(job):
@@ -365,80 +304,40 @@ class JobQueue:
         previous = self.plotters.get(job.plotter or "")
         return previous is None or previous is plotter or previous.work_area == plotter.work_area
 
-    def _begin(self, job: Job, plotter: Plotter, point: ResumePoint | None = None) -> None:
+    def _begin(self, job: Job, plotter: Plotter, cause: str,
+               point: ResumePoint | None = None) -> None:  # fmt: skip
         if point is not None:
-            plotter.runner.begin(job, point.line, True, point)
-        elif job.state in RESUMABLE and job.resume_line is not None:
-            plotter.runner.begin(job, job.resume_line, True)
+            plotter.runner.begin(job, cause, point.line, True, point)
+        elif job.state in RESUMABLE and job.resume_line is not None and cause != "restart":
+            plotter.runner.begin(job, cause, job.resume_line, True)
         else:
-            plotter.runner.begin(job, first_line(job.layers, job.plot_layers))
+            plotter.runner.begin(job, cause, first_line(job.layers, job.plot_layers))
 
-    # ---- control -------------------------------------------------------------------------
+    def running_on(self, job: Job) -> Plotter:
+        """The plotter an active job runs on."""
+        if not job.active or job.plotter not in self.plotters:
+            raise Refused(409, f"job {job.id} is {job.state}, not running or paused")
+        return self.plotters[job.plotter]
 
-    def _running_on(self, job_id: str | None, plotter: str | None = None) -> Plotter:
-        """The plotter running the given job, or the one running a job (the first if several)."""
-        if job_id is not None:
-            job = self.get(job_id)
-            if not job.active or job.plotter not in self.plotters:
-                raise Refused(409, f"job {job_id} is {job.state}, not running or paused")
-            return self.plotters[job.plotter]
-        if plotter is not None:
-            return self.plotter(plotter)
-        for candidate in self.plotters.values():
-            if candidate.job is not None:
-                return candidate
-        raise Refused(409, "no job is running")
+    def busy_plotter(self, name: str | None) -> Plotter:
+        """The plotter a hold or continue without a job acts on: the named one, else the
+        one running a job, else the first."""
+        if name is not None:
+            return self.plotter(name)
+        return next((p for p in self.plotters.values() if p.job is not None), self.first)
 
-    def pause(self, job_id: str | None = None, plotter: str | None = None) -> Job | None:
-        """Feed hold of a job; without a job named, of the plotter's job, or of its machine
-        when no job runs (a jog, a console move): the board lifts the pen while held."""
-        unit = self._holding(job_id, plotter)
-        if unit.job is None:
-            unit.realtime(b"!")
-            return None
-        return unit.runner.pause()
+    # ---- stops ----------------------------------------------------------------------------
 
-    def resume(self, job_id: str | None = None, plotter: str | None = None) -> Job | None:
-        if job_id is not None and self.get(job_id).state in RESUMABLE:
-            return self.start(job_id, plotter)
-        unit = self._holding(job_id, plotter)
-        if unit.job is None:
-            unit.realtime(b"~")
-            return None
-        return unit.runner.resume()
-
-    def _holding(self, job_id: str | None, plotter: str | None) -> Plotter:
-        """The plotter a hold or continue acts on: the job's, the named one's, the one
-        running a job, else the first."""
-        if job_id is None and (plotter is not None or all(p.job is None for p in
-                                                           self.plotters.values())):  # fmt: skip
-            return self.plotter(plotter)
-        return self._running_on(job_id, plotter)
-
-    async def frame(self, job_id: str, plotter: str | None = None) -> Job:
-        """Trace the job's frame with the pen up on the plotter it would run on."""
-        job = self.get(job_id)
-        if job.active:
-            raise Refused(409, f"job {job_id} is {job.state}; trace the frame before it runs")
-        unit = self.plotter(plotter or job.target or (job.plotter if job.plotter in self.plotters
-                                                       else None))  # fmt: skip
-        if not unit.fits(job):
-            raise Refused(409, f"job {job_id} does not fit {unit.name}'s work area "
-                               f"({unit.work_area})")  # fmt: skip
-        await unit.trace_frame(job)
-        return job
-
-    async def cancel(self, job_id: str) -> Job:
-        job = self.get(job_id)
-        if job.state in FINISHED:
-            raise Refused(409, f"job {job_id} is already {job.state}")
-        if not job.active:
-            job.state, job.error, job.waiting = "cancelled", None, None
-            job.finished_at = time.time()
-            self._changed(job)
-            return job
-        await self._running_on(job_id).runner.cancel(job)
-        return job
+    def estop(self, name: str | None, source: str, origin: str | None = None) -> Plotter:
+        """Stop one plotter (the first with no name) at once; an unknown name stops
+        nothing and is refused (404) with the plotters there are."""
+        plotter = self.plotters.get(name) if name is not None else self.first
+        if plotter is None:
+            raise Refused(404, {"message": f"no plotter named {name!r}; there are: "
+                                           + ", ".join(self.plotters),
+                                "plotters": list(self.plotters)})  # fmt: skip
+        plotter.estop(source, origin)
+        return plotter
 
     def estop_all(self, source: str, origin: str | None = None) -> None:
         """Every plotter's reset byte first, then the bookkeeping."""

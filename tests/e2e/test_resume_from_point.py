@@ -15,7 +15,8 @@ import os
 import signal
 
 import pytest
-from plotbridge.plotter.runner import JOB_POLL_HZ, MARK_FILE
+from plotbridge.plotter.runner import JOB_POLL_HZ
+from plotbridge.plotter.stoppoint import MARK_FILE
 from websockets.sync.client import connect
 
 from tests.fixtures.drawings import FEED, TWO_STROKES

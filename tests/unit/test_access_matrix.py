@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 from fastapi.testclient import TestClient
-from plotbridge.access import PUBLIC, ROUTES, WS_MESSAGES, Role, may, may_act
+from plotbridge.access import JOB_ACTIONS, PUBLIC, ROUTES, WS_MESSAGES, Role, may, may_act, rule
 from plotbridge.jobs.imports import Importer
 from starlette.websockets import WebSocketDisconnect
 
@@ -39,6 +39,17 @@ def concrete(template: str, job: str) -> str:
             .replace("{pen}", "no-such-pen"))  # fmt: skip
 
 
+def expanded() -> list[tuple[str, str, str | None]]:
+    """Every HTTP route of the table; the job action route once per action."""
+    found = []
+    for method, template in sorted(ROUTES):
+        if method == "WS":
+            continue
+        actions = sorted(JOB_ACTIONS) if "{action}" in template else [None]
+        found += [(method, template, action) for action in actions]
+    return found
+
+
 def test_every_route_is_in_the_table(world):
     client, *_ = world
     assert served_routes(client.app) == set(ROUTES)
@@ -47,12 +58,11 @@ def test_every_route_is_in_the_table(world):
 def test_every_route_as_each_role_and_as_nobody(world):
     client, keys, others, own = world
     wrong = []
-    for (method, template), (need, owner_rule) in sorted(ROUTES.items()):
-        if method == "WS":
-            continue
+    for method, template, action in expanded():
+        need, owner_rule = rule(method, template, action)
         jobs = [(others, False), (own, True)] if owner_rule else [("no-such-job", False)]
         for job, owned in jobs:
-            path = concrete(template, job)
+            path = concrete(template, job).replace("{action}", action or "")
             answer = client.request(method, path, headers={"authorization": ""})
             if need is PUBLIC:
                 if ACCESS_REFUSAL in answer.text[:100]:

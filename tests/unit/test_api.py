@@ -13,7 +13,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from plotbridge.jobs.imports import Importer
-from plotbridge.plotter.runner import MARK_FILE
+from plotbridge.plotter.stoppoint import MARK_FILE
 from plotbridge.resume import Mark, ResumePoint
 from plotbridge.upload import parse_upload_fields
 from starlette.testclient import TestClient
@@ -223,8 +223,9 @@ async def test_start_waits_for_the_machine(api):
     api.link.status.connected = False
     response = await api.client.post(f"/api/jobs/{second['id']}/start")
     assert response.json()["state"] == "waiting" and "not connected" in response.json()["waiting"]
-    again = await api.client.post(f"/api/jobs/{first['id']}/start")  # still waits, new reason
-    assert again.json()["state"] == "waiting" and "not connected" in again.json()["waiting"]
+    again = await api.client.post(f"/api/jobs/{first['id']}/start")  # it waits already
+    assert again.status_code == 409 and again.json()["detail"]["state"] == "waiting"
+    assert again.json()["detail"]["actions"] == ["cancel", "frame", "move", "delete"]
     api.link.status.connected = True
     api.link.set_state("Idle", alarm=None)  # e.g. homed: the first in queue order starts
     assert api.queue.jobs[first["id"]].state == "running"
@@ -283,12 +284,12 @@ async def test_estop_stops_running_job_at_last_ack(api):
     await api.client.post(f"/api/jobs/{job['id']}/start")
     for n in range(1, 6):
         api.link.step()
-        await settle(lambda n=n: api.queue.jobs[job["id"]].lines_done == n, within=10.0)
+        await settle(lambda n=n: api.queue.jobs[job["id"]].lines_acked == n, within=10.0)
     response = await api.client.post("/api/machine/estop")
     assert response.status_code == 202
     assert api.link.estop_calls == 1
     stopped = (await api.client.get(f"/api/jobs/{job['id']}")).json()
-    assert stopped["state"] == "stopped" and stopped["lines_done"] == 5
+    assert stopped["state"] == "stopped" and stopped["lines_done"] <= 5  # never ahead of acks
     assert stopped["resume_line"] is not None and stopped["resume_line"] <= 6
     assert (await api.client.get("/api/machine")).json()["state"] == "Alarm"
 
@@ -298,7 +299,7 @@ async def test_the_stop_point_is_the_first_report_after_the_resets_banner(api, t
     await api.client.post(f"/api/jobs/{job['id']}/start")
     for n in range(1, 4):
         api.link.step()
-        await settle(lambda n=n: api.queue.jobs[job["id"]].lines_done == n)
+        await settle(lambda n=n: api.queue.jobs[job["id"]].lines_acked == n)
     api.link.set_state("Run", x=1.0, y=0.0)
     await api.client.post("/api/machine/estop")
     await settle(lambda: api.queue.jobs[job["id"]].state == "stopped")
@@ -312,12 +313,12 @@ async def test_the_stop_point_is_the_first_report_after_the_resets_banner(api, t
 
 
 async def test_a_resume_starts_from_the_stop_point_while_its_write_is_slow(api, monkeypatch):
-    import plotbridge.plotter.runner as runner
+    import plotbridge.plotter.stoppoint as stoppoint
 
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
     api.link.step()
-    await settle(lambda: api.queue.jobs[job["id"]].lines_done == 1)
+    await settle(lambda: api.queue.jobs[job["id"]].lines_acked == 1)
     api.link.set_state("Run", x=1.0, y=0.0)
     await api.client.post("/api/machine/estop")
     await settle(lambda: api.queue.jobs[job["id"]].state == "stopped")
@@ -328,7 +329,7 @@ async def test_a_resume_starts_from_the_stop_point_while_its_write_is_slow(api, 
         save(mark, path)
 
     monkeypatch.setattr(Mark, "save", busy_disk)
-    monkeypatch.setattr(runner, "locate", lambda program, mark: located.append(mark)
+    monkeypatch.setattr(stoppoint, "locate", lambda program, mark: located.append(mark)
                         or ResumePoint(1))  # fmt: skip
     api.link.set_state("Alarm", x=3.0, y=0.0)  # the stop point, told at once
     api.link.set_state("Idle")  # unlocked
@@ -397,7 +398,7 @@ async def test_board_error_fails_job_with_line(api):
     job = (await upload(api.client)).json()
     await api.client.post(f"/api/jobs/{job['id']}/start")
     api.link.step()
-    await settle(lambda: api.queue.jobs[job["id"]].lines_done == 1)  # streaming: line 2 next
+    await settle(lambda: api.queue.jobs[job["id"]].lines_acked == 1)  # streaming: line 2 next
     api.link.abort(StreamAborted("error", 1, 2, "error:33 invalid target"))
     await settle(lambda: api.queue.jobs[job["id"]].state == "failed")
     failed = (await api.client.get(f"/api/jobs/{job['id']}")).json()
@@ -415,7 +416,7 @@ async def interrupted_after_12_lines(api) -> str:
     await api.client.post(f"/api/jobs/{jid}/start")
     for done in range(1, 13):  # one step per acknowledgement (two could merge into one)
         api.link.step()
-        await settle(lambda done=done: api.queue.jobs[jid].lines_done >= done)
+        await settle(lambda done=done: api.queue.jobs[jid].lines_acked >= done)
     api.link.set_state("Run", planner_free=15)  # planner empty, segment buffer maybe not
     api.link.abort(StreamAborted("disconnected", 12, None, "link lost"))
     await settle(lambda: api.queue.jobs[jid].state == "interrupted")
@@ -429,7 +430,7 @@ async def test_link_lost_interrupts_then_resume_uses_preamble(api, monkeypatch):
     def preamble(program, point):
         return point.line, ["M5", "G0 X6 Y0"]
 
-    monkeypatch.setattr("plotbridge.plotter.runner.resume_preamble", preamble)
+    monkeypatch.setattr("plotbridge.plotter.stoppoint.resume_preamble", preamble)
     api.link.set_state("Idle", planner_free=15)
     api.link.auto_ack = True
     response = await api.client.post(f"/api/jobs/{jid}/resume")
@@ -855,14 +856,12 @@ async def test_restart_runs_an_interrupted_job_from_its_first_line(api):
     jid = await interrupted_after_12_lines(api)
     kept = api.queue.jobs[jid].resume_line
     api.link.set_state("Alarm", planner_free=15)
-    refused = await api.client.post(f"/api/jobs/{jid}/restart")  # the plotter is not ready
-    assert refused.status_code == 409
-    assert kept and api.queue.jobs[jid].resume_line == kept, "a refused restart keeps it"
-    api.link.set_state("Idle", planner_free=15)
+    response = await api.client.post(f"/api/jobs/{jid}/restart")  # waits, as a start does
+    assert response.status_code == 200 and response.json()["state"] == "waiting"
+    assert kept and "Alarm" in response.json()["waiting"]
     api.link.auto_ack = True
     sent = len(api.link.streamed)
-    response = await api.client.post(f"/api/jobs/{jid}/restart")
-    assert response.status_code == 200, response.text
+    api.link.set_state("Idle", planner_free=15)  # homed: it starts by itself
     await settle(lambda: api.queue.jobs[jid].state == "done")
     again = api.link.streamed[sent:]
     assert again[0][0] == 1 and all(n != 0 for n, _ in again), "no resume preamble"

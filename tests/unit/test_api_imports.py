@@ -26,13 +26,13 @@ def test_server_modules_and_a_running_job_do_not_import_numpy(tmp_path):
         from plotbridge.config import Config
         from plotbridge.jobs.model import Job
         from plotbridge.plotter.link import Link
-        from plotbridge.plotter.runner import Runner
+        from plotbridge.jobs.progress import follow, plan_of
 
         config = Config(data_dir=Path({str(tmp_path)!r}))
         create_app(config, [Board("p", Link("/dev/null"))], "t" * 16)
         job = Job(id="j", name="j", format="gcode", lines_total=10, lines_done=4,
                   estimate_s=10.0, timeline=[(10, 10.0)])
-        Runner._progress(None, job)  # the eta of a running job, as the server computes it
+        follow(job, None, plan_of(job, None, 0), 5, None)  # a running job's eta, as served
         assert job.eta_s == 6.0, job
         print(sorted(m for m in sys.modules if m.split(".")[0] in {HEAVY!r}))
     """)

@@ -213,30 +213,34 @@ async def test_layers_plot_with_their_pens_odometer_and_reink(tmp_path, monkeypa
     async with serving(app) as client:
         for name, up, down in (("a", 1000, 2000), ("thin", 1300, 1700)):
             await client.post("/api/pens", json={"name": name, "up_us": up, "down_us": down,
-                                                 "speed": 600, "reink_m": 0.008})  # fmt: skip
+                                                 "speed": 600, "reink_m": 0.004})  # fmt: skip
         link.settings.update({60: 1000.0, 61: 2000.0})
         queue = app.state.components.queue
+        prompts: list[dict] = []
+        app.state.components.events.subscribe(
+            lambda m: (m.get("transition") or {}).get("to") == "pen_change"
+            and prompts.append(m["job"]["pen_change"]))  # fmt: skip
         bad = await upload(client, pens="b=nothing")
         assert bad.status_code == 422 and "no pen 'nothing'" in bad.text
         job = (await upload(client, pens="b=thin,c=thin", start="true")).json()
         assert [layer["pen"] for layer in job["layers"]] == [1, 2, 2]  # "a": by its name
         await settle(lambda: queue.jobs[job["id"]].state == "pen_change")
         prompt = queue.jobs[job["id"]].pen_change
-        assert prompt["message"] == "Layer 2 of 3, 'b': load pen 'thin', then continue"
-        assert prompt["pen"] == "thin" and prompt["reason"] == "layer"
+        # "a" passed 4 mm on layer 1's last stroke: one prompt at the boundary says both
+        assert prompt["message"] == ("Layer 2 of 3, 'b': load pen 'thin', then continue "
+                                     "(pen 'a' is due for re-inking: 0.005 m drawn)")
+        assert prompt["pen"] == "thin" and prompt["reason"] == "layer" and prompt["reink"] == "a"
         assert not any(c.startswith("$6") for c in link.commands)  # "a" is what the board has
         assert all("F600" in t for _, t in link.streamed if t.startswith("G1"))
         await client.post(f"/api/jobs/{job['id']}/resume")
-        # layer 2 takes thin's positions; thin passes 8 mm in layer 3 (5 + 5): re-ink
         await settle(lambda: queue.jobs[job["id"]].pen_change is not None
                      and queue.jobs[job["id"]].pen_change["layer"] == 3)  # fmt: skip
         assert link.commands[3:5] == ["$60=1300", "$61=1700"]
+        assert queue.jobs[job["id"]].pen_change["reink"] == "thin"
         await client.post(f"/api/jobs/{job['id']}/resume")
-        await settle(lambda: (queue.jobs[job["id"]].pen_change or {}).get("reason") == "reink")
-        reink = queue.jobs[job["id"]].pen_change
-        assert reink["message"].startswith("Re-ink pen 'thin': 0.0 m drawn") and reink["layer"] == 3
-        await client.post(f"/api/jobs/{job['id']}/resume")
+        # thin passes 8 mm on the job's last stroke: no prompt, the job finishes
         await settle(lambda: queue.jobs[job["id"]].state == "done")
+        assert [p["reason"] for p in prompts] == ["layer", "layer"]
         await asyncio.sleep(0)
         odometers = {p["name"]: p["odometer_m"] for p in (await client.get("/api/pens")).json()}
         assert odometers == {"a": pytest.approx(0.005), "thin": pytest.approx(0.010)}

@@ -6,6 +6,7 @@ import json
 import sqlite3
 
 from plotbridge.jobs.model import Job
+from plotbridge.jobs.progress import follow, plan_of
 from plotbridge.jobs.store import SCHEMA_VERSION, JobStore
 
 
@@ -37,7 +38,7 @@ def test_layers_keep_their_progress_and_extra_keys(tmp_path):
     layers = [{"name": "a", "colour": "#000000", "first_line": 1, "last_line": 10,
                "pen_down_mm": 5.0, "estimate_s": 2.0, "ink": "fineliner"}]  # fmt: skip
     running = job("a", "running", layers=layers, lines_done=5, timeline=[(10, 2.0)])
-    running.follow_layers()
+    follow(running, None, plan_of(running, None, 0), 6, None)
     store = open_store(tmp_path)
     store.save(running, 0).result()
     store.close()

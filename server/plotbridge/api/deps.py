@@ -14,6 +14,7 @@ from starlette.requests import HTTPConnection
 from plotbridge.access import Role, may, rule
 from plotbridge.config import Config
 from plotbridge.events import EventHub
+from plotbridge.jobs.actions import JobActions
 from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
 from plotbridge.people import Access, Identity
@@ -27,6 +28,7 @@ class Components:
     access: Access  # who is asking, people, keys, sessions, the audit log
     events: EventHub
     queue: JobQueue
+    actions: JobActions  # the job verbs (jobs/actions.py)
     clients: Hub  # the WebSocket fan-out
     pens: PenLibrary
     webhooks: Webhooks
@@ -48,7 +50,7 @@ async def authorize(conn: HTTPConnection) -> AsyncIterator[Identity | None]:
     websocket = conn.scope["type"] == "websocket"
     method = "WS" if websocket else conn.scope["method"].replace("HEAD", "GET")
     template = getattr(conn.scope.get("route"), "path", conn.scope["path"])
-    need, owner_rule = rule(method, template)
+    need, owner_rule = rule(method, template, conn.path_params.get("action"))
     identity: Identity | None = conn.scope.get("state", {}).get("identity")
     if need is None:
         yield identity

@@ -5,13 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query, Request
+from fastapi import APIRouter, Body, Query, Request
+from fastapi import Path as PathParam
 from fastapi.responses import FileResponse, JSONResponse, Response
 
 from plotbridge.api.deps import GUARD, Parts, Who, upload_error
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
-from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, StartBody, upload_openapi
+from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, upload_openapi
 from plotbridge.pens.model import parse_layer_pens
 from plotbridge.people.views import job_view, jobs_view
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
@@ -73,7 +74,7 @@ async def upload(request: Request, c: Parts, who: Who) -> Any:
     answer = job.public()
     if start and job.state == "queued":
         try:
-            answer = c.queue.start(job.id).public()
+            answer = (await c.actions.act(job.id, "start")).public()
         except Refused as exc:  # the upload stands; say why it did not start
             answer["start_error"] = exc.detail
     return JSONResponse(answer, status_code=201)
@@ -100,64 +101,49 @@ async def patch_job(job_id: str, body: PatchJobBody,
 
 @router.delete("/jobs/{job_id}", status_code=204)
 async def delete_job(job_id: str, c: Parts) -> Response:
-    await c.queue.delete(job_id)
+    await c.actions.act(job_id, "delete")
     return Response(status_code=204)
-
-
-@router.post("/jobs/{job_id}/start", response_model=Job)
-async def start_job(job_id: str, c: Parts, plotter: Target = None,
-                    body: StartBody | None = None) -> dict[str, Any]:  # fmt: skip
-    """Start (or resume) a job; the body's `layers`/`start_layer` plot some layers only,
-    its `pens` name each layer's pen."""
-    if body is not None:
-        c.queue.select_layers(job_id, body.layers, body.start_layer)
-        if body.pens is not None:
-            c.queue.set_pens(job_id, body.pens)
-    return c.queue.start(job_id, plotter).public()
-
-
-@router.post("/jobs/{job_id}/restart", response_model=Job)
-async def restart_job(job_id: str, c: Parts, plotter: Target = None,
-                      body: StartBody | None = None) -> dict[str, Any]:  # fmt: skip
-    """A stopped, interrupted, failed (or done) job again from its first (plotted) line."""
-    if body is not None:
-        c.queue.select_layers(job_id, body.layers, body.start_layer)
-    return c.queue.restart(job_id, plotter).public()
-
-
-@router.post("/jobs/{job_id}/pause", response_model=Job)
-async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
-    c.queue.pause(job_id)
-    return c.queue.get(job_id).public()
-
-
-@router.post("/jobs/{job_id}/resume", response_model=Job)
-async def resume_job(job_id: str, c: Parts, plotter: Target = None,
-                     body: ResumeBody | None = None) -> dict[str, Any]:  # fmt: skip
-    """Continue a paused job or a pen change; resume a stopped or interrupted one where it
-    stopped; with a body, from a point (`from`, `overlap`) and/or after homing (`home`)."""
-    if body is not None and body.special:
-        await c.queue.resume_from(job_id, plotter, body.where(), body.overlap, body.home)
-    else:
-        c.queue.resume(job_id, plotter)
-    return c.queue.get(job_id).public()
-
-
-@router.post("/jobs/{job_id}/frame", response_model=Job)
-async def frame_job(job_id: str, c: Parts, plotter: Target = None) -> dict[str, Any]:
-    """Trace the job's bounding box with the pen up; answers once the carriage is back."""
-    return (await c.queue.frame(job_id, plotter)).public()
-
-
-@router.post("/jobs/{job_id}/cancel", response_model=Job)
-async def cancel_job(job_id: str, c: Parts) -> dict[str, Any]:
-    return (await c.queue.cancel(job_id)).public()
 
 
 @router.post("/jobs/{job_id}/move", response_model=list[Job])
 async def move_job(job_id: str, body: MoveBody,
                    c: Parts) -> list[dict[str, Any]]:  # fmt: skip
-    return c.queue.move(job_id, body.position)
+    await c.actions.act(job_id, "move", body=body.model_dump())
+    return c.queue.list()
+
+
+@router.post("/jobs/{job_id}/pause", response_model=Job)
+async def pause_job(job_id: str, c: Parts) -> dict[str, Any]:
+    """The old name of `hold`."""
+    return (await c.actions.act(job_id, "hold")).public()
+
+
+@router.post("/jobs/{job_id}/resume", response_model=Job)
+async def resume_job(job_id: str, c: Parts, plotter: Target = None,
+                     body: ResumeBody | None = None) -> dict[str, Any]:  # fmt: skip
+    """`continue` a held job or a pen change, or `resume` a stopped or interrupted one where
+    it stopped; with a body, `resume_from` a point (`from`, `overlap`) and/or
+    `home_then_resume` (`home`)."""
+    sent = body.model_dump(by_alias=True, exclude_unset=True) if body is not None else None
+    return (await c.actions.resume_legacy(job_id, plotter, sent)).public()
+
+
+@router.post("/jobs/{job_id}/{action}", response_model=Job)
+async def job_action(job_id: str, action: Annotated[str, PathParam(max_length=32)], c: Parts,
+                     plotter: Target = None,
+                     body: Annotated[dict[str, Any] | None, Body()] = None,
+                     ) -> dict[str, Any]:  # fmt: skip
+    """One of the job's `actions` (docs/INTERNALS.md, "The job lifecycle"): start, hold,
+    continue, stop, resume, home_then_resume, resume_from, restart, cancel, frame. The body
+    is the action's options (start, restart: StartBody; resume_from: ResumeBody).
+    An action the job's state does not allow answers 409 with its state and actions."""
+    if action in ("delete", "edit", "move"):
+        raise Refused(405, f"{action}: use {ROUTED[action]}")
+    return (await c.actions.act(job_id, action, plotter, body)).public()
+
+
+ROUTED = {"delete": "DELETE /api/jobs/{id}", "edit": "PATCH /api/jobs/{id}",
+          "move": "POST /api/jobs/{id}/move with {\"position\"}"}
 
 
 @router.get("/jobs/{job_id}/preview")

@@ -30,6 +30,15 @@ def named_plotter(name: Annotated[str, Path(max_length=64)], c: Parts) -> Plotte
     return c.queue.plotter(name)
 
 
+@router.post("/api/plotters/{name}/machine/estop", status_code=202)
+async def estop_named(name: Annotated[str, Path(max_length=64)], c: Parts,
+                      request: Request) -> dict[str, Any]:  # fmt: skip
+    """Stop one plotter at once; an unknown name stops nothing: 404 naming the plotters
+    there are (the WebSocket's stop answers the same)."""
+    plotter = c.queue.estop(name, "REST", page_id(request.headers.get(PAGE_HEADER)))
+    return {"status": "stopped", "machine": plotter.machine()}
+
+
 @router.get("/api/plotters")
 async def plotters(c: Parts) -> list[dict[str, Any]]:
     return [plotter.describe() for plotter in c.queue.plotters.values()]
@@ -42,8 +51,9 @@ async def estop_all(c: Parts, request: Request) -> dict[str, Any]:
     return {"status": "stopped", "plotters": list(c.queue.plotters)}
 
 
-def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
-    """The per-board routes under `prefix`, for the plotter `pick` resolves."""
+def machine_routes(prefix: str, pick: Callable[..., Plotter], estop: bool) -> APIRouter:
+    """The per-board routes under `prefix`, for the plotter `pick` resolves (with its own
+    `machine/estop` when `estop`)."""
     routes = APIRouter(prefix=prefix, dependencies=GUARD)
     Board = Annotated[Plotter, Depends(pick)]
 
@@ -51,21 +61,22 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
     async def machine(plotter: Board) -> dict[str, Any]:
         return plotter.machine()
 
-    @routes.post("/machine/estop", status_code=202)
-    async def estop(plotter: Board, request: Request) -> dict[str, Any]:
-        plotter.estop("REST", page_id(request.headers.get(PAGE_HEADER)))  # before any await
-        return {"status": "stopped", "machine": plotter.machine()}
+    if estop:
+        @routes.post("/machine/estop", status_code=202)
+        async def stop(plotter: Board, request: Request) -> dict[str, Any]:
+            plotter.estop("REST", page_id(request.headers.get(PAGE_HEADER)))  # before awaits
+            return {"status": "stopped", "machine": plotter.machine()}
 
     @routes.post("/machine/hold")
     async def hold(plotter: Board, c: Parts) -> dict[str, Any]:
         """Feed hold of the plotter's job, or of its machine: the pen lifts, position kept."""
-        c.queue.pause(plotter=plotter.name)
+        c.actions.hold_plotter(plotter.name)
         return {"machine": plotter.machine()}
 
     @routes.post("/machine/continue")
     async def go_on(plotter: Board, c: Parts) -> dict[str, Any]:
         """Cycle start after a hold: the pen lowers where it lifted, motion goes on."""
-        c.queue.resume(plotter=plotter.name)
+        c.actions.continue_plotter(plotter.name)
         return {"machine": plotter.machine()}
 
     @routes.post("/machine/unlock")
@@ -113,5 +124,5 @@ def machine_routes(prefix: str, pick: Callable[..., Plotter]) -> APIRouter:
     return routes
 
 
-router.include_router(machine_routes("/api", first_plotter))
-router.include_router(machine_routes("/api/plotters/{name}", named_plotter))
+router.include_router(machine_routes("/api", first_plotter, estop=True))
+router.include_router(machine_routes("/api/plotters/{name}", named_plotter, estop=False))

@@ -14,7 +14,7 @@ from pydantic import ValidationError
 from plotbridge.access import WS_MESSAGES, Role, may_act
 from plotbridge.api.deps import Components, Who, page_id
 from plotbridge.errors import Refused
-from plotbridge.models import JogBody, ResumeBody
+from plotbridge.models import JogBody
 from plotbridge.people import Identity
 from plotbridge.people.views import message_view
 from plotbridge.ws import Client
@@ -23,6 +23,7 @@ log = logging.getLogger("plotbridge.api.ws")
 
 WS_MESSAGE_MAX = 4096  # characters; the longest real message (a console line) is ~200
 RESUME_WORDS = frozenset({"from", "overlap", "home"})  # a resume that may wait for homing
+AWAITING = frozenset({"jog", "command", "job_action"})  # wait for the board: queued per client
 WS_COMMANDS_WAITING = 16  # per WebSocket client: jog and console lines not yet answered
 
 router = APIRouter()
@@ -109,8 +110,7 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
                 text = (message.get("bytes") or b"").decode("utf-8", "replace")
             kind, body = parse_message(text)
             if kind == "estop":  # first thing, before anything else (never rate-limited)
-                _estop(c, body)
-                c.clients.send(client, {"type": "ack", "command": "estop"})
+                c.clients.send(client, _estop(c, body))
             elif not client.rate.take():
                 await ws.close(code=1008, reason="too many messages")
                 return
@@ -118,7 +118,7 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
                 c.clients.send(client, {"type": "error", "command": None, "detail": kind})
             elif (refused := refusal(c, client.identity, kind, body)) is not None:
                 c.clients.send(client, refused)
-            elif kind in ("jog", "command") or (kind == "resume" and RESUME_WORDS & body.keys()):
+            elif kind in AWAITING or (kind == "resume" and RESUME_WORDS & body.keys()):
                 try:
                     waiting.put_nowait((kind, body))
                 except asyncio.QueueFull:
@@ -130,20 +130,21 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
         worker.cancel()
 
 
-def _estop(c: Components, body: dict[str, Any] | None) -> None:
-    """`{"type": "estop"}` stops the first plotter (or the named one), `"all": true` all."""
+def _estop(c: Components, body: dict[str, Any] | None) -> dict[str, Any]:
+    """`{"type": "estop"}` stops the first plotter (or the named one), `"all": true` all;
+    an unknown name stops nothing and is refused as REST refuses it (404, the plotters)."""
     body = body or {}
     origin = page_id(body.get("page"))
     if body.get("all") is True:
         c.queue.estop_all("WebSocket, all plotters", origin)
-        return
+        return {"type": "ack", "command": "estop"}
     name = body.get("plotter")
     try:
-        plotter = c.queue.plotter(name if isinstance(name, str) else None)
-    except Refused:  # a stop must never be lost: a wrong name stops them all
-        c.queue.estop_all(f"WebSocket, unknown plotter {name!r}", origin)
-        return
-    plotter.estop("WebSocket", origin)
+        c.queue.estop(str(name) if name is not None else None, "WebSocket", origin)
+    except Refused as exc:
+        return {"type": "error", "command": "estop", "status": exc.status,
+                "detail": exc.detail}  # fmt: skip
+    return {"type": "ack", "command": "estop"}
 
 
 async def _board_commands(c: Components, client: Client, waiting: asyncio.Queue[Command]) -> None:
@@ -161,17 +162,28 @@ async def _command(c: Components, kind: Any, message: dict[str, Any]) -> dict[st
     name = message.get("plotter")
     try:
         target = name if isinstance(name, str) else None
+        job = message.get("job")
+        if kind == "job_action":
+            action = message.get("action")
+            if not isinstance(job, str) or not isinstance(action, str):
+                raise Refused(422, "a job_action names its job and action")
+            options = {k: v for k, v in message.items()
+                       if k not in ("type", "job", "action", "plotter")}  # fmt: skip
+            done = await c.actions.act(job, action, target, options or None)
+            return {"type": "ack", "command": kind, "action": action, "job": done.public()}
         if kind == "pause":
-            c.queue.pause(message.get("job"), target)
+            if isinstance(job, str):
+                await c.actions.act(job, "hold")
+            else:
+                c.actions.hold_plotter(target)
         elif kind == "resume":  # with from/overlap/home: as POST /api/jobs/{id}/resume's body
-            body = ResumeBody(**{k: v for k, v in message.items() if k in RESUME_WORDS})
-            job = message.get("job")
-            if not body.special:
-                c.queue.resume(job, target)
-            elif not isinstance(job, str):
+            options = {k: v for k, v in message.items() if k in RESUME_WORDS}
+            if isinstance(job, str):
+                await c.actions.resume_legacy(job, target, options or None)
+            elif options:
                 raise Refused(422, "a resume from a point or after homing names its job")
             else:
-                await c.queue.resume_from(job, target, body.where(), body.overlap, body.home)
+                c.actions.continue_plotter(target)
         elif kind == "jog":
             body = JogBody(**{k: v for k, v in message.items() if k not in ("type", "plotter")})
             await c.queue.plotter(target).jog(body.dx, body.dy, body.feed)
@@ -181,7 +193,10 @@ async def _command(c: Components, kind: Any, message: dict[str, Any]) -> dict[st
         else:
             return {"type": "error", "command": kind, "detail": f"unknown type {kind!r}"}
     except Refused as exc:
-        return {"type": "error", "command": kind, "detail": exc.detail}
+        answer = {"type": "error", "command": kind, "status": exc.status, "detail": exc.detail}
+        if kind == "job_action":
+            answer["action"] = message.get("action")
+        return answer
     except ValidationError as exc:
         return {"type": "error", "command": kind, "detail": exc.errors(include_url=False)}
     return {"type": "ack", "command": kind}

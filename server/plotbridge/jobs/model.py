@@ -9,19 +9,17 @@ from __future__ import annotations
 import time
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, computed_field
 from pydantic_core import to_jsonable_python
 
-from plotbridge.motion.eta import Timeline, share_done
+from plotbridge.jobs.lifecycle import ACTIVE, RESUMABLE, allowed
+
+__all__ = ["ACTIVE", "AFTER_JOB", "RESUMABLE", "Bounds", "Imported", "Job", "JobState", "Layer"]
 
 JobState = Literal[
     "queued", "waiting", "running", "paused", "pen_change", "done", "failed", "cancelled",
     "stopped", "interrupted",
-]  # fmt: skip
-
-ACTIVE: frozenset[str] = frozenset({"running", "paused", "pen_change"})
-FINISHED: frozenset[str] = frozenset({"done", "failed", "cancelled", "stopped"})
-RESUMABLE: frozenset[str] = frozenset({"interrupted", "stopped"})
+]  # fmt: skip (jobs/lifecycle.py's State)
 
 AfterJob = Literal["park", "home", "none"]
 """What a plotter does once a job is done: pen up and park, home, or nothing."""
@@ -56,21 +54,19 @@ class Layer(BaseModel):
     pen_down_mm: float = 0.0
     estimate_s: float = 0.0
     lines_done: int = 0
-    """Its lines acknowledged by the board, 0..lines_total."""
+    """Its lines the pen has finished, 0..lines_total."""
     progress: float = 0.0
-    """The share of its estimated time drawn, 0..1."""
+    """The share of its planned time the pen has done, 0..1."""
+    drawn_mm: float = 0.0
+    """Its pen-down length drawn."""
+    eta_s: float | None = None
+    """Its planned time still to come."""
     pen: int | None = None
     """The pen library's id of the pen that draws it ("Pen library"), or None."""
 
     @property
     def lines_total(self) -> int:
         return self.last_line - self.first_line + 1
-
-    def follow(self, lines_done: int, timeline: Timeline) -> None:
-        """Its progress when the job has `lines_done` lines acknowledged."""
-        self.lines_done = min(max(lines_done - self.first_line + 1, 0), self.lines_total)
-        self.progress = round(share_done(timeline, self.first_line, self.last_line,
-                                         lines_done), 4)  # fmt: skip
 
 
 class Imported(BaseModel):
@@ -112,7 +108,15 @@ class Job(BaseModel):
     created_at: float = Field(default_factory=time.time)
     lines_total: int
     lines_done: int = 0
+    """Lines the pen has finished (from the line the board executes, not the acks)."""
     progress: float = 0.0
+    """The share of the plan's time the pen has done, 0..1."""
+    drawn_mm: float = 0.0
+    """Pen-down length drawn."""
+    done_point: dict[str, Any] | None = None
+    """Where the pen is (or stopped): {"line", "x", "y", "layer", "layer_name"}."""
+    summary: str = ""
+    """One sentence on where the job is, naming its layer and position."""
     estimate_s: float
     eta_s: float | None = None
     bounds: Bounds | None = None
@@ -147,13 +151,23 @@ class Job(BaseModel):
     options: dict[str, Any] = Field(default_factory=dict, exclude=True)
     timeline: list[tuple[int, float]] = Field(default_factory=list, exclude=True)
     safe_line: int | None = Field(None, exclude=True)
+    lines_acked: int = Field(0, exclude=True)
+    """Lines the board acknowledged (a planner's depth ahead of the pen)."""
+    claim: str | None = Field(None, exclude=True)
+    """The action under way that holds the job (jobs/lifecycle.py, `claim`)."""
+
+    @computed_field  # type: ignore[prop-decorator]
+    @property
+    def actions(self) -> list[str]:
+        """What may be asked of the job now (jobs/lifecycle.py)."""
+        return allowed(self.state, self.claim is not None)
 
     def public(self) -> dict[str, Any]:
         """The API's job object."""
         return self.model_dump(mode="json")
 
     def record(self) -> dict[str, Any]:
-        """Everything, for the store."""
+        """Everything, for the store (not `actions`: it follows from the state)."""
         return {name: to_jsonable_python(getattr(self, name)) for name in type(self).model_fields}
 
     def imported(self, result: Imported) -> None:
@@ -166,11 +180,6 @@ class Job(BaseModel):
         self.layers = [layer.model_copy() for layer in result.layers]
         self.warnings = result.warnings
         self.substitutions = result.substitutions
-
-    def follow_layers(self) -> None:
-        """Each layer's progress from the job's acknowledged lines."""
-        for layer in self.layers:
-            layer.follow(self.lines_done, self.timeline)
 
     @property
     def active(self) -> bool:

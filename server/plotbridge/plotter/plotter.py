@@ -1,7 +1,8 @@
 """One board as a unit: its link task, its runner, its machine state, its stop.
 
 A plotter publishes its machine reports and console lines (each carrying its
-name) and tells the queue when it becomes free to take a job (`on_ready`).
+name), and a `plotter` message when it becomes free to take a job (the queue
+dispatches on it).
 Nothing here knows other plotters: an emergency stop on one touches only it.
 """
 
@@ -20,11 +21,12 @@ from typing import Any
 from plotbridge import settings_meta
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
+from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
 from plotbridge.plotter.link import CommandError, Link, LinkDown, LinkEvent
-from plotbridge.plotter.runner import Report, Runner
+from plotbridge.plotter.runner import Runner
 from plotbridge.virtual import VirtualPlotter
 
 log = logging.getLogger("plotbridge.plotter")
@@ -46,7 +48,8 @@ class WorkArea:
 
 
 class Plotter:
-    def __init__(self, name: str, link: Link, events: EventHub, jobs_dir: Path, *,
+    def __init__(self, name: str, link: Link, events: EventHub, jobs_dir: Path,
+                 lifecycle: Lifecycle, *,
                  virtual: VirtualPlotter | None = None, work_area: WorkArea | None = None,
                  profile: str | None = None, home_on_connect: bool = False,
                  after_job: AfterJob = "none",
@@ -59,10 +62,10 @@ class Plotter:
         self.configured_area = work_area
         self.profile = profile  # the board profile configured for it (None: the default)
         self.home_on_connect = home_on_connect
-        self.on_ready: Callable[[Plotter], None] = lambda _: None
-        self.on_job: Report = lambda _job, _save: None
-        self.runner = Runner(name, link, jobs_dir, self._job_changed, self._job_finished,
+        self.runner = Runner(name, link, jobs_dir, lifecycle, self._free,
                              after_job=after_job, park=park, pens=pens)  # fmt: skip
+        self._tracing: str | None = None  # a frame trace under way
+        self._was_free = False
         self._task: asyncio.Task[None] | None = None
         self._homing: asyncio.Task[None] | None = None
         self._unsubscribe: Callable[[], None] | None = None
@@ -128,8 +131,8 @@ class Plotter:
         """Why no job can start on this plotter now, or None when one can."""
         if self.job is not None:
             return f"{self.name} runs job {self.job.id} ({self.job.name})"
-        if self.runner.busy:
-            return self.runner.busy
+        if busy := self.runner.busy or self._tracing:
+            return busy
         state = self.state
         if state == "Disconnected":
             return f"{self.name} is not connected; check the cable or power"
@@ -226,23 +229,23 @@ class Plotter:
         bounds = job.bounds
         if bounds is None:
             raise Refused(409, f"job {job.id} has no bounds to trace")
-        if self.runner.busy:
-            raise Refused(409, self.runner.busy)
+        if busy := self.runner.busy or self._tracing:
+            raise Refused(409, busy)
         if self.state != READY_STATE:
             raise Refused(409, self.not_ready() or f"{self.name} is {self.state}")
         corners = [(bounds.min_x, bounds.min_y), (bounds.max_x, bounds.min_y),
                    (bounds.max_x, bounds.max_y), (bounds.min_x, bounds.max_y),
                    (bounds.min_x, bounds.min_y)]  # fmt: skip
         lines = ["M5", *(f"G0 X{x:.3f} Y{y:.3f}" for x, y in corners), "G4 P0"]
-        self.runner.busy = f"{self.name} traces the frame of job {job.id}"
+        self._tracing = f"{self.name} traces the frame of job {job.id}"
+        self._free()
         log.info("%s: tracing the frame of job %s", self.name, job.id)
         try:
             for line in lines:  # G4 P0 is answered once the carriage has stopped
                 await self.send("trace the frame", line, wait=120)
         finally:
-            self.runner.busy = None
-            if self.state == READY_STATE:
-                self.on_ready(self)
+            self._tracing = None
+            self._free()
 
     async def jog(self, dx: float, dy: float, feed: float) -> list[str]:
         if self.job is not None:
@@ -328,8 +331,7 @@ class Plotter:
         if event.kind == "status" and event.status is not None:
             self.runner.on_status(event.status)
             self._send_machine()
-            if event.status.state == READY_STATE and self.job is None:
-                self.on_ready(self)
+            self._free()
         elif event.kind == "log":
             self._on_log(event.direction or "rx", event.line or "")
         elif event.kind == "alarm":
@@ -341,11 +343,12 @@ class Plotter:
             if self.home_on_connect and self.job is None:
                 self._homing = asyncio.create_task(self._home(time.time()),
                                                    name=f"home-{self.name}")  # fmt: skip
-            self.on_ready(self)
+            self._free()
         elif event.kind == "disconnected":
             log.warning("%s disconnected: %s", self.name, event.message)
             self.runner.lost()
             self._send_machine(force=True)
+            self._free()
 
     async def _home(self, since: float) -> None:
         """`--home-on-connect`: home a plotter that came up in Alarm (waiting jobs follow)."""
@@ -378,11 +381,12 @@ class Plotter:
         self.events.publish({"type": "log", "plotter": self.name, "direction": direction,
                              "line": line})  # fmt: skip
 
-    # ---- the runner's reports --------------------------------------------------------
+    # ---- free to take a job ------------------------------------------------------------
 
-    def _job_changed(self, job: Job, save: bool) -> None:
-        self.on_job(job, save)
-
-    def _job_finished(self, job: Job) -> None:
-        if self.state == READY_STATE:
-            self.on_ready(self)
+    def _free(self) -> None:
+        """Publish `{"type": "plotter", "plotter", "free"}` when whether the plotter can take
+        a job now changes (the queue dispatches waiting jobs on `free`)."""
+        free = self.not_ready() is None
+        if free != self._was_free:
+            self._was_free = free
+            self.events.publish({"type": "plotter", "plotter": self.name, "free": free})
