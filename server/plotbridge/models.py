@@ -35,6 +35,12 @@ class LoginBody(Strict):
     link: str | None = Field(None, max_length=256)
 
 
+class DeclineBody(Strict):
+    """Why an upload is declined: its sender sees it."""
+
+    reason: str = Field(min_length=1, max_length=500)
+
+
 class PenBody(Strict):
     down: bool
 

@@ -47,19 +47,29 @@ def test_submitter_operator_viewer_and_a_revoked_key(server, plotter):
     keys = {role: cli_key(data, f"{role}-1", role) for role in ("submitter", "operator", "viewer")}
     submitter, operator, viewer = (as_key(server, keys[r]) for r in keys)
     with submitter, operator, viewer:
-        # a submitter uploads; reads no settings; cancels no one else's job
-        job = submitter.post("/api/jobs", files={"file": ("a.gcode", drawing(circles=0))}).json()
-        assert job["owner"] == "key submitter-1"
+        # a submitter uploads and asks to start: it waits for approval; reads no settings,
+        # cancels no one else's job
+        server.home()
+        files = {"file": ("a.gcode", drawing(circles=0))}
+        job = submitter.post("/api/jobs", files=files, data={"start": "true"}).json()
+        assert job["state"] == "awaiting_approval" and job["owner"] == "key submitter-1"
         assert submitter.get("/api/machine/settings").status_code == 403
         others = server.submit(drawing(circles=0), start=False)
         assert submitter.post(f"/api/jobs/{others['id']}/cancel").status_code == 403
         assert [j["id"] for j in submitter.get("/api/jobs").json()] == [job["id"]]
-        # an operator plots it: the trace is the drawing
-        server.home()
+        # an operator approves it: it plots, and the trace is the drawing
         plotter.clear()
-        assert operator.post(f"/api/jobs/{job['id']}/start").status_code == 200
+        approved = operator.post(f"/api/jobs/{job['id']}/approve")
+        assert approved.status_code == 200, approved.text
         assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
         assert_same_drawing(server.preview(job["id"])["strokes"], plotter.trace()["strokes"])
+        # another is declined: its sender sees why
+        refused = submitter.post("/api/jobs", files=files).json()
+        reason = "please use the A5 paper"
+        assert operator.post(f"/api/jobs/{refused['id']}/decline",
+                             json={"reason": reason}).status_code == 200  # fmt: skip
+        seen = submitter.get(f"/api/jobs/{refused['id']}").json()
+        assert seen["state"] == "cancelled" and seen["approval"]["reason"] == reason
         # a viewer stops a running job within the usual bound
         running = operator.post("/api/jobs", files={"file": ("b.gcode", drawing(circles=6))}).json()
         assert operator.post(f"/api/jobs/{running['id']}/start").status_code == 200
@@ -79,10 +89,12 @@ def test_submitter_operator_viewer_and_a_revoked_key(server, plotter):
                 while time.monotonic() < deadline:
                     ws.recv(5)
             assert closed.value.rcvd is not None and closed.value.rcvd.code == 4401
-    log = audit(server, 6)
+    log = audit(server, 8)
     steps = {(entry["who"], entry["action"], entry["target"]) for entry in log}
     assert ("key submitter-1", "POST /api/jobs", None) in steps
-    assert ("key operator-1", "POST /api/jobs/{job_id}/start", job["id"]) in steps
+    assert ("key operator-1", "POST /api/jobs/{job_id}/approve", job["id"]) in steps
+    assert ("key operator-1", "POST /api/jobs/{job_id}/decline", refused["id"]) in steps
+    assert ("key operator-1", "POST /api/jobs/{job_id}/start", running["id"]) in steps
     assert ("key submitter-1", "POST /api/jobs/{job_id}/cancel", others["id"]) not in steps
     stop = next(e for e in log if e["action"] == "POST /api/machine/estop")
     assert stop["who"] == "key viewer-1" and stop["detail"]["page"] == "page-9"

@@ -180,3 +180,36 @@ def test_sessions_outlive_a_restart_and_old_sessions_move_into_the_store(tmp_pat
     with TestClient(app) as client:
         again = {"cookie": f"plotbridge_session={session}"}
         assert client.get("/api/me", headers=again).status_code == 200
+
+
+def test_a_submitters_upload_waits_for_approval_and_a_decline_says_why(app_client):
+    app, client, _ = app_client
+    keys = keys_per_role(app)
+    sub, op = bearer(keys["submitter"]), bearer(keys["operator"])
+    files = {"file": ("a.gcode", "G1 X1 Y1\n")}
+    first = client.post("/api/jobs", files=files, data={"start": "true"}, headers=sub).json()
+    assert first["state"] == "awaiting_approval" and first["owner"] == "key submitter-key"
+    assert first["approval"] == {"start": True, "decision": None}
+    assert client.get(f"/api/jobs/{first['id']}", headers=sub).json()["actions"] == ["cancel"]
+    assert client.get(f"/api/jobs/{first['id']}", headers=op).json()["actions"] == [
+        "cancel", "approve", "decline"]
+    assert client.post(f"/api/jobs/{first['id']}/approve", headers=sub).status_code == 403
+    approved = client.post(f"/api/jobs/{first['id']}/approve", headers=op).json()
+    assert approved["state"] in ("running", "waiting")  # its sender asked to start it
+    assert approved["approval"]["decision"] == "approved"
+    assert approved["approval"]["by"] == "key operator-key"
+    second = client.post("/api/jobs", files=files, headers=sub).json()
+    assert client.post(f"/api/jobs/{second['id']}/decline", headers=op,
+                       json={}).status_code == 422  # a reason is needed  # fmt: skip
+    declined = client.post(f"/api/jobs/{second['id']}/decline", headers=op,
+                           json={"reason": "too big for the A4 paper"}).json()  # fmt: skip
+    seen = client.get(f"/api/jobs/{second['id']}", headers=sub).json()
+    assert declined["state"] == seen["state"] == "cancelled"
+    assert seen["approval"]["reason"] == "too big for the A4 paper"
+    assert "too big for the A4 paper" in seen["error"]
+    assert client.post(f"/api/jobs/{second['id']}/approve", headers=op).status_code == 409
+    # the setting: no upload waits, or every upload waits
+    client.put("/api/settings/approval", json={"mode": "none"}, headers=bearer(TOKEN))
+    assert client.post("/api/jobs", files=files, headers=sub).json()["state"] == "queued"
+    client.put("/api/settings/approval", json={"mode": "all"}, headers=bearer(TOKEN))
+    assert client.post("/api/jobs", files=files, headers=op).json()["state"] == "awaiting_approval"

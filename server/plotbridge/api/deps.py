@@ -18,6 +18,7 @@ from plotbridge.jobs.actions import JobActions
 from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
 from plotbridge.people import Access, Identity
+from plotbridge.people.actor import ACTOR
 from plotbridge.queue import JobQueue
 from plotbridge.ws import Hub
 
@@ -70,12 +71,16 @@ async def authorize(conn: HTTPConnection) -> AsyncIterator[Identity | None]:
         whose = " on their own jobs" if owner_rule and identity.role >= need else ""
         raise HTTPException(403, f"{identity.who} is a {identity.role.name}: {method} "
                                  f"{template} needs {need.name}{whose}")  # fmt: skip
+    ACTOR.set(identity.who)
     if method in ("GET", "WS"):
         yield identity
         return
     access = components_of(conn).access
     detail: dict[str, Any] = {"page": page_id(conn.headers.get(PAGE_HEADER))}
-    target = "/".join(str(v) for v in conn.path_params.values()) or None
+    params = dict(conn.path_params)
+    action = params.pop("action", None)  # the job action route: named by its action
+    what = f"{method} {template.replace('{action}', str(action))}"
+    target = "/".join(str(v) for v in params.values()) or None
     try:
         yield identity
     except Exception as exc:
@@ -83,7 +88,7 @@ async def authorize(conn: HTTPConnection) -> AsyncIterator[Identity | None]:
         raise
     finally:
         detail.update(getattr(conn.state, "audit", None) or {})
-        access.audit(identity, f"{method} {template}", target,
+        access.audit(identity, what, target,
                      {k: v for k, v in detail.items() if v is not None})
 
 

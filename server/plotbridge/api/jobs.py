@@ -14,6 +14,7 @@ from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
 from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, upload_openapi
 from plotbridge.pens.model import parse_layer_pens
+from plotbridge.people.approval import needs_approval
 from plotbridge.people.views import job_view, jobs_view
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
@@ -24,9 +25,10 @@ Target = Annotated[
 
 
 @router.get("/jobs", response_model=list[Job])
-async def list_jobs(c: Parts, who: Who) -> list[dict[str, Any]]:
+async def list_jobs(c: Parts, who: Who) -> JSONResponse:
+    """As this person sees them (people/views.py: a submitter's own; `actions` theirs)."""
     assert who is not None
-    return jobs_view(who, c.queue.list())
+    return JSONResponse(jobs_view(who, c.queue.list()))
 
 
 @router.post("/jobs", status_code=201, response_model=Job, openapi_extra=upload_openapi())
@@ -60,17 +62,20 @@ async def upload(request: Request, c: Parts, who: Who) -> Any:
             kind, source = "file", path
             filename = filename or params.get("filename") or params.get("name") or "upload"
         name = (params.get("name") or Path(filename).name or "untitled")[:200]
+        approval = ({"start": start, "decision": None}
+                    if needs_approval(c.access.approval_mode, who.role) else None)  # fmt: skip
         options["name"] = name
         job = await c.queue.create(kind=kind, source=source, filename=filename, name=name,
                                    options=options, placement=placement,
                                    target=params.get("plotter") or None,
-                                   after=after, pens=pens, owner=who.who)  # fmt: skip
+                                   after=after, pens=pens, owner=who.who,
+                                   approval=approval)  # fmt: skip
     except UploadRefused as exc:
         return upload_error(exc.status, exc.message)
     finally:
         if path is not None:
             path.unlink(missing_ok=True)
-    request.state.audit = {"job": job.id, "name": name}
+    request.state.audit = {"job": job.id, "name": name, "awaiting_approval": bool(approval)}
     answer = job.public()
     if start and job.state == "queued":
         try:
@@ -81,9 +86,9 @@ async def upload(request: Request, c: Parts, who: Who) -> Any:
 
 
 @router.get("/jobs/{job_id}", response_model=Job)
-async def get_job(job_id: str, c: Parts, who: Who) -> dict[str, Any]:
+async def get_job(job_id: str, c: Parts, who: Who) -> JSONResponse:
     assert who is not None
-    return job_view(who, c.queue.get(job_id).public()) or {}
+    return JSONResponse(job_view(who, c.queue.get(job_id).public()))
 
 
 @router.patch("/jobs/{job_id}", response_model=Job)

@@ -16,6 +16,7 @@ from plotbridge.api.deps import Components, Who, page_id
 from plotbridge.errors import Refused
 from plotbridge.models import JogBody
 from plotbridge.people import Identity
+from plotbridge.people.actor import ACTOR
 from plotbridge.people.views import message_view
 from plotbridge.ws import Client
 
@@ -38,6 +39,7 @@ async def websocket(ws: WebSocket, who: Who) -> None:
     view = None if who.role == Role.admin else (lambda message: message_view(who, message))
     client = c.clients.add(ws, view)
     client.identity = who
+    ACTOR.set(who.who)  # the tasks below act as this person (an approval's "by")
     untrack = c.access.track(who, lambda: _revoked(ws, client))
     for message in c.queue.snapshot_messages():
         c.clients.send(client, message)
@@ -111,6 +113,7 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
             kind, body = parse_message(text)
             if kind == "estop":  # first thing, before anything else (never rate-limited)
                 c.clients.send(client, _estop(c, body))
+                _audit(c, client.identity, kind, body)
             elif not client.rate.take():
                 await ws.close(code=1008, reason="too many messages")
                 return
@@ -118,16 +121,34 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
                 c.clients.send(client, {"type": "error", "command": None, "detail": kind})
             elif (refused := refusal(c, client.identity, kind, body)) is not None:
                 c.clients.send(client, refused)
-            elif kind in AWAITING or (kind == "resume" and RESUME_WORDS & body.keys()):
-                try:
-                    waiting.put_nowait((kind, body))
-                except asyncio.QueueFull:
-                    c.clients.send(client, {"type": "error", "command": kind, "detail":
-                                            "too many commands waiting for the board"})
+                _audit(c, client.identity, kind, body, refused=403)
             else:
-                c.clients.send(client, await _command(c, kind, body))
+                _audit(c, client.identity, kind, body)
+                if kind in AWAITING or (kind == "resume" and RESUME_WORDS & body.keys()):
+                    try:
+                        waiting.put_nowait((kind, body))
+                    except asyncio.QueueFull:
+                        c.clients.send(client, {"type": "error", "command": kind, "detail":
+                                                "too many commands waiting for the board"})
+                else:
+                    c.clients.send(client, await _command(c, kind, body))
     finally:
         worker.cancel()
+
+
+AUDITED = frozenset({"estop", "pause", "resume", "command", "job_action"})  # not jog: chatty
+
+
+def _audit(c: Components, who: Identity, kind: Any, body: dict[str, Any] | None,
+           **more: Any) -> None:  # fmt: skip
+    """One audit entry for a message that changes something (never waits)."""
+    if kind in AUDITED:
+        body = body or {}
+        detail = {"action": body.get("action"), "plotter": body.get("plotter"),
+                  "page": page_id(body.get("page")), "line": body.get("line"), **more}
+        target = body.get("job") if isinstance(body.get("job"), str) else None
+        c.access.audit(who, f"WS {kind}", target, {k: v for k, v in detail.items()
+                                                   if v is not None})  # fmt: skip
 
 
 def _estop(c: Components, body: dict[str, Any] | None) -> dict[str, Any]:
