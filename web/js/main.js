@@ -13,6 +13,7 @@ import { bindControl, renderControl } from "./views/control.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
 import { bindPens, createPenActions, renderPens } from "./views/pens.js";
+import "./views/people.js"; // roles: hides what the role cannot do; approvals; people and keys
 import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { PICKABLE, bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
