@@ -348,8 +348,8 @@ def token_command(args: argparse.Namespace) -> int:
 
     path = args.token_file or args.data_dir.expanduser() / "token"
     try:
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
         if args.rotate:
-            path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
             write_private(path, new_token() + "\n")
             print(f"plotbridge: new token in {path}; every session of the token has ended",
                   flush=True)  # fmt: skip
