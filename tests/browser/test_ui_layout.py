@@ -12,7 +12,7 @@ from tests.fixtures.drawings import THREE_LAYERS, drawing
 
 pytestmark = pytest.mark.browser
 
-TABS = ["plot", "history", "control", "pens", "settings", "console"]
+TABS = ["plot", "history", "control", "pens", "settings", "console", "fleet"]
 PHONE = {"width": 390, "height": 844}
 DESKTOP = {"width": 1400, "height": 900}
 

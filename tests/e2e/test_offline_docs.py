@@ -17,7 +17,7 @@ BUNDLES = ("/docs/assets/swagger-ui-bundle.js", "/docs/assets/redoc.standalone.j
 VENDORED = "/docs/assets/"  # their stylesheet names namespaces inside data: URIs only
 EXTERNAL = re.compile(r"https?://", re.I)
 REFERENCES = (
-    re.compile(r"""\b(?:src|href|action)\s*=\s*["']([^"']+)["']""", re.I),  # HTML
+    re.compile(r"""\s(?:src|href|action)=["']([^"']+)["']""", re.I),  # HTML attributes
     re.compile(r"""url\(\s*["']?([^"')]+)["']?\s*\)""", re.I),  # CSS
     re.compile(r"""@import\s+["']([^"']+)["']"""),  # CSS
     # ES modules: `import ... from "x"`, `export ... from "x"`, `import "x"`, `import("x")`

@@ -133,7 +133,7 @@ def test_a_pen_past_its_reink_interval_pauses_at_a_stroke_end(server, plotter):
     assert reink["state"] == "pen_change", reink
     prompt = reink["pen_change"]
     assert prompt["layer"] == 2 and prompt["pen"] == "red marker"
-    assert prompt["message"].startswith("Re-ink pen 'red marker': 0.1 m drawn")
+    assert prompt["message"].startswith("Re-ink pen 'red marker': 0.1")
     assert_parked(plotter)
     assert len(plotter.trace()["strokes"]) == 3  # the outline and two whole squares
 
