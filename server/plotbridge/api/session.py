@@ -41,7 +41,7 @@ async def login(body: LoginBody, c: Parts) -> Response:
     return response
 
 
-@router.get("/login")
+@router.get("/login", include_in_schema=False)  # a browser link, answered with a redirect
 async def login_link(c: Parts, token: str = "") -> Response:
     if not c.auth.check_token(token):  # a stale link: the login page says so
         return RedirectResponse("/?link=stale", status_code=303)
