@@ -137,20 +137,19 @@ class JobActions:
     def hold_plotter(self, name: str | None) -> Job | None:
         """Feed hold of the plotter's job, or of its machine when no job runs (a jog, a
         console move): the board lifts the pen while held."""
-        unit = self.queue.busy_plotter(name)
-        if unit.job is None:
-            unit.realtime(b"!")
-            return None
-        self.lifecycle.check(unit.job, "hold")
-        return unit.runner.pause()
+        return self._machine_or_job(name, b"!", "hold")
 
     def continue_plotter(self, name: str | None) -> Job | None:
+        return self._machine_or_job(name, b"~", "continue")
+
+    def _machine_or_job(self, name: str | None, byte: bytes, action: str) -> Job | None:
+        """The realtime byte to the machine when no job runs, else the job's own action."""
         unit = self.queue.busy_plotter(name)
         if unit.job is None:
-            unit.realtime(b"~")
+            unit.realtime(byte)
             return None
-        self.lifecycle.check(unit.job, "continue")
-        return unit.runner.resume()
+        self.lifecycle.check(unit.job, action)
+        return unit.runner.pause() if action == "hold" else unit.runner.resume()
 
     # ---- helpers ----------------------------------------------------------------------------
 
