@@ -340,7 +340,7 @@ async def serve(config: Config) -> int:
 
     from plotbridge import mdns
     from plotbridge.app import Board, create_app
-    from plotbridge.guard import connections
+    from plotbridge.guard import connections, wsingress
     from plotbridge.plotter.link import Link
     from plotbridge.plotter.plotter import WorkArea
     from plotbridge.virtual import VirtualPlotter
@@ -368,7 +368,8 @@ async def serve(config: Config) -> int:
         app = create_app(config, boards, token)
         settings = uvicorn.Config(
             app, host=config.host, port=config.port, log_level="warning", log_config=None,
-            ws="websockets-sansio", lifespan="on", access_log=False, ws_max_size=WS_MAX_BYTES,
+            ws=wsingress.MeteredWebSocket, ws_max_size=WS_MAX_BYTES, lifespan="on",
+            access_log=False,
             ws_per_message_deflate=False,  # a 64 KiB frame of one byte repeated comes in as 100
             # bytes and cost the loop its decompression; the compression of every event too
             http=connections.GuardedH11, h11_max_incomplete_event_size=connections.MAX_HEADER_BYTES,

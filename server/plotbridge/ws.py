@@ -2,7 +2,10 @@
 
 A message is serialized once and put on every client's queue without waiting;
 a client whose queue is full has fallen behind and is dropped, so a slow or dead
-client never delays the others, the link or an emergency stop.
+client never delays the others, the link or an emergency stop. The sends of one
+event to hundreds of clients are spread over loop passes (`SendPace`): each pass
+sends at most SENDS_PER_PASS, and what the selector reported in between (a stop's
+request) runs before the rest.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ log = logging.getLogger("plotbridge.ws")
 QUEUE_SIZE = 256
 MESSAGES_PER_S = 50  # from one client; the page sends a few per second at most (jogging)
 MESSAGE_BURST = 100
+SENDS_PER_PASS = 32  # WebSocket sends per event-loop pass (~40 us each)
 
 
 class RateLimit:
@@ -40,9 +44,31 @@ class RateLimit:
         return True
 
 
+class SendPace:
+    """How many sends this loop pass may still make. The first send of a pass schedules
+    the count's reset, which runs at the start of the next pass, before the sends that
+    waited for it and after nothing but what was already due."""
+
+    def __init__(self, per_pass: int = SENDS_PER_PASS) -> None:
+        self.per_pass = per_pass
+        self.used = 0
+
+    def take(self) -> bool:
+        if self.used == 0:
+            asyncio.get_running_loop().call_soon(self._reset)
+        if self.used >= self.per_pass:
+            return False
+        self.used += 1
+        return True
+
+    def _reset(self) -> None:
+        self.used = 0
+
+
 class Client:
-    def __init__(self, ws: WebSocket) -> None:
+    def __init__(self, ws: WebSocket, pace: SendPace) -> None:
         self.ws = ws
+        self.pace = pace
         self.queue: asyncio.Queue[str | None] = asyncio.Queue(QUEUE_SIZE)
         self.dropped = False
         self.task: asyncio.Task[None] | None = None
@@ -61,15 +87,18 @@ class Client:
             text = await self.queue.get()
             if text is None:
                 return
+            while not self.pace.take():  # noqa: ASYNC110 (waits for the next pass, not an event)
+                await asyncio.sleep(0)
             await self.ws.send_text(text)
 
 
 class Hub:
     def __init__(self) -> None:
         self.clients: set[Client] = set()
+        self.pace = SendPace()
 
     def add(self, ws: WebSocket) -> Client:
-        client = Client(ws)
+        client = Client(ws, self.pace)
         self.clients.add(client)
         return client
 

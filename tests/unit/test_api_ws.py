@@ -5,7 +5,7 @@ from __future__ import annotations
 import asyncio
 
 from plotbridge.guard.hosts import origin_allowed
-from plotbridge.ws import QUEUE_SIZE, Hub
+from plotbridge.ws import QUEUE_SIZE, SENDS_PER_PASS, Hub
 
 from tests.fixtures.waits import settle
 
@@ -49,3 +49,22 @@ def test_origin_check():
     assert not origin_allowed("null", "plot.local:8000")
     assert not origin_allowed("http://plot.local:8000", None)
 
+
+
+async def test_one_event_to_many_clients_is_sent_over_several_loop_passes():
+    """A loop pass sends at most SENDS_PER_PASS: a stop read meanwhile waits for no more."""
+    hub = Hub()
+    clients = [hub.add(ListSocket()) for _ in range(SENDS_PER_PASS * 3)]
+    for client in clients:
+        client.task = asyncio.create_task(client.pump())
+    hub.broadcast({"type": "machine"})
+    passes = 0
+    while sum(len(c.ws.sent) for c in clients) < len(clients):
+        before = sum(len(c.ws.sent) for c in clients)
+        await asyncio.sleep(0)
+        passes += 1
+        assert sum(len(c.ws.sent) for c in clients) - before <= SENDS_PER_PASS
+        assert passes < 100
+    assert passes >= 3
+    for client in clients:
+        client.task.cancel()

@@ -4,12 +4,15 @@
 from __future__ import annotations
 
 import json
+import socket
 
 import pytest
 from plotbridge.errors import Refused
-from plotbridge.guard.acceptor import may_be_stop
+from plotbridge.guard.acceptor import Acceptor, may_be_stop
 from plotbridge.guard.middleware import Checks
-from plotbridge.guard.stoplane import NEED_MORE, StopLane
+from plotbridge.guard.stoplane import LANE, NEED_MORE, StopLane
+
+from tests.fixtures.waits import settle
 
 TOKEN = "lane-test-token-0123456"
 
@@ -92,3 +95,35 @@ def test_the_acceptor_keeps_only_what_may_become_a_stop():
     assert not may_be_stop(b"GET /api/health HTTP/1.1\r\n")
     assert not may_be_stop(b"POST /api/jobs HTTP/1.1\r\n")
     assert not may_be_stop(b"X")
+
+
+async def test_a_stop_sent_with_its_connection_is_answered_by_the_accept_itself(lane):
+    """The acceptor acts on a whole stop that came with its connection: no transport,
+    no hand-over; any other request is handed over with its bytes still unread."""
+    listener = socket.socket()
+    listener.bind(("127.0.0.1", 0))
+    listener.listen(8)
+    listener.setblocking(False)
+    handed, abandoned = [], []
+    saved = (LANE.checks, LANE.stop)
+    LANE.bind(lane.checks, lane.stop)
+    acceptor = Acceptor(listener, lambda peer: True, lambda sock, peer: handed.append(sock),
+                        abandoned.append)  # fmt: skip
+    try:
+        with socket.create_connection(listener.getsockname()) as client:
+            client.sendall(head("/api/machine/estop", f"Authorization: Bearer {TOKEN}"))
+            await settle(lambda: abandoned, what="the stop's connection closed")
+            client.settimeout(5)
+            assert status(client.recv(4096))[0] == 202
+        assert lane.stops == [(None, False, "REST", None)] and handed == []
+        other = b"GET /api/health HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"
+        with socket.create_connection(listener.getsockname()) as client:
+            client.sendall(other)
+            await settle(lambda: handed, what="the request handed over")
+            handed[0].setblocking(True)
+            assert handed[0].recv(4096) == other
+            handed[0].close()
+        assert len(abandoned) == 1
+    finally:
+        acceptor.close()
+        LANE.bind(*saved)

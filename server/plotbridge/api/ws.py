@@ -64,8 +64,9 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
             if text is None:
                 text = (message.get("bytes") or b"").decode("utf-8", "replace")
             kind, body = parse_message(text)
-            if kind == "estop":  # first thing, before anything else (never rate-limited)
-                c.clients.send(client, _estop(c, body))
+            if kind == "estop":  # first thing, before anything else (never rate-limited);
+                # answered at once, ahead of the events queued for this client
+                await ws.send_text(json.dumps(_estop(c, body), separators=(",", ":")))
             elif not client.rate.take():
                 await ws.close(code=1008, reason="too many messages")
                 return

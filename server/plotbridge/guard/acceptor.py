@@ -4,7 +4,9 @@ queue at once, and one over the connection caps may still carry a stop.
 Replaces asyncio's own accept loop on uvicorn's listening sockets. asyncio accepts
 a burst, makes each connection a task, a transport and a protocol, and when
 accept() fails for want of a descriptor it stops listening for a second. Here:
-- a connection the census has room for is handed to uvicorn's protocol as before;
+- a connection the census has room for is handed to uvicorn's protocol as before,
+  unless what it sent with its connection is a whole stop: that is acted on and
+  answered at once;
 - any other is never given a transport: what it has sent is read at once (a
   stop's request is normally there already) and offered to the stop lane; a stop
   is acted on and answered in this same callback, anything else gets 503 and is
@@ -62,13 +64,16 @@ class _Waiting:
 
 class Acceptor:
     def __init__(self, listener: socket.socket, admit: Callable[[str], bool],
-                 hand_over: Callable[[socket.socket, str], Any]) -> None:  # fmt: skip
+                 hand_over: Callable[[socket.socket, str], Any],
+                 abandon: Callable[[str], None]) -> None:  # fmt: skip
         """`listener`: a listening socket (non-blocking); `admit(peer)`: whether the
         caps leave room for a connection from `peer` (counting it); `hand_over(sock,
-        peer)`: give an admitted connection to the HTTP protocol."""
+        peer)`: give an admitted connection to the HTTP protocol; `abandon(peer)`: an
+        admitted one closed before that."""
         self.listener = listener
         self.admit = admit
         self.hand_over = hand_over
+        self.abandon = abandon
         self.loop = asyncio.get_running_loop()
         self.waiting: dict[int, _Waiting] = {}  # by descriptor, oldest first
         self.refused = 0
@@ -99,9 +104,31 @@ class Acceptor:
             sock.setblocking(False)
             peer = str(address[0])
             if self.admit(peer):
-                self.hand_over(sock, peer)
+                if self._stopped_at_once(sock):
+                    self.abandon(peer)
+                else:
+                    self.hand_over(sock, peer)
             else:
                 self._over_caps(sock, peer)
+
+    def _stopped_at_once(self, sock: socket.socket) -> bool:
+        """A stop whose whole request came with its connection (a client sends it as it
+        connects) is acted on and answered here, one loop pass before a transport
+        could read it; anything else is left unread for the HTTP protocol."""
+        try:
+            data = sock.recv(HEAD_MAX + BODY_MAX, socket.MSG_PEEK)
+        except OSError:
+            return False
+        if not may_be_stop(data[:256]) or b"\r\n\r\n" not in data:
+            return False
+        answer = LANE.answer(data)
+        if not answer:  # not a stop, not allowed, or its body is still on its way
+            return False
+        with contextlib.suppress(OSError):
+            sock.recv(len(data))  # read, so that closing sends the answer, not a reset
+            sock.send(answer)
+        sock.close()
+        return True
 
     def _accept_with_spare(self) -> None:
         """Out of descriptors: the spare one lets the next connection be answered."""

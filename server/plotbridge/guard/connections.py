@@ -154,7 +154,8 @@ class GuardedServer(uvicorn.Server):
                 listener = socket.socket(fileno=os.dup(wrapped.fileno()))
                 listener.setblocking(False)
                 listener.listen(LISTEN_QUEUE)
-                self.acceptors.append(Acceptor(listener, CENSUS.reserve, self._hand_over))
+                self.acceptors.append(Acceptor(listener, CENSUS.reserve, self._hand_over,
+                                               CENSUS.abandon))
 
     def _hand_over(self, sock: socket.socket, peer: str) -> None:
         loop = asyncio.get_running_loop()

@@ -10,19 +10,22 @@ Timeline = Sequence[Sequence[float]]
 """(line, seconds elapsed when it ends) samples, lines rising (docs/INTERNALS.md)."""
 
 
+def _line(sample: Sequence[float]) -> int:
+    return int(sample[0])
+
+
 def elapsed(timeline: Timeline, line: int) -> float:
     """Seconds from the start until program line `line` ends, interpolating the samples
     (0 without a timeline)."""
     if not timeline:
         return 0.0
-    lines = [int(s[0]) for s in timeline]
-    k = bisect_left(lines, line)
-    if k < len(lines) and lines[k] == line:
+    k = bisect_left(timeline, line, key=_line)  # per status report: no copy of the samples
+    if k < len(timeline) and _line(timeline[k]) == line:
         return float(timeline[k][1])
     if k == 0:
         l1, t1 = timeline[0]
         return float(t1) * max(line, 0) / l1 if l1 > 0 else 0.0
-    if k >= len(lines):
+    if k >= len(timeline):
         return float(timeline[-1][1])
     (l0, t0), (l1, t1) = timeline[k - 1], timeline[k]
     return t0 + (t1 - t0) * (line - l0) / (l1 - l0)

@@ -25,6 +25,7 @@ from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.model import AfterJob, Job
 from plotbridge.pens import PenLibrary
 from plotbridge.plotter.board import MOVING_STATES, READY_STATE
+from plotbridge.plotter.consolelog import ConsoleLog
 from plotbridge.plotter.link import CommandError, Link, LinkDown, LinkEvent
 from plotbridge.plotter.runner import Runner
 from plotbridge.virtual import VirtualPlotter
@@ -72,6 +73,7 @@ class Plotter:
         self.configured_area = work_area
         self.profile = profile  # the board profile configured for it (None: the default)
         self.home_on_connect = home_on_connect
+        self.console_log = ConsoleLog(name, events.publish)
         self.runner = Runner(name, link, jobs_dir, lifecycle, self._free,
                              after_job=after_job, park=park, pens=pens)  # fmt: skip
         self._tracing: str | None = None  # a frame trace under way
@@ -276,8 +278,7 @@ class Plotter:
             except LinkDown as exc:
                 raise Refused(409, "the plotter is not connected") from exc
             said = f"{byte} ({CONSOLE_REALTIME[byte]}: sent as a realtime byte)"
-            self.events.publish({"type": "log", "plotter": self.name, "direction": "tx",
-                                 "line": said})  # fmt: skip
+            self.console_log.add("tx", said)
             return [said]
         if self.job is not None:
             raise Refused(409, f"cannot send commands while job {self.job.id} is running")
@@ -393,8 +394,7 @@ class Plotter:
             return
         if self.job is not None and (direction == "tx" or line == "ok"):
             return  # a streaming job would flood the consoles; errors and messages still go
-        self.events.publish({"type": "log", "plotter": self.name, "direction": direction,
-                             "line": line})  # fmt: skip
+        self.console_log.add(direction, line)
 
     # ---- free to take a job ------------------------------------------------------------
 

@@ -8,9 +8,13 @@ import { asList } from "./core.js";
 export function consoleActions({ store, socket, core, all }) {
   const s = store.state;
   return {
-    appendLog(direction, line) {
+    appendLog(lines) {
       store.update((st) => {
-        st.log.push({ seq: ++st.logSeq, direction, line: String(line) });
+        for (const entry of lines) {
+          if (!entry || typeof entry !== "object") continue;
+          const direction = entry.direction === "tx" ? "tx" : "rx";
+          st.log.push({ seq: ++st.logSeq, direction, line: String(entry.line ?? "") });
+        }
         if (st.log.length > LOG_LIMIT) st.log.splice(0, st.log.length - LOG_LIMIT);
       });
     },
@@ -20,10 +24,10 @@ export function consoleActions({ store, socket, core, all }) {
         st.commandError = "";
       });
       if (socket.send({ type: "command", line, plotter: s.plotter, confirm })) return; // the log shows tx and the answer
-      all.appendLog("tx", line);
+      all.appendLog([{ direction: "tx", line }]);
       try {
         const data = await api.post(core.machinePath("command"), { line, confirm });
-        for (const r of asList(data, "responses")) all.appendLog("rx", r);
+        all.appendLog(asList(data, "responses").map((r) => ({ direction: "rx", line: r })));
       } catch (err) {
         if (err.status === 401) return;
         if (err.status === 428 && !confirm) {
