@@ -379,6 +379,34 @@ class Plotbridge:
                 raise TimeoutError(f"job {job_id} still {job['state']} after {timeout:g} s")
             time.sleep(poll)
 
+    def wait_fleet(
+        self,
+        fleet_id: str,
+        progress: Callable[[Job], None] | None = None,
+        *,
+        timeout: float | None = None,
+        poll: float = 0.5,
+    ) -> Job:
+        """Block until a fleet job (`upload(fleet=True)`'s `fleet.id`) has settled on the
+        bridge that took it; its record from `GET /api/fleet` (`job_state`, `bridge`,
+        `plotter`, `progress`). `progress(record)` is called on every poll, with `state`
+        set to the job's state there (or where the fleet has it: offered, granted)."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            record = next((j for j in self.fleet().get("jobs", []) if j.get("id") == fleet_id),
+                          None)  # fmt: skip
+            if record is None:
+                raise PlotbridgeError(f"fleet job {fleet_id} is not known to this bridge")
+            shown = {**record, "state": record["job_state"] if record["state"] == "committed"
+                     else record["state"]}  # fmt: skip
+            if progress is not None:
+                progress(shown)
+            if record.get("settled"):
+                return shown
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"fleet job {fleet_id} not settled after {timeout:g} s")
+            time.sleep(poll)
+
     # ---- events ------------------------------------------------------------------------
 
     def events_url(self) -> str:

@@ -67,6 +67,8 @@ def send(pb: Plotbridge, args: argparse.Namespace) -> dict[str, Any]:
         job = pb.start(job["id"], layers=numbers)
     if args.wait:
         with job_progress(job["name"], quiet=args.json) as update:
+            if args.fleet:
+                return {**job, "fleet": pb.wait_fleet(job["fleet"]["id"], update, poll=args.poll)}
             job = pb.wait(job["id"], update, poll=args.poll)
     return job
 
@@ -80,23 +82,27 @@ def run(args: argparse.Namespace) -> int:
         print("plotbridge submit: --layers with numbers picks the layers a start plots: "
               "add --start", file=sys.stderr)  # fmt: skip
         return 2
-    if args.fleet and (args.start or args.wait or args.plotter):
+    if args.fleet and (args.start or args.plotter):
         print("plotbridge submit: --fleet lets the fleet pick the plotter and start it: "
-              "drop --start, --wait and --plotter", file=sys.stderr)  # fmt: skip
+              "drop --start and --plotter", file=sys.stderr)  # fmt: skip
         return 2
     try:
         with connect(args) as pb:
             job = send(pb, args)
     except PlotbridgeError as exc:
         return fail("submit", exc)
+    placed = job["fleet"] if args.fleet and args.wait else None  # where the fleet ran it
     if args.json:
         print(json.dumps(job, indent=2))
+    elif placed is not None:
+        print(f"job {job['id']} '{job['name']}': {placed['state']} on "
+              f"{placed['bridge']}/{placed['plotter']} (the fleet's job {placed['id']})")
     else:
         estimate = job.get("estimate_s") or 0
         where = " in the fleet's queue" if job.get("fleet") else ""
         print(f"job {job['id']} '{job['name']}': {job['state']}{where} "
               f"(estimate {estimate:.0f} s)")
-    if args.wait and job["state"] != "done":
+    if args.wait and (placed or job)["state"] != "done":
         if job.get("error"):
             print(f"plotbridge submit: {job['error']}", file=sys.stderr)
         return 1

@@ -81,19 +81,17 @@ def test_fleet_job_plots_once_on_the_free_bridge(two_bridges):
     a.wait_progress(busy["id"], 20, timeout=60)
     path = a.data_dir.parent / "fleet-once.gcode"
     path.write_text(drawing(circles=2))
-    submitted = run_cli(a, "submit", str(path), "--name", "fleet-once", "--fleet", "--json")
+    submitted = run_cli(a, "submit", str(path), "--name", "fleet-once", "--fleet", "--wait",
+                        "--json")  # follows the fleet job until it has settled where it ran
     assert submitted.returncode == 0, submitted.stderr
-    offered = json.loads(submitted.stdout)
-    assert offered["fleet"]["state"] == "offered"
-    assert not jobs_named(a, "fleet-once"), "the fleet holds the job, not A's queue"
-    wait_until(lambda: jobs_named(b, "fleet-once"), lambda jobs: jobs and all(
-        j["state"] == "done" for j in jobs), 60, "the fleet job done on B")
-    assert len(jobs_named(b, "fleet-once")) == 1
-    assert not jobs_named(a, "fleet-once")
-    placed = wait_until(lambda: fleet_job(a, offered["id"]),
-                        lambda j: j["job_state"] == "done", 10, "A's record of where it ran")
-    assert placed["bridge"] == "B" and placed["state"] == "committed"
-    assert placed["progress"] == 1.0
+    answer = json.loads(submitted.stdout)
+    assert answer["fleet"]["state"] == "done" and answer["fleet"]["bridge"] == "B"
+    done = jobs_named(b, "fleet-once")
+    assert len(done) == 1 and done[0]["state"] == "done", done
+    assert not jobs_named(a, "fleet-once"), "the fleet held the job, not A's queue"
+    placed = fleet_job(a, answer["fleet"]["id"])
+    assert placed["bridge"] == "B" and placed["state"] == "committed" and placed["settled"]
+    assert placed["job_state"] == "done" and placed["progress"] == 1.0
 
 
 def test_bridge_killed_before_starting_gives_the_job_back(two_bridges, broker):

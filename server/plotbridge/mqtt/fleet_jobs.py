@@ -267,8 +267,10 @@ class FleetOrigin(Party):
     # ---- views ---------------------------------------------------------------------------
 
     def public(self, record: dict[str, Any]) -> dict[str, Any]:
+        """`settled`: placed, and its job there has come to rest (the lifecycle's word)."""
         keep = ("id", "name", "state", "bridge", "plotter", "job_state", "progress")
-        return {key: record.get(key) for key in keep}
+        settled = record["state"] == "committed" and record.get("job_state") in SETTLED
+        return {**{key: record.get(key) for key in keep}, "settled": settled}
 
     def describe(self) -> list[dict[str, Any]]:
         ordered = sorted(self.records.values(), key=lambda r: r["created_at"])
