@@ -1,5 +1,6 @@
 """The fleet tab in Chromium: two bridges on one Mosquitto; A's page lists both bridges'
-plotters, its STOP stops B's job through the broker, STOP EVERYTHING stops every one."""
+plotters, its STOP stops B's job through the broker, STOP EVERYTHING stops every one; the
+view comes over the WebSocket, not by polling."""
 
 from __future__ import annotations
 
@@ -20,6 +21,9 @@ def test_fleet_tab_lists_every_plotter_and_stops_them(desktop, broker, tmp_path)
         for server in (a, b):
             server.home()
         login(page, a.url, a.token)
+        reads: list[str] = []
+        page.on("request", lambda r: reads.append(r.url) if r.method == "GET" and
+                r.url.endswith("/api/fleet") else None)  # fmt: skip
         page.click('.tab[data-tab="fleet"]')
         card = '#fleet-bridges .fleet-bridge[data-key="{}"] .fleet-plotter[data-key="plotter1"]'
         for bridge in ("A", "B"):
@@ -37,6 +41,7 @@ def test_fleet_tab_lists_every_plotter_and_stops_them(desktop, broker, tmp_path)
         a.wait_job(on_a["id"], ("stopped",), 20)
         b.wait_job(on_b["id"], ("stopped",), 20)
         page.wait_for_selector(card.format("B") + ' .badge[data-state="Alarm"]', timeout=20_000)
+        assert len(reads) <= 1, reads  # at most a first view; "fleet" messages keep it fresh
     finally:
         a.close()
         b.close()

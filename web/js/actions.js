@@ -3,6 +3,7 @@
 
 import { consoleActions } from "./actions/console.js";
 import { SELECTED_KEY, createCore } from "./actions/core.js";
+import { fleetActions } from "./actions/fleet.js";
 import { jobActions } from "./actions/jobs.js";
 import { machineActions } from "./actions/machine.js";
 import { sessionActions } from "./actions/session.js";
@@ -32,6 +33,7 @@ export function createActions(store, socket, estop) {
   const ctx = { store, socket, estop, core: createCore(store), all };
   Object.assign(all,
     sessionActions(ctx), jobActions(ctx), machineActions(ctx), settingsActions(ctx), consoleActions(ctx),
+    fleetActions(ctx),
     { loadPens: () => loadPens(store), pens: createPenActions(store) });
   return all;
 }

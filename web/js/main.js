@@ -125,7 +125,7 @@ function render(state) {
   else if (state.tab === "control") renderControl(state);
   else if (state.tab === "pens") renderPens(state);
   else if (state.tab === "settings") renderSettings(state);
-  else if (state.tab === "fleet") renderFleet();
+  else if (state.tab === "fleet") renderFleet(state, actions);
   else renderConsole(state);
 }
 
@@ -229,7 +229,7 @@ function bind() {
   bindSettings(actions);
   bindConsole(actions);
   bindResume(actions);
-  bindFleet(() => store.state.tab === "fleet");
+  bindFleet(actions);
 }
 
 async function start() {

@@ -120,6 +120,8 @@ export function reduce(state, msg) {
       return onStopped(state, msg);
     case "pens":
       return Array.isArray(msg.pens) ? { ...state, pens: { ...state.pens, list: msg.pens } } : state;
+    case "fleet":
+      return msg.fleet && typeof msg.fleet === "object" ? { ...state, fleet: msg.fleet } : state;
     default:
       return state;
   }

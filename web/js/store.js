@@ -36,6 +36,8 @@ export function initialState() {
     jog: { step: 10, feed: 3000 },
     settings: { list: null, edits: {}, busy: false, message: "", error: "" },
     pens: { list: [], form: null, busy: false, error: "", message: "" },  // views/pens.js
+    fleet: null,              // GET /api/fleet's answer, kept by "fleet" messages
+    fleetError: "",
     log: [],                  // { seq, direction, line }
     logSeq: 0,
     estop: null,              // { phase: "sending"|"sent"|"failed", at, acked, via, remote, scope, names }

@@ -77,10 +77,17 @@ class MqttService:
         await self.connection.close()
 
     async def _tick(self) -> None:
+        """Each second: fleet jobs granted and not taken in time, and the fleet view
+        sent to the pages (`{"type": "fleet"}`, when it changed: no page polls it)."""
+        shown = None
         while True:
             await asyncio.sleep(1.0)
             self.origin.poll()
             self.taker.poll()
+            view = self.describe()
+            if view != shown:
+                shown = view
+                self.events.publish({"type": "fleet", "fleet": view})
 
     def _on_event(self, message: dict[str, Any]) -> None:
         self.telemetry.on_event(message)

@@ -117,7 +117,8 @@ export function sessionActions({ store, socket, estop, core, all }) {
       else if (["jobs", "job_deleted", "queue", "stopped", "pens"].includes(msg.type)) {
         core.apply(msg);
         core.ensurePreview();
-      } else if (msg.type === "log") all.appendLog(Array.isArray(msg.lines) ? msg.lines : []);
+      } else if (msg.type === "fleet") core.apply(msg);
+      else if (msg.type === "log") all.appendLog(Array.isArray(msg.lines) ? msg.lines : []);
       else if (msg.type === "ack" && msg.command === "estop") estop.onSocketAck();
       else if (msg.type === "error" && msg.command === "command" && msg.confirm) {
         all.confirmCommand(msg.line, msg.detail);

@@ -1,20 +1,15 @@
-// The fleet tab: every plotter of every bridge on the MQTT broker (GET /api/fleet, polled
-// while the tab is shown), a STOP per plotter (through the broker for another bridge's),
-// STOP EVERYTHING, a link to each bridge's own page, and where this bridge's fleet jobs run.
-// Self-contained: it builds its panel inside #tab-fleet and keeps its own data.
+// The fleet tab: every plotter of every bridge on the MQTT broker (the store's `fleet`,
+// which "fleet" messages keep fresh), a STOP per plotter (through the broker for another
+// bridge's), STOP EVERYTHING, a link to each bridge's own page, and where this bridge's
+// fleet jobs run. Builds its panel inside #tab-fleet; renders from the state.
 
-import { api } from "../api.js";
 import { $, el, setHidden, setText, syncList } from "../dom.js";
 
-const POLL_MS = 1000;
+const POLL_MS = 2000; // only while the socket is down
 
-let shown = () => false;
-let fleet = null;
-let error = "";
-let timer = null;
+let pending = false; // a read of /api/fleet is on its way
 
-export function bindFleet(isShown) {
-  shown = isShown;
+export function bindFleet(actions) {
   const panel = $("#tab-fleet");
   panel.append(
     el("div", { className: "card fleet-head" },
@@ -33,49 +28,29 @@ export function bindFleet(isShown) {
     if (!button) return;
     if (event.type === "pointerdown") pointerAt = performance.now();
     else if (performance.now() - pointerAt < 1000) return;
-    if (button.dataset.verb === "stop-everything") stop("/api/fleet/estop", {});
+    if (button.dataset.verb === "stop-everything") actions.fleetStop("/api/fleet/estop", {});
     else if (button.dataset.verb === "fleet-stop") {
-      stop("/api/fleet/stop", { bridge: button.dataset.bridge, plotter: button.dataset.plotter });
+      actions.fleetStop("/api/fleet/stop", { bridge: button.dataset.bridge, plotter: button.dataset.plotter });
     }
   };
   panel.addEventListener("pointerdown", act);
   panel.addEventListener("click", act);
 }
 
-async function stop(path, body) {
-  try {
-    await api.post(path, body);
-    error = "";
-  } catch (err) {
-    error = `STOP: ${err.message}`;
+/** Called by the page's render while the fleet tab is shown: the view comes from the
+ * socket; REST reads it at once when there is none yet, and every POLL_MS without a socket. */
+export function renderFleet(state, actions) {
+  if ((!state.fleet || state.socket.status !== "open") && !pending) {
+    pending = true;
+    setTimeout(async () => {
+      await actions.refreshFleet();
+      pending = false;
+    }, state.fleet ? POLL_MS : 0);
   }
-  poll();
+  draw(state.fleet, state.fleetError);
 }
 
-async function poll() {
-  clearTimeout(timer);
-  try {
-    fleet = await api.get("/api/fleet");
-    if (!error.startsWith("STOP")) error = "";
-  } catch (err) {
-    error = err.message;
-  }
-  draw();
-  if (shown()) timer = setTimeout(poll, POLL_MS);
-}
-
-/** Called by the page's render while the fleet tab is shown. */
-export function renderFleet() {
-  if (timer === null) poll();
-  draw();
-}
-
-function draw() {
-  if (!shown()) {
-    clearTimeout(timer);
-    timer = null;
-    return;
-  }
+function draw(fleet, error) {
   const f = fleet || { enabled: false, bridges: [], jobs: [] };
   setText($("#fleet-title"), f.enabled ? `Fleet ${f.fleet}` : "Fleet");
   setText($("#fleet-status"), error || (!fleet ? "loading..." : !f.enabled
