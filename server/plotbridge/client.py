@@ -39,6 +39,22 @@ def going_on(job: Job) -> bool:
     return bool(job.get("waiting")) or any(a in job.get("actions", ()) for a in GOING_ON)
 
 
+def _follow(read: Callable[[], tuple[Job, bool]], progress: Callable[[Job], None] | None,
+            timeout: float | None, poll: float, what: str) -> Job:
+    """Polls `read()` (the thing followed, whether it is over) every `poll` s until it is
+    over; TimeoutError naming `what` past `timeout`."""
+    deadline = None if timeout is None else time.monotonic() + timeout
+    while True:
+        item, over = read()
+        if progress is not None:
+            progress(item)
+        if over:
+            return item
+        if deadline is not None and time.monotonic() > deadline:
+            raise TimeoutError(f"{what} still {item.get('state')} after {timeout:g} s")
+        time.sleep(poll)
+
+
 class PlotbridgeError(Exception):
     """A request that failed: `status` (None when the server was not reached) and `detail`."""
 
@@ -368,16 +384,11 @@ class Plotbridge:
         """Block until the job neither runs nor waits to (done, failed, cancelled, stopped,
         interrupted: nothing in its `actions` keeps it going); the last job. `progress(job)`
         is called on every poll. TimeoutError past `timeout`."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
+        def read() -> tuple[Job, bool]:
             job = self.job(job_id)
-            if progress is not None:
-                progress(job)
-            if not going_on(job):
-                return job
-            if deadline is not None and time.monotonic() > deadline:
-                raise TimeoutError(f"job {job_id} still {job['state']} after {timeout:g} s")
-            time.sleep(poll)
+            return job, not going_on(job)
+
+        return _follow(read, progress, timeout, poll, f"job {job_id}")
 
     def wait_fleet(
         self,
@@ -389,23 +400,17 @@ class Plotbridge:
     ) -> Job:
         """Block until a fleet job (`upload(fleet=True)`'s `fleet.id`) has settled on the
         bridge that took it; its record from `GET /api/fleet` (`job_state`, `bridge`,
-        `plotter`, `progress`). `progress(record)` is called on every poll, with `state`
-        set to the job's state there (or where the fleet has it: offered, granted)."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
+        `plotter`, `progress`), its `state` the job's there (or where the fleet has it:
+        offered, granted). `progress(record)` is called on every poll."""
+        def read() -> tuple[Job, bool]:
             record = next((j for j in self.fleet().get("jobs", []) if j.get("id") == fleet_id),
                           None)  # fmt: skip
             if record is None:
                 raise PlotbridgeError(f"fleet job {fleet_id} is not known to this bridge")
-            shown = {**record, "state": record["job_state"] if record["state"] == "committed"
-                     else record["state"]}  # fmt: skip
-            if progress is not None:
-                progress(shown)
-            if record.get("settled"):
-                return shown
-            if deadline is not None and time.monotonic() > deadline:
-                raise TimeoutError(f"fleet job {fleet_id} not settled after {timeout:g} s")
-            time.sleep(poll)
+            state = record["job_state"] if record["state"] == "committed" else record["state"]
+            return {**record, "state": state}, bool(record.get("settled"))
+
+        return _follow(read, progress, timeout, poll, f"fleet job {fleet_id}")
 
     # ---- events ------------------------------------------------------------------------
 
