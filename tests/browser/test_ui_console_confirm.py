@@ -33,10 +33,10 @@ def test_sleep_and_reset_lines_are_sent_only_once_confirmed(desktop, server, plo
 
     page.once("dialog", answer(True))
     page.fill("#command-line", "$RST=#")
-    page.press("#command-line", "Enter")
-    assert "coordinate offsets" in asked[1]
+    page.press("#command-line", "Enter")  # asked once the server's 428 is back
     page.wait_for_function("""() => [...document.querySelectorAll('#log li.tx')]
         .some((li) => li.textContent.includes('$RST=#'))""")
+    assert "coordinate offsets" in asked[1]
     # sent, and the board clears its stored offsets (G54 on every board): no error shown
     page.wait_for_function("""() => [...document.querySelectorAll('#log li')]
         .some((li) => li.textContent.includes('Restoring'))""")

@@ -76,7 +76,7 @@ def test_stop_button_mid_job_and_progress_entities(ha_bridge, plotter):
     later = listener.wait(lambda lst: (s := state(lst, progress)) and s["progress"] > earlier
                           and s, 30, "the progress entity to advance")
     assert later["time_left"] <= seen["time_left"]
-    server.wait_progress(job["id"], 80)
+    server.wait_drawing(job["id"], 80)
     stop = configs["plotter1_stop"]
     sent = stop_clock(plotter)
     listener.publish(stop["command_topic"], stop["payload_press"])

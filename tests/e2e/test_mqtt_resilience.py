@@ -100,7 +100,7 @@ def test_retained_garbage_flood_changes_nothing(plotter, broker, tmp_path):
         server.home()
         flooding.start()
         job = server.submit(drawing(circles=6))
-        server.wait_progress(job["id"], 40)
+        server.wait_drawing(job["id"])
         sent = stop_clock(plotter)
         response = server.client.post("/api/machine/estop")
         assert response.status_code == 202

@@ -51,7 +51,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     once = drawn_once_mm(server, plotter, drawing(circles=6))
     plotter.clear()
     job = server.submit(drawing(circles=6))
-    server.wait_progress(job["id"], 40)
+    server.wait_drawing(job["id"])
     sent = stop_clock(plotter)
     response = server.client.post("/api/machine/estop")
     assert response.status_code == 202
@@ -102,7 +102,7 @@ def test_estop_websocket_mid_job(server, plotter):
     with connect(url) as ws:
         first = json.loads(ws.recv(5))
         assert first["type"] == "machine"
-        server.wait_progress(job["id"], 40)
+        server.wait_drawing(job["id"])
         sent = stop_clock(plotter)
         ws.send(json.dumps({"type": "estop"}))
         seen_ack = seen_stopped = False
@@ -145,7 +145,7 @@ def test_pause_resume(server, plotter):
 def test_machine_stop_button_fails_the_job_with_line_and_alarm(server, plotter):
     server.home()
     job = server.submit(drawing(circles=6))
-    server.wait_progress(job["id"], 40)
+    server.wait_drawing(job["id"])
     plotter.press("estop")
     failed = server.wait_job(job["id"], ("failed", "stopped", "interrupted", "done"), 20)
     plotter.release("estop")

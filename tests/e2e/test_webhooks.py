@@ -201,7 +201,7 @@ def test_stop_button_alarm_and_a_lost_link_are_told(server, plotter, receiver):
     assert saved.status_code == 200, saved.text
     server.home()
     job = server.submit(drawing(circles=6))
-    server.wait_progress(job["id"], 40)
+    server.wait_drawing(job["id"])
     plotter.press("estop")  # the board's stop button: ALARM:10 mid-job
     server.wait_machine(lambda m: m["state"] == "Alarm", 10)
     plotter.release("estop")
