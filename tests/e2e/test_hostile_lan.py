@@ -210,7 +210,7 @@ def test_a_crowd_exhausting_connections_cannot_refuse_the_stop(limited):
             everyone = httpx.post(f"{limited.url}/api/estop", timeout=30,
                                   headers={"Authorization": f"Bearer {limited.token}"})
             assert everyone.status_code == 202, everyone.text
-            assert crowd_refused(limited.url)  # still full
+            wait_until(lambda: crowd_refused(limited.url), bool, 30, "the server still full")
         finally:
             crowd.stop()
     assert crowd.statuses[503] > 0 and crowd.server_errors() == 0, crowd.statuses
