@@ -368,6 +368,23 @@ async def test_estop_during_stream_writes_reset_first_and_aborts():
         await settle(lambda: link.status.state == "Alarm")
 
 
+async def test_a_stream_whose_job_was_stopped_before_it_began_sends_nothing():
+    """A stop (soft reset) between a job's start and its first stream: the stream, handed
+    the reset count from the job's start, ends at once; no line reaches the board."""
+    board = FakeBoard()
+    async with running(board) as link:
+        began = link.resets
+        link.estop()
+        board.send("", "Grbl 1.1h ['$' for help]")
+        sent = len(board.lines)
+        with pytest.raises(StreamAborted) as info:
+            await asyncio.wait_for(link.stream(iter(program(50)), lambda n: None, began), 1)
+        assert info.value.reason == "estop"
+        assert len(board.lines) == sent
+        await asyncio.wait_for(link.stream(iter(program(3)), lambda n: None, link.resets), 5)
+        assert len(board.lines) > sent  # a job begun after the reset streams
+
+
 async def test_command_after_reset_waits_for_banner():
     board = FakeBoard()
     async with running(board) as link:

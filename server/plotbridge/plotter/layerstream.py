@@ -29,6 +29,12 @@ async def until(lines: AsyncIterator[tuple[int, str]],
 class LayerStream:
     def __init__(self, link: Link) -> None:
         self.link = link
+        self.resets = link.resets  # the link's count when the job began (`begin`)
+
+    def begin(self) -> None:
+        """A job begins: a soft reset from now on (its stop, its cancel) ends it, even one
+        that comes before its first stream does."""
+        self.resets = self.link.resets
 
     async def run(self, program: Path, line: int, stop: int | None, preamble: list[str],
                   feed: PenFeed, on_ack: Callable[[int], None],
@@ -42,7 +48,7 @@ class LayerStream:
         async with contextlib.aclosing(until(reader.lines(), stop)) as lines:
             await self.link.stream(wire.compact_async(feed.lines(lines), self.link.settings,
                                                       self.link.facts.line_numbers),
-                                   on_ack)  # fmt: skip
+                                   on_ack, self.resets)  # fmt: skip
         return await self.standing(since)
 
     async def standing(self, since: float) -> str:

@@ -200,6 +200,7 @@ class Link:
         self._settled = asyncio.Event()
         self._settled.set()
         self._await_banner = False
+        self.resets = 0  # soft resets sent: a stream for a job begun before one never starts
         self._stream: _Stream | None = None
         self._lost: asyncio.Future[str] | None = None
         self._last_rx = 0.0
@@ -316,18 +317,23 @@ class Link:
             if waiter in self._status_waiters:
                 self._status_waiters.remove(waiter)
 
-    async def stream(self, lines: Lines, on_ack: Callable[[int], None]) -> None:
+    async def stream(self, lines: Lines, on_ack: Callable[[int], None],
+                     resets: int | None = None) -> None:  # fmt: skip
         """Stream (line number, text) pairs with character counting.
 
         `lines` may be an async iterable (a program read lazily from disk).
         Keeps as many lines in the board's receive buffer as fit in its 128
         bytes, so the planner never starves; calls on_ack(number) per ok, in
-        order. Returns when every line is acknowledged; raises StreamAborted.
+        order. Returns when every line is acknowledged; raises StreamAborted,
+        at once when `resets` (the count when its job began) is no longer the
+        count: a stop came before the stream could begin.
         """
         async with self._send_lock:
             await self._wait_settled()
             if not self._ready:
                 raise LinkDown("not connected")
+            if resets is not None and resets != self.resets:
+                raise StreamAborted("estop", None, message="reset before the stream began")
             st = _Stream(on_ack)
             self._stream = st
             try:
@@ -460,6 +466,7 @@ class Link:
             log.error("soft reset could not be written: link down")
         self._settled.clear()
         self._await_banner = True
+        self.resets += 1
         if self._stream is not None:
             # A stream cancelled before the reset stays "cancelled".
             self._stream.fail(reason, message="soft reset")

@@ -55,7 +55,8 @@ class Runner:
         self.after = AfterJobMoves(plotter, link, after_job, park)
         self.point = StopPoint(link, jobs_dir, lifecycle)
         self.changes = PenChanges(link, lifecycle, pens, self.after.park_lines)
-        self.layers = LayerRuns(self.point, self.changes, LayerStream(link), self._on_ack)
+        self.stream = LayerStream(link)
+        self.layers = LayerRuns(self.point, self.changes, self.stream, self._on_ack)
         self.job: Job | None = None
         self._task: asyncio.Task[None] | None = None
         self._last_save = 0.0
@@ -82,6 +83,7 @@ class Runner:
                             started_at=time.time(), finished_at=None, safe_line=line,
                             **fresh)  # fmt: skip
         self.job = job
+        self.stream.begin()
         self.point.reset(line)
         self.link.poll_hz = JOB_POLL_HZ
         self.busy_changed()
