@@ -189,6 +189,7 @@ GRBL_ANSWERS = [
     (["$J=G5 X1 F100"], "error:20"),
     (["$J=G91 X1 Z1 F100"], "ok"),
     (["$J=G91 Z-1 F100", "?"], "|A:S"),
+    (["$J=G91 X50 F100", "G0 X1"], "error:9"),  # G-code is locked while a jog runs
     # a dwell and a motion on one line: the dwell, then the motion (G1: a feed);
     # multiples of 5 mm are whole steps on every board (uno-uln2003: 32.6 steps/mm)
     (["G4 P1 G1 X1"], "error:22"),
