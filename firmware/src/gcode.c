@@ -155,6 +155,12 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
     undo->feed = st->feed;
     undo->z = st->z;
     memcpy(blk->start, st->pos, sizeof(blk->start));
+    if (jog) { /* (st is the jog's copy) GRBL's jog: a G1 at units per minute */
+        st->motion = MOTION_G1;
+#if GRBL_G93
+        st->inverse_time = 0;
+#endif
+    }
     for (uint8_t i = 0; line[i];) {
         char letter = line[i++];
         if (letter == '/') /* block delete: GRBL ignores the character */
@@ -176,17 +182,20 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         if (letter == 'G' || letter == 'M') {
             if (undo->motion == UNDO_NONE)
                 memcpy(undo, st, sizeof(*st));
-            if (float_bits(v) > float_bits(1000.0f)) /* (a negative one too: its sign bit) */
-                return ERR_UNSUPPORTED;
             float v10 = v * 10.0f;
-            uint16_t code10 = (uint16_t)(v10 + 0.5f);
+            float r10 = v10 + 0.5f;
+            /* above 1000, or negative (its sign bit) but for -0 (G-0 is G0
+             * to GRBL, whose whole part and fraction of -0 are 0) */
+            if (float_bits(r10) > float_bits(10000.5f))
+                return ERR_UNSUPPORTED;
+            uint16_t code10 = (uint16_t)r10;
             if (fabsf(v10 - (float)code10) > 0.001f)
                 return ERR_NOT_INTEGER;
+            /* a command a jog may not have is refused after every other
+             * check (error:16), as GRBL orders them */
             if (jog && (letter == 'M' || (code10 != 200 && code10 != 210 && code10 != 900 &&
-                                          code10 != 910 && code10 != 530))) {
-                blk->jog_bad = 1; /* (after the F check, as GRBL orders them) */
-                continue;
-            }
+                                          code10 != 910 && code10 != 530)))
+                blk->jog_bad = 1;
             if (letter == 'G') {
                 switch (code10) {
                 case 0: case 10: case 20: case 30: case 800:
@@ -283,7 +292,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
             continue;
         }
         if (w >= W_COUNT)
-            return jog ? ERR_INVALID_JOG : ERR_UNSUPPORTED;
+            return ERR_UNSUPPORTED;
         if (seen & WB(w))
             return ERR_WORD_REPEATED;
         /* words whose value must not be negative (GRBL's rule) */
@@ -302,27 +311,14 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
             if (seen & WB(w))
                 val[w] *= 25.4f;
     uint8_t axes = (uint8_t)(seen & (WB(W_X) | WB(W_Y)));
-    if (jog) {
-        /* GRBL's order: the F word first, then what a jog may not command,
-         * then words it leaves unused (S, T, P, ...) */
-        if (!(seen & WB(W_F)))
-            return ERR_UNDEFINED_FEED;
-        if (blk->jog_bad || !axes || (seen & WB(W_Z)))
-            return ERR_INVALID_JOG;
-        if (seen & ~(WB(W_X) | WB(W_Y) | WB(W_F) | WB(W_N)))
-            return ERR_UNUSED_WORDS;
-        motion = MOTION_G1;
-    }
     if ((seen & WB(W_N)) && magnitude_above(val[W_N], MAX_LINE_NUMBER))
         return ERR_LINE_NUMBER;
     if (seen & WB(W_N)) /* GRBL keeps the whole part */
         blk->line = (uint32_t)val[W_N];
-    if (seen & WB(W_F)) {
-        if (jog)
-            blk->feed = val[W_F];
-        else
-            st->feed = val[W_F];
-    }
+    if (jog && !(seen & WB(W_F))) /* (GRBL: before the other checks) */
+        return ERR_UNDEFINED_FEED;
+    if (seen & WB(W_F))
+        st->feed = val[W_F];
     if (blk->pen == PEN_M300) {
         if (!(seen & WB(W_S)))
             return ERR_VALUE_WORD_MISSING;
@@ -348,7 +344,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
     if (seen & WB(W_Z)) {
         /* Z is the pen, decided on machine Z so that no offset can flip it;
          * only a motion moves the pen (G92 Z, G10 Z and G53 Z never do) */
-        if (non_modal == NM_NONE) {
+        if (non_modal <= NM_DWELL) {
             float z = st->incremental ? st->z + val[W_Z] : val[W_Z] + gc_wco(st, 2);
             if (magnitude_above(z, GC_MAX_COORD))
                 return ERR_INVALID_TARGET;
@@ -358,13 +354,13 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         }
     }
     uint8_t mode = (uint8_t)(motion >= 0 ? motion : st->motion);
-    if (g53 && !jog && mode > MOTION_G1)
+    if (g53 && mode > MOTION_G1)
         return ERR_G53_MOTION;
     /* G80: an axis word on the line is error:31, whatever command it is for */
     if (mode == MOTION_NONE && (seen & (WB(W_X) | WB(W_Y) | WB(W_Z))))
         return ERR_AXIS_WORDS_UNUSED;
     /* an explicit G1 without axis words still needs a feed (GRBL) */
-    if (motion == MOTION_G1 && !jog && (int32_t)float_bits(st->feed) <= 0)
+    if (motion == MOTION_G1 && (int32_t)float_bits(st->feed) <= 0)
         return ERR_UNDEFINED_FEED;
 
     /* where the axis words point, in machine mm: made in the block's
@@ -391,19 +387,20 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
         target[a] = t;
     }
 
-    uint16_t used = (uint16_t)(WB(W_X) | WB(W_Y) | WB(W_Z) | WB(W_F) | WB(W_N) | WB(W_S) | WB(W_T));
+    /* (a jog leaves S and T unused: error:36, as GRBL) */
+    uint16_t used = (uint16_t)(WB(W_X) | WB(W_Y) | WB(W_Z) | WB(W_F) | WB(W_N) | (jog ? 0 : WB(W_S) | WB(W_T)));
 
     if (non_modal == NM_DWELL) {
-        if (axes || motion >= 0)
-            return ERR_AXIS_COMMAND_CONFLICT;
+        /* a motion on its line (in the modal mode) follows the dwell, as in GRBL */
         if (!(seen & (1u << W_P)))
             return ERR_VALUE_WORD_MISSING;
         if (magnitude_above(val[W_P], 3600.0f)) /* (P is not negative: refused as it was read) */
             return ERR_BAD_NUMBER;
-        blk->action = ACT_DWELL;
+        blk->dwell = 1;
         blk->dwell_s = val[W_P];
         used |= 1u << W_P;
-    } else if (non_modal >= NM_G92) {
+    }
+    if (non_modal >= NM_G92) {
         /* G92 and G10 share one path: an offset from each axis word, the
          * one that makes the machine position read it (G92: g92 = machine -
          * wcs - word; G10 L20: wcs = machine - g92 - word; G10 L2: the word) */
@@ -481,7 +478,7 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
             return seen & WB(W_Z) ? ERR_ARC_NO_PLANE_AXIS : ERR_NO_AXIS_WORDS;
         if (moving || motion == MOTION_G2 || motion == MOTION_G3) {
             if (st->motion != MOTION_G0) {
-                float f = jog ? blk->feed : st->feed;
+                float f = st->feed;
                 if ((int32_t)float_bits(f) <= 0) /* f <= 0 (never negative: +0 or -0) */
                     return ERR_UNDEFINED_FEED;
                 blk->feed = f;
@@ -527,6 +524,10 @@ uint8_t gc_parse(const char *line, gc_state_t *st, gc_block_t *blk, uint8_t jog,
     }
     if (seen & ~used)
         return ERR_UNUSED_WORDS;
+    /* GRBL's last jog check; a jog without axis words is refused too
+     * (GRBL 1.1h would jog to machine 0) */
+    if (jog && (blk->jog_bad || !(seen & (WB(W_X) | WB(W_Y) | WB(W_Z)))))
+        return ERR_INVALID_JOG;
     if (blk->clear_g92) {
         memset(st->g92, 0, sizeof(st->g92));
         blk->wco_changed = 1;

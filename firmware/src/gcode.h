@@ -7,7 +7,7 @@
 #include "config.h"
 
 enum { MOTION_G0, MOTION_G1, MOTION_G2, MOTION_G3, MOTION_NONE }; /* NONE: G80 */
-enum { ACT_NONE, ACT_RAPID, ACT_LINE, ACT_ARC, ACT_DWELL, ACT_G28 }; /* ACT_G28: G28 and G30 */
+enum { ACT_NONE, ACT_RAPID, ACT_LINE, ACT_ARC, ACT_G28 }; /* ACT_G28: G28 and G30 */
 enum { PEN_KEEP, PEN_UP, PEN_DOWN };
 enum { MOTORS_KEEP, MOTORS_ON, MOTORS_OFF };
 
@@ -46,6 +46,7 @@ typedef struct {
     uint8_t pen;          /* PEN_*: applied before the motion */
     uint8_t motors;       /* MOTORS_* */
     uint8_t program_end;  /* M2/M30: after the motion */
+    uint8_t dwell;        /* G4: dwell_s before the action (a motion on its line) */
     uint8_t pause;        /* M0/M1: feed hold (Hold:0) once the motion before it ends */
     uint8_t wco_changed;  /* G92/G92.1/G10/G54..: the status report shows WCO next time */
     uint8_t has_via;      /* G28 with axis words */

@@ -2,6 +2,7 @@
 #include <avr/sleep.h>
 #include <avr/wdt.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 #include "arc.h"
 #include "float_bits.h"
@@ -415,6 +416,8 @@ uint8_t machine_execute(const gc_block_t *blk)
     if (mach.abort)
         return ERR_LOCKED;
     plan_set_line_number(blk->line);
+    if (blk->dwell && !mach.check) /* G4: before a motion on its line */
+        machine_dwell_ms((uint32_t)(blk->dwell_s * 1000.0f + 0.5f));
     uint8_t e = STATUS_OK;
     switch (blk->action) {
     case ACT_RAPID: e = line_to(blk->target, 0.0f, PB_RAPID); break;
@@ -446,10 +449,6 @@ uint8_t machine_execute(const gc_block_t *blk)
         }
         break;
     }
-    case ACT_DWELL:
-        if (!mach.check)
-            machine_dwell_ms((uint32_t)(blk->dwell_s * 1000.0f + 0.5f));
-        break;
     case ACT_G28:
         if (blk->has_via)
             e = line_to(blk->via, 0.0f, PB_RAPID);
@@ -503,8 +502,12 @@ uint8_t machine_jog(const char *body)
         return ERR_TRAVEL_EXCEEDED;
     if (mach.check)
         return STATUS_OK;
+    if (blk.pen != PEN_KEEP) /* its Z moves the pen, as a G1's does */
+        machine_pen(blk.pen == PEN_DOWN);
     mach.jog = 1;
-    memcpy(gc.pos, tmp.pos, sizeof(gc.pos));
+    /* where it ends, pos and machine Z (side by side in the state) */
+    _Static_assert(offsetof(gc_state_t, z) == offsetof(gc_state_t, pos) + sizeof(gc.pos), "pos, z");
+    memcpy(gc.pos, tmp.pos, sizeof(gc.pos) + sizeof(gc.z));
     plan_set_line_number(blk.line);
     return line_to(blk.target, blk.feed, PB_JOG);
 }

@@ -20,10 +20,9 @@ static linebuf_t lb;
 
 uint8_t protocol_gcode(const char *line)
 {
-    if (mach.alarm)
+    /* G-code is locked in Alarm and while a jog runs (GRBL: error:9) */
+    if (mach.alarm || (mach.jog && machine_moving()))
         return ERR_LOCKED;
-    if (mach.jog && machine_moving())
-        return ERR_NOT_IDLE;
     /* parsed in place, put back when the line is bad or refused (gcode.h) */
     gc_state_t undo;
     gc_block_t blk;

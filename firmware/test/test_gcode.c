@@ -50,7 +50,7 @@ void test_gcode_valid(void)
     CHECK(parse("G53G0X1Y1") == STATUS_OK);
     CHECK_NEAR(blk.target[0], 1, 1e-6);
     /* dwell, G28, line numbers, comments already stripped */
-    CHECK(parse("G4P0.5") == STATUS_OK && blk.action == ACT_DWELL);
+    CHECK(parse("G4P0.5") == STATUS_OK && blk.dwell && blk.dwell_s == 0.5f && blk.action == ACT_NONE);
     CHECK_NEAR(blk.dwell_s, 0.5, 1e-6);
     CHECK(parse("N120G28") == STATUS_OK && blk.action == ACT_G28 && !blk.has_via);
     CHECK(parse("G28X5") == STATUS_OK && blk.has_via);
@@ -117,7 +117,21 @@ void test_gcode_errors(void)
     CHECK(parse("G0X1P1") == ERR_UNUSED_WORDS);
     CHECK(parse("G0X1I1") == ERR_UNUSED_WORDS);
     CHECK(parse("G92") == ERR_NO_AXIS_WORDS);
-    CHECK(parse("G4P1X1") == ERR_AXIS_COMMAND_CONFLICT);
+    /* a dwell and a motion on one line: the dwell, then the motion (GRBL's
+     * order of execution); a G1 there still needs a feed */
+    gc_state_t saved = st;
+    CHECK(parse("G4P1X1") == STATUS_OK && blk.dwell && blk.dwell_s == 1.0f && blk.action == ACT_RAPID);
+    CHECK(parse("G4P1G1X2") == ERR_UNDEFINED_FEED);
+    CHECK(parse("G4P1G1X2F100") == STATUS_OK && blk.dwell && blk.action == ACT_LINE && blk.target[0] == 2.0f);
+    CHECK(parse("G4P1Z-1") == STATUS_OK && blk.dwell && blk.pen == PEN_DOWN);
+    CHECK(parse("G4P1G0") == STATUS_OK && blk.dwell && st.motion == MOTION_G0);
+    CHECK(parse("G4G28") == ERR_MODAL_CONFLICT);
+    /* G-0 is G0 to GRBL (-0's whole part and fraction are 0); G-1 is not */
+    CHECK(parse("G1F100") == STATUS_OK && st.motion == MOTION_G1);
+    CHECK(parse("G-0X3") == STATUS_OK && st.motion == MOTION_G0 && blk.action == ACT_RAPID);
+    CHECK(parse("G-1X3") == ERR_UNSUPPORTED);
+    CHECK(parse("G-0.04") == ERR_NOT_INTEGER);
+    st = saved;
     CHECK(parse("M300") == ERR_VALUE_WORD_MISSING);
     CHECK(parse("G0X1234567890") == ERR_BAD_NUMBER);
     CHECK(parse("G0X200000") == ERR_INVALID_TARGET);
@@ -144,15 +158,38 @@ void test_gcode_errors(void)
     gc_block_t j;
     gc_state_t after = st;
     CHECK(gc_parse("G91X10F1000", &after, &j, 1, &undo) == STATUS_OK && j.action == ACT_LINE);
-    /* GRBL: the missing F first (22), then a command a jog may not have
-     * (16), then words it leaves unused (36) */
+    /* GRBL: the missing F first (22), then the checks of any line, then
+     * words it leaves unused (36: S and T too), then a command a jog may
+     * not have (16) */
     CHECK(gc_parse("X10", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
     CHECK(gc_parse("G4P1", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
     CHECK(gc_parse("G91X-1", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
     CHECK(gc_parse("G4P1F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G4X1F100", &after, &j, 1, &undo) == ERR_VALUE_WORD_MISSING);
     CHECK(gc_parse("G91X1F100S100", &after, &j, 1, &undo) == ERR_UNUSED_WORDS);
+    CHECK(gc_parse("G1X1F100S1", &after, &j, 1, &undo) == ERR_UNUSED_WORDS);
+    CHECK(gc_parse("X1F100T1", &after, &j, 1, &undo) == ERR_UNUSED_WORDS);
     CHECK(gc_parse("G0X10F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G1X10F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
     CHECK(gc_parse("M3X1F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("F100", &after, &j, 1, &undo) == ERR_INVALID_JOG);
+    CHECK(gc_parse("G0G1X1F100", &after, &j, 1, &undo) == ERR_AXIS_COMMAND_CONFLICT);
+    CHECK(gc_parse("G5X1F100", &after, &j, 1, &undo) == ERR_UNSUPPORTED);
+    CHECK(gc_parse("X1A1F100", &after, &j, 1, &undo) == ERR_UNSUPPORTED);
+    CHECK(gc_parse("G53G2X1I1F100", &after, &j, 1, &undo) == ERR_G53_MOTION);
+    CHECK(gc_parse("N10000001X1F100", &after, &j, 1, &undo) == ERR_LINE_NUMBER);
+    CHECK(gc_parse("X1F0", &after, &j, 1, &undo) == ERR_UNDEFINED_FEED);
+    /* Z is jogged (the pen, as a G1's Z): with X and Y or alone */
+    after = st;
+    after.z = 0.0f;
+    CHECK(gc_parse("G91X1Z1F100", &after, &j, 1, &undo) == STATUS_OK && j.action == ACT_LINE &&
+          j.pen == PEN_UP && after.z == 1.0f && j.feed == 100.0f);
+    after = st;
+    CHECK(gc_parse("G90Z-1F100", &after, &j, 1, &undo) == STATUS_OK && j.pen == PEN_DOWN);
+    /* a jog is a G1 at F whatever the modal state says (G0 here) */
+    after = st;
+    after.motion = MOTION_G0;
+    CHECK(gc_parse("X5F300", &after, &j, 1, &undo) == STATUS_OK && j.action == ACT_LINE && j.feed == 300.0f);
 }
 
 void test_gcode_grbl_state(void)

@@ -167,8 +167,9 @@ def test_every_grbl_code_is_in_the_table() -> None:
 
 
 # Lines that answered unlike GRBL 1.1h in the line-by-line comparison of issue 31
-# (each after a soft reset and $X), with GRBL 1.1h's answer; the two that stay
-# plotter differences (% and a target beyond 100,000 mm) are rows of the table.
+# (each after a soft reset and $X), with GRBL 1.1h's answer, on every board profile;
+# the plotter differences (%, a target beyond 100,000 mm, a jog without axis words)
+# are rows of the table.
 GRBL_ANSWERS = [
     (["G0 G1 X1"], "error:24"),
     (["G59.1"], "error:23"),
@@ -180,6 +181,23 @@ GRBL_ANSWERS = [
     (["$J=G4 P1"], "error:22"),
     (["$J=G91 X-1"], "error:22"),
     (["$J=G91 X1 F100 S100"], "error:36"),
+    # GRBL checks a jog as a G1 line, then its unused words (36), then what a
+    # jog may not command (16); Z is an axis a jog moves (here the pen)
+    (["$J=G1 X1 F100 S1"], "error:36"),
+    (["$J=G4 P1 F100"], "error:16"),
+    (["$J=G4 X1 F100"], "error:28"),
+    (["$J=G5 X1 F100"], "error:20"),
+    (["$J=G91 X1 Z1 F100"], "ok"),
+    (["$J=G91 Z-1 F100", "?"], "|A:S"),
+    (["$J=G91 X50 F100", "G0 X1"], "error:9"),  # G-code is locked while a jog runs
+    # a dwell and a motion on one line: the dwell, then the motion (G1: a feed);
+    # multiples of 5 mm are whole steps on every board (uno-uln2003: 32.6 steps/mm)
+    (["G4 P1 G1 X1"], "error:22"),
+    (["G1 X5 F600", "G4 P0.1 G1 X10", "G4 P0", "?"], "MPos:10.000,0.000"),
+    (["G4 P0.1 X15 Y10", "G4 P0", "?"], "MPos:15.000,10.000"),
+    # -0 is 0 to GRBL: G-0 is G0
+    (["G-0"], "ok"),
+    (["G1 X5 F100", "G-0 X2", "$G"], "[GC:G0 G54"),
     (["$1=1.5", "$$"], "$1=1"),
     (["G0 X50 Y50", "G2 X52 Y50 I1 K1 F500"], "ok"),
     (["M8 M9"], "error:21"),
@@ -198,7 +216,8 @@ GRBL_ANSWERS = [
 ]
 
 
-@pytest.mark.parametrize("board", ["uno-cnc-shield", "mega-ramps14"])
+@pytest.mark.parametrize("board", ["uno-cnc-shield", "uno-uln2003", "mega-l298n", "mega-stepdir",
+                                   "mega-ramps14"])
 def test_lines_answer_as_grbl_1_1h(plotter_factory, board: str) -> None:
     plotter = plotter_factory(board_firmware(board), args=("--board", board))
     g = Grbl(plotter.port)
@@ -221,6 +240,23 @@ def test_lines_answer_as_grbl_1_1h(plotter_factory, board: str) -> None:
             g.ok("G10 L2 P1 X0 Y0 Z0")
             g.ok("$1=25")
         assert not failures, "\n".join(failures)
+    finally:
+        g.close()
+
+
+def test_a_dwell_runs_before_the_motion_on_its_line(plotter) -> None:
+    """GRBL executes G4 before the line's motion: the line's ok (after the
+    dwell, as the dwell waits inside the line) comes with the carriage still
+    near its start, at least the dwell's simulated time after the line."""
+    g = Grbl(plotter.port)
+    try:
+        fresh(g)
+        t0 = plotter.trace()["sim_time"]
+        g.ok("G4 P2 G1 X60 F1200")  # 2 s, then 3 s of motion
+        at_ok = plotter.trace()
+        assert at_ok["sim_time"] - t0 >= 2.0, (t0, at_ok["sim_time"])
+        assert at_ok["position"]["x"] < 30, at_ok["position"]
+        assert mpos(g.wait_state("Idle", 30)) == (60.0, 0.0)
     finally:
         g.close()
 
