@@ -2,7 +2,7 @@
 
 import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
 import { layerChoice } from "../actions/jobs.js";
-import { bytes, duration, length, mm, percent } from "../format.js";
+import { bytes, duration, layerTitle, length, mm, percent } from "../format.js";
 import { can, isActive, jobButtons } from "../job-actions.js";
 import { previewJob } from "../store.js";
 import { errorText, jobStateText } from "../words.js";
@@ -24,7 +24,7 @@ export function layerRows(job, choice, pens = []) {
   return layers.map((l, i) => ({
     key: `${i}:${l.first_line}`,
     number: i + 1,
-    name: l.name || `layer ${i + 1}`,
+    name: layerTitle(l, i + 1),
     colour: COLOUR.test(l.colour || "") ? l.colour : "",
     pen: l.pen ?? null,
     penName: l.pen === null || l.pen === undefined ? "" : penName(pens, l.pen),

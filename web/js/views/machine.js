@@ -22,6 +22,7 @@ export function penChangeText(job, pens = []) {
   if (p.reason === "reink") return p.message || "re-ink the pen, then continue";
   const pen = p.pen || (job.layers && job.layers[p.layer - 1] && job.layers[p.layer - 1].pen !== null
     && job.layers[p.layer - 1].pen !== undefined ? penName(pens, job.layers[p.layer - 1].pen) : null);
+  if (!pen && p.message) return p.message; // the server's: the layer's name or colour in words
   const layer = `layer ${p.layer} of ${p.layers}${p.name ? ` “${p.name}”` : ""}`;
   return `${layer}: ${pen ? `load pen “${pen}”` : "load the pen for this layer"}, then continue`;
 }
