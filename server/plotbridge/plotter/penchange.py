@@ -79,7 +79,8 @@ class PenChanges:
         if reink is not None:
             message += f" (pen '{reink.name}' is due for re-inking: {self.metres(reink)} drawn)"
         return {"reason": "layer", "layer": index + 1, "layers": len(job.layers),
-                "name": layer.label or f"layer {index + 1}", "colour": layer.colour, "pen": pen.name if pen else None, "message": message,
+                "name": layer.label or f"layer {index + 1}", "colour": layer.colour,
+                "pen": pen.name if pen else None, "message": message,
                 "reink": reink.name if reink is not None else None}  # fmt: skip
 
     def reink_prompt(self, job: Job, pen: Pen, index: int) -> Prompt:
