@@ -15,6 +15,7 @@ import pytest
 
 from tests.browser.conftest import login, screenshot
 from tests.fixtures.pages import job_row, upload, wait_job_state
+from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.browser
 
@@ -99,9 +100,14 @@ def test_actions_go_over_the_socket_and_a_stopped_job_resumes_the_layers_chosen(
     server.wait_machine(lambda m: m["state"] == "Idle", 120)
     wait_job_state(page, NAME, ("stopped",))
     layers = row.locator("li.layer")
-    here = server.job(job_id)["done_point"]["layer"]
+    stopped = wait_until(lambda: server.job(job_id), lambda j: j["done_point"]["layer"] == 2,
+                         15, "the stop point at the pen change: layer 2's start")  # fmt: skip
+    assert stopped["summary"].startswith("stopped in layer 2 'red' at X "), stopped["summary"]
+    assert stopped["layers"][0]["progress"] == 1  # layer 1 was drawn, not lost to the park
+    here = 2
     assert layers.nth(here - 1).locator(".start-at").text_content() == "resume here"
     assert layers.nth(here - 1).locator("input.start").is_checked()
+    assert layers.nth(0).locator(".start-at").text_content() == "start here"
     # from layer 3, without layer 4: only the blue square is drawn
     layers.nth(2).locator("input.start").check()
     layers.nth(3).locator("input.tick").uncheck()

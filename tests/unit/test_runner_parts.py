@@ -123,6 +123,36 @@ async def test_a_pen_change_waits_for_continue_and_says_a_due_reink_in_one_promp
     assert await again is False
 
 
+async def test_parked_for_a_pen_the_stop_point_is_the_boundary_not_the_park(folder):
+    link = await started_link()
+    job = a_job("running", lines_total=len(PROGRAM), estimate_s=10.0,
+                timeline=[(4, 0.0), (15, 10.0)])  # fmt: skip
+    life, _ = lifecycle_with(job)
+    point = StopPoint(link, folder, life)
+    point.reset(1)
+    await point.measure(job)
+    point.streaming(bytearray(b"\x01" * 15))
+    link.status.line, link.status.x = 10, 5.5
+    point.report(job, link.status)
+    point.live = False  # the stretch stands: lines up to 10 drawn, the carriage parks
+    point.parked(job, 11)
+    assert job.lines_done == 10 and job.done_point["x"] == 6.0
+    link.status.line, link.status.x = None, 0.0  # reports from the park position
+    point.report(job, link.status)
+    await point.written()
+    assert Mark.load(folder / "j1" / MARK_FILE) == Mark(11, 11, 6.0, 0.0)
+    life.move(job, "pen_change")
+    life.move(job, "estop")  # stopped while it waits for the pen
+    point.estopped(job)
+    link.status.state, link.status.updated_at = "Alarm", time.time()
+    point.standing(link.status)
+    await point.written()
+    assert Mark.load(folder / "j1" / MARK_FILE) == Mark(11, 11, 6.0, 0.0)
+    await settle(lambda: "stopped" in job.summary)
+    assert job.lines_done == 10 and job.drawn_mm == pytest.approx(6.0), job.summary
+    assert job.summary == "stopped at X 6.0 Y 0.0, 60 % drawn"
+
+
 class NoPens(Library):
     def layer_pen(self, _layer) -> None:
         return None
