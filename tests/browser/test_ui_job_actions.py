@@ -71,8 +71,8 @@ class Traffic:
         return [m["action"] for m in self.frames]
 
 
-def test_actions_go_over_the_socket_and_a_stopped_job_resumes_the_layers_chosen(desktop, server,
-                                                                                plotter):  # fmt: skip
+def test_actions_go_over_the_socket_and_a_stopped_job_resumes_the_layers_chosen(
+        desktop, server, plotter):  # fmt: skip
     page, errors = desktop
     server.home()
     page.add_init_script(KEEP_SOCKETS)
