@@ -87,9 +87,11 @@ def test_actions_go_over_the_socket_and_a_stopped_job_resumes_the_layers_chosen(
 
     row.locator("button[data-verb=start]").click()
     server.wait_pen_change(job_id, 2, 120)
-    banner = page.locator("#banners .banner", has_text="Layer 2 of 4")
+    banner = page.locator("#banners .banner", has_text="layer 2 of 4")
     banner.wait_for()
-    assert "load the red pen" in banner.text_content(), banner.text_content()
+    assert "layer 2 of 4 “red”: load the pen" in banner.text_content(), banner.text_content()
+    assert server.job(job_id)["pen_change"]["message"] == (
+        "Layer 2 of 4: load the red pen, then continue")
     assert traffic.actions() == ["start"] and traffic.rest == []  # the socket, not REST
     assert not re.search(r"#[0-9a-f]{6}", page.locator("body").inner_text(), re.I)
 

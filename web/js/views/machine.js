@@ -16,13 +16,13 @@ function machineLabel(m) {
 /** "plotter2: " when there are several plotters, else "". */
 const whose = (state, name = state.plotter) => (state.plotterOrder.length > 1 && name ? `${name}: ` : "");
 
-/** The pen prompt of a job at a pen change, in words: names the pen, never its colour code. */
+/** The pen prompt of a job at a pen change, in words: names the pen, else the layer (its
+ * `name` is the layer's label: a colour in words), never a colour code. */
 export function penChangeText(job, pens = []) {
   const p = job.pen_change || {};
   if (p.reason === "reink") return p.message || "re-ink the pen, then continue";
   const pen = p.pen || (job.layers && job.layers[p.layer - 1] && job.layers[p.layer - 1].pen !== null
     && job.layers[p.layer - 1].pen !== undefined ? penName(pens, job.layers[p.layer - 1].pen) : null);
-  if (!pen && p.message) return p.message; // the server's: the layer's name or colour in words
   const layer = `layer ${p.layer} of ${p.layers}${p.name ? ` “${p.name}”` : ""}`;
   return `${layer}: ${pen ? `load pen “${pen}”` : "load the pen for this layer"}, then continue`;
 }
