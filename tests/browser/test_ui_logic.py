@@ -281,8 +281,8 @@ def test_header_says_connection_lost(modules):
 
 
 def test_a_resume_with_the_layer_choice_and_its_websocket_message(modules):
-    layers = [{"name": n, "first_line": f, "last_line": l, "label": n}
-              for n, f, l in (("a", 1, 9), ("b", 11, 19), ("c", 21, 29))]  # fmt: skip
+    layers = [{"name": n, "first_line": f, "last_line": last, "label": n}
+              for n, f, last in (("a", 1, 9), ("b", 11, 19), ("c", 21, 29))]  # fmt: skip
     job = server_job("stopped", id="j7", layers=layers,
                      done_point={"line": 12, "x": 1, "y": 2, "layer": 2})  # fmt: skip
     got = run(modules, f"""
