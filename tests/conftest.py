@@ -5,7 +5,7 @@ import pytest
 from tests.fixtures.artifacts import MEASUREMENTS
 
 pytest_plugins = ["tests.fixtures.plotsim", "tests.fixtures.server", "tests.fixtures.grbl",
-                  "tests.fixtures.mosquitto"]
+                  "tests.fixtures.mosquitto", "tests.fixtures.stock_grbl"]
 
 
 def pytest_sessionstart(session: pytest.Session) -> None:

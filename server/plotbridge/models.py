@@ -99,11 +99,13 @@ class ResumeFrom(Strict):
 
 class ResumeBody(Strict):
     """Resume options: where from (default: where the job stopped), how far back along
-    the stroke to start (mm), and whether to home ($H) first."""
+    the stroke to start (mm), whether to home ($H) first, and the layers to plot after
+    the one it resumes in (1-based; as a start's `layers`; default: those chosen before)."""
 
     from_: ResumeFrom | None = Field(None, alias="from")
     overlap: float = Field(0.0, ge=0, le=1000)
     home: bool = False
+    layers: list[Annotated[int, Field(ge=1)]] | None = Field(None, min_length=1, max_length=1000)
 
     @property
     def special(self) -> bool:

@@ -128,19 +128,31 @@ RANGES: dict[int, Range] = _ranges()
 
 Group = Literal["motion", "pen", "switches", "area", "board", "other"]
 GROUPS: dict[Group, tuple[int, ...]] = {
-    "motion": (110, 111, 120, 121, 11, 12, 100, 101, 63),
+    # as GRBL users read them: each kind with its axes together (steps, rate, acceleration)
+    "motion": (100, 101, 110, 111, 120, 121, 11, 12, 63),
     "pen": (60, 61, 62, 64, 65),
-    "switches": (22, 21, 20, 23, 24, 25, 26, 27, 5),
+    # homing on, then its direction, speeds, debounce and pull-off; then the limits
+    "switches": (22, 23, 25, 24, 26, 27, 21, 20, 5),
     "area": (130, 131),
     "board": (0, 1, 2, 3, 4, 10, 13),
+    "other": (6, 30, 31, 32, 102, 112, 122, 132),
 }
 """What a plotter user means by each setting, in the order shown; "other" (spindle, probe,
 laser, Z) does not apply to a pen plotter: the UI hides it unless asked."""
 _GROUP_OF = {number: group for group, numbers in GROUPS.items() for number in numbers}
+_ORDER = {number: (g, i) for g, numbers in enumerate(GROUPS.values())
+          for i, number in enumerate(numbers)}  # fmt: skip
 
 
 def group(number: int) -> Group:
     return _GROUP_OF.get(number, "other")
+
+
+def shown_order(number: int) -> tuple[int, int, int]:
+    """Where `number` comes in the settings list: by group, then as GROUPS orders it; a
+    number nobody knows comes last, by number."""
+    g, i = _ORDER.get(number, (len(GROUPS), 0))
+    return g, i, number
 MASK_BITS = ("X", "Y")  # bit 0, bit 1 of every mask setting
 
 

@@ -44,6 +44,13 @@ def stage(server) -> None:
                                               "up_us": 1000, "down_us": 2000})  # fmt: skip
     done = server.submit(drawing(circles=1))
     server.wait_job(done["id"], ("done",), 120)
+    # a stopped job in layers: its row offers the layer choice of its resume
+    stopped = server.client.post("/api/jobs", data={"start": "true"}, files={
+        "file": ("a-stopped-poster-with-a-long-name.svg", THREE_LAYERS)}).json()  # fmt: skip
+    server.wait_pen_change(stopped["id"], 2, 120)
+    server.client.post("/api/machine/estop")
+    server.wait_job(stopped["id"], ("stopped",), 20)
+    server.home()
     server.client.post("/api/jobs", files={"file": ("a-poster-with-a-rather-long-name.svg",
                                                     THREE_LAYERS)})  # fmt: skip
 

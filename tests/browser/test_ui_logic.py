@@ -278,3 +278,40 @@ def test_header_says_connection_lost(modules):
     """.replace("RUNNING", json.dumps(server_job("running", id="j"))))
     assert got[0]["state"] == "moving" and "left" in got[0]["job"] and got[0]["pos"]
     assert got[1] == {"state": "connection lost", "badge": "Lost", "pos": "", "pen": "", "job": ""}
+
+
+def test_a_resume_with_the_layer_choice_and_its_websocket_message(modules):
+    layers = [{"name": n, "first_line": f, "last_line": last, "label": n}
+              for n, f, last in (("a", 1, 9), ("b", 11, 19), ("c", 21, 29))]  # fmt: skip
+    job = server_job("stopped", id="j7", layers=layers,
+                     done_point={"line": 12, "x": 1, "y": 2, "layer": 2})  # fmt: skip
+    got = run(modules, f"""
+        const job = {json.dumps(job)};
+        const all = {{ticked: [1, 2, 3], start: null}};
+        return [
+          m.stoppedLayer(job), m.stoppedLayer({{...job, done_point: null, resume_line: 10}}),
+          m.resumeChoice(job, all),                                  // where it stopped
+          m.resumeChoice(job, {{ticked: [1, 2], start: null}}),     // without layer 3
+          m.resumeChoice(job, {{ticked: [1, 3], start: null}}),     // skip the rest of 2
+          m.resumeChoice(job, {{ticked: [1, 2, 3], start: 1}}),     // from layer 1 again
+          m.resumeChoice(job, {{ticked: [1], start: null}}),        // nothing left
+          m.actionMessage(job, "resume_from", {{body: {{from: {{layer: 3}}, layers: [1, 3]}}}}),
+          m.actionMessage(job, "start", {{layers: {{ticked: [2, 3], start: 2}}}}),
+          m.actionRequest(job, "delete"),
+          m.layerRows(job, all).map((r) => [r.name, r.start, r.resumesHere]),
+          m.layerTitle({{name: "#d40000", label: "red"}}, 2), m.layerTitle({{}}, 3),
+        ];
+    """)
+    assert got[0] == 2 and got[1] == 2  # the M0 before layer 2 belongs to layer 2
+    assert got[2] == {"action": "resume", "body": {}}
+    assert got[3] == {"action": "resume", "body": {"layers": [1, 2]}}
+    assert got[4] == {"action": "resume_from", "body": {"layers": [1, 3], "from": {"layer": 3}}}
+    assert got[5] == {"action": "resume_from", "body": {"from": {"layer": 1}}}
+    assert "no layer ticked from layer 2 on" in got[6]["error"]
+    assert got[7] == {"type": "job_action", "job": "j7", "action": "resume_from",
+                      "from": {"layer": 3}, "layers": [1, 3]}  # fmt: skip
+    assert got[8] == {"type": "job_action", "job": "j7", "action": "start", "layers": [2, 3],
+                      "start_layer": 2}  # fmt: skip
+    assert got[9] == {"method": "DELETE", "path": "/api/jobs/j7"}
+    assert got[10] == [["a", False, False], ["b", True, True], ["c", False, False]]
+    assert got[11:] == ["red", "layer 3"]

@@ -259,6 +259,9 @@ def test_settings_ranges_switches_sticky_save_try_and_leave_guard(phone, server)
     # grouped under headings; the spindle, probe, laser and Z rows only when asked
     headings = page.locator("#settings-body tr.group-head").all_text_contents()
     assert headings[:4] == ["Motion", "Pen", "Switches and homing", "Work area"], headings
+    # rows as GRBL users read them: steps, maximum rate, acceleration, each axis together
+    keys = page.locator("#settings-body tr").evaluate_all("(rs) => rs.map((r) => r.dataset.key)")
+    assert keys[1:7] == ["100", "101", "110", "111", "120", "121"], keys  # after "Motion"
     assert page.locator("#setting-30").count() == 0
     page.check("#settings-all")
     page.wait_for_selector("#setting-30")

@@ -7,63 +7,24 @@ counts as done; a re-ink interval that falls on the last stroke asks for nothing
 from __future__ import annotations
 
 import contextlib
-import math
 import os
 import signal
 
 import pytest
 from plotbridge.plotter.stoppoint import MARK_FILE
 
-from tests.fixtures.drawings import FEED
+from tests.fixtures.drawings import LONG_STROKE, STROKE
+from tests.fixtures.drawings import PROGRESS_THREE_LAYERS as THREE_LAYERS
 from tests.fixtures.server import running_server
-from tests.fixtures.trace import wait_still
+from tests.fixtures.trace import (
+    DRAWN_TOL_MM,
+    assert_nothing_past_the_resume_point,
+    settled_drawn,
+    wait_still,
+)  # fmt: skip
 from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
-
-DRAWN_TOL_MM = 0.5
-
-
-def circle(cx: float, cy: float, r: float, segments: int) -> list[str]:
-    points = [(cx + r * math.cos(2 * math.pi * k / segments),
-               cy + r * math.sin(2 * math.pi * k / segments)) for k in range(segments + 1)]
-    return ([f"G0 X{points[0][0]:.3f} Y{points[0][1]:.3f}", "M3"]
-            + [f"G1 X{x:.3f} Y{y:.3f} F{FEED}" for x, y in points[1:]] + ["M5"])  # fmt: skip
-
-
-# layer 1: a 150 mm square in 4 long lines; layers 2 and 3: two circles of 300 short lines
-THREE_LAYERS = "\n".join(
-    ["G21", "G90", "G0 X20 Y20", "M3"]
-    + [f"G1 X{x} Y{y} F{FEED}" for x, y in ((170, 20), (170, 170), (20, 170), (20, 20))]
-    + ["M5", "M0 red"] + circle(60, 60, 10, 300) + circle(120, 60, 10, 300)
-    + ["M0 blue"] + circle(60, 120, 10, 300) + circle(120, 120, 10, 300)) + "\n"  # fmt: skip
-
-# one stroke of 200 lines of 0.8 mm: longer than a planner's worth
-LONG_STROKE = "\n".join(["G21", "G90", "G0 X10 Y20", "M3"]
-                        + [f"G1 X{10 + 0.8 * k:.1f} Y20 F{FEED}" for k in range(1, 201)]
-                        + ["M5"]) + "\n"  # fmt: skip
-# one stroke of 40 lines of 4 mm
-STROKE = "\n".join(["G21", "G90", "G0 X10 Y20", "M3"]
-                   + [f"G1 X{10 + 4 * k} Y20 F{FEED}" for k in range(1, 41)]
-                   + ["M5"]) + "\n"  # fmt: skip
-
-
-def settled_drawn(server, plotter, job_id: str) -> tuple[dict, float]:
-    """The stopped job once its drawn length matches the simulator's (or the last one seen
-    when it never does) and what the pen drew."""
-    drawn = wait_still(plotter, 30)["draw_mm"]
-    job = wait_until(lambda: server.job(job_id),
-                     lambda j: abs(j["drawn_mm"] - drawn) <= DRAWN_TOL_MM, 15,
-                     f"drawn_mm of job {job_id} within {DRAWN_TOL_MM} mm of {drawn:.2f}")
-    return job, drawn
-
-
-def assert_nothing_past_the_resume_point(job: dict) -> None:
-    point = job["done_point"]
-    assert point is not None and job["lines_done"] == point["line"] - 1, job
-    assert f"X {point['x']:.1f} Y {point['y']:.1f}" in job["summary"], job["summary"]
-    assert "line" not in job["summary"], job["summary"]  # positions and layers, no lines
-
 
 def test_progress_at_the_first_pen_change_is_the_share_of_the_plans_time(server, plotter):
     server.home()

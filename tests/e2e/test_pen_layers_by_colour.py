@@ -74,7 +74,10 @@ def test_three_colours_two_pen_changes(parked_server, plotter):
     drawn_before = [0]  # trace strokes drawn when each layer starts
     for layer, resume in ((2, "api"), (3, "websocket")):
         changing = server.wait_pen_change(job["id"], layer)
-        assert changing["pen_change"]["message"].startswith(f"Layer {layer} of 3, "), changing
+        word = ("green", "blue")[layer - 2]  # named in words, never by its code
+        assert changing["pen_change"]["message"] == (
+            f"Layer {layer} of 3: load the {word} pen, then continue"), changing
+        assert changing["layers"][layer - 1]["label"] == changing["pen_change"]["name"] == word
         assert changing["pen_change"]["colour"] == COLOURS[layer - 1]
         trace = assert_parked(plotter, PARK)
         drawn_before.append(len(trace["strokes"]))

@@ -20,7 +20,7 @@ async def test_pen_change_parks_prompts_and_continues(tmp_path, monkeypatch):
         changing = (await client.get(f"/api/jobs/{job['id']}")).json()
         prompt = changing["pen_change"]
         assert prompt["layer"] == 2 and prompt["layers"] == 3 and prompt["name"] == "b"
-        assert prompt["message"].startswith("Layer 2 of 3, 'b'") and "#ff0000" in prompt["message"]
+        assert prompt["message"] == "Layer 2 of 3, 'b': load its pen, then continue"  # no code
         first_m0 = layers[1]["first_line"] - 1
         assert [n for n, _ in link.streamed] == list(range(1, first_m0))  # not the M0
         assert link.commands == ["M5", "G0 X2.000 Y3.000", "G4 P0"]  # pen up, parked

@@ -38,6 +38,15 @@ async def test_jobs_go_to_free_plotters_that_fit_and_wait_in_order(farm):
     assert [(p["name"], p["job"]) for p in listed] == [
         ("a", jobs[0]["id"]), ("b", jobs[1]["id"]), ("c", None)]
     assert listed[2]["work_area"] == {"width": 10, "height": 10}
+    # each carries its job's actions, the lifecycle's (the same list as the job's own)
+    running = (await farm.client.get(f"/api/jobs/{jobs[0]['id']}")).json()
+    assert listed[0]["actions"] == running["actions"] == ["hold", "stop", "cancel"]
+    assert listed[2]["actions"] == []
+    await farm.client.post(f"/api/jobs/{jobs[0]['id']}/hold")
+    held = (await farm.client.get("/api/plotters")).json()[0]
+    assert held["actions"] == farm.queue.jobs[jobs[0]["id"]].actions
+    assert "continue" in held["actions"]
+    await farm.client.post(f"/api/jobs/{jobs[0]['id']}/continue")
     farm.links["b"].auto_ack = True
     farm.links["b"].step()
     await settle(lambda: farm.queue.jobs[jobs[2]["id"]].state == "done")  # started by itself

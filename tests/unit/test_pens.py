@@ -269,3 +269,31 @@ async def test_a_start_plots_only_the_chosen_layers(tmp_path, monkeypatch):
         second = range(layers[1].first_line, layers[1].last_line + 1)
         sent = [n for n, _ in link.streamed]
         assert not set(second) & set(sent) and layers[2].last_line in sent
+
+
+async def test_a_resume_plots_the_layers_chosen_then(tmp_path, monkeypatch):
+    monkeypatch.setattr(Importer, "_import", layered_import)
+    app, link = make_app(tmp_path)
+    link.auto_ack = True
+    async with serving(app) as client:
+        queue = app.state.components.queue
+        job = (await upload(client, start="true")).json()
+        await settle(lambda: queue.jobs[job["id"]].state == "pen_change")
+        held = await client.post(f"/api/jobs/{job['id']}/resume", json={"layers": [3]})
+        assert held.status_code == 422 and "continues as it is" in held.text
+        await client.post("/api/machine/estop")
+        await settle(lambda: queue.jobs[job["id"]].state == "stopped")
+        link.set_state("Idle")
+        path = f"/api/jobs/{job['id']}"
+        bad = await client.post(f"{path}/resume", json={"layers": [4]})
+        assert bad.status_code == 422 and "layer 4: " in bad.text
+        assert queue.jobs[job["id"]].plot_layers is None  # a refused choice changes nothing
+        sent = len(link.streamed)
+        resumed = await client.post(f"{path}/resume_from",
+                                    json={"from": {"layer": 3}, "layers": [3]})  # fmt: skip
+        assert resumed.status_code == 200, resumed.text
+        assert resumed.json()["plot_layers"] == [3]
+        await settle(lambda: queue.jobs[job["id"]].state == "done")
+        layers = queue.jobs[job["id"]].layers
+        after = [n for n, _ in link.streamed[sent:] if n]  # 0: the preamble
+        assert min(after) >= layers[2].first_line and layers[2].last_line in after

@@ -123,6 +123,62 @@ async def test_a_pen_change_waits_for_continue_and_says_a_due_reink_in_one_promp
     assert await again is False
 
 
+async def test_parked_for_a_pen_the_stop_point_is_the_boundary_not_the_park(folder):
+    link = await started_link()
+    job = a_job("running", lines_total=len(PROGRAM), estimate_s=10.0,
+                timeline=[(4, 0.0), (15, 10.0)])  # fmt: skip
+    life, _ = lifecycle_with(job)
+    point = StopPoint(link, folder, life)
+    point.reset(1)
+    await point.measure(job)
+    point.streaming(bytearray(b"\x01" * 15))
+    link.status.line, link.status.x = 10, 5.5
+    point.report(job, link.status)
+    point.live = False  # the stretch stands: lines up to 10 drawn, the carriage parks
+    point.parked(job, 11)
+    assert job.lines_done == 10 and job.done_point["x"] == 6.0
+    link.status.line, link.status.x = None, 0.0  # reports from the park position
+    point.report(job, link.status)
+    await point.written()
+    assert Mark.load(folder / "j1" / MARK_FILE) == Mark(11, 11, 6.0, 0.0)
+    life.move(job, "pen_change")
+    life.move(job, "estop")  # stopped while it waits for the pen
+    point.estopped(job)
+    link.status.state, link.status.updated_at = "Alarm", time.time()
+    point.standing(link.status)
+    await point.written()
+    assert Mark.load(folder / "j1" / MARK_FILE) == Mark(11, 11, 6.0, 0.0)
+    await settle(lambda: "stopped" in job.summary)
+    assert job.lines_done == 10 and job.drawn_mm == pytest.approx(6.0), job.summary
+    assert job.summary == "stopped at X 6.0 Y 0.0, 60 % drawn"
+
+
+class NoPens(Library):
+    def layer_pen(self, _layer) -> None:
+        return None
+
+
+async def test_a_pen_change_names_the_pen_else_the_layer_else_the_colour_never_a_code():
+    link = await started_link()
+    layers = [Layer(name="#000000", first_line=1, last_line=2),
+              Layer(name="#d40000", colour="#d40000", first_line=4, last_line=5),
+              Layer(name="shade", colour="#1f77b4", first_line=7, last_line=8)]  # fmt: skip
+    job = a_job("running", layers=layers)
+    life, _ = lifecycle_with(job)
+    park = lambda: []  # noqa: E731
+    named = PenChanges(link, life, Library(Pen(id=1, name="Red brush")), park)  # type: ignore[arg-type]
+    unnamed = PenChanges(link, life, NoPens(Pen(id=1, name="x")), park)  # type: ignore[arg-type]
+    prompts = [changes.layer_prompt(job, i) for changes in (named, unnamed) for i in (1, 2)]
+    assert [p["message"] for p in prompts] == [
+        "Layer 2 of 3 (red): load pen 'Red brush', then continue",
+        "Layer 3 of 3, 'shade': load pen 'Red brush', then continue",
+        "Layer 2 of 3: load the red pen, then continue",
+        "Layer 3 of 3, 'shade': load its pen, then continue",  # not the preview's colour
+    ]
+    assert [p["name"] for p in prompts[2:]] == ["red", "shade"]
+    assert not any("#" in str(p["message"]) + str(p["name"]) for p in prompts)
+
+
 async def test_after_job_moves_keep_the_plotter_busy_until_done():
     link = await started_link()
     moves = AfterJobMoves("p1", link, "park", (5.0, 7.5))

@@ -42,3 +42,7 @@ export const ALARMS = {
   9: "homing failed: no limit switch found",
   10: "the emergency-stop button on the machine was pressed",
 };
+
+/** A layer's name as people read it: the server's `label` (a colour code in words), never
+ * a code. `number`: 1-based, for a layer without one. */
+export const layerTitle = (layer, number) => (layer && (layer.label || layer.name)) || `layer ${number}`;

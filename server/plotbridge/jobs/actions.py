@@ -81,20 +81,22 @@ class JobActions:
         else:
             self.lifecycle.move(job, "cancel", error=None, waiting=None)
 
-    async def resume(self, job: Job, plotter: str | None, _body: Body | None) -> None:
-        """Exactly where the pen stopped; a plotter in Alarm is homed first."""
-        await self._resume(job, "resume", plotter, None, 0.0, home=None)
+    async def resume(self, job: Job, plotter: str | None, body: Body | None) -> None:
+        """Exactly where the pen stopped (then the layers chosen: `layers`); a plotter in
+        Alarm is homed first."""
+        options = self._resume_options(body)
+        await self._resume(job, "resume", plotter, options, home=True if options.home else None)
 
     async def home_then_resume(self, job: Job, plotter: str | None,
-                               _body: Body | None) -> None:  # fmt: skip
-        await self._resume(job, "home_then_resume", plotter, None, 0.0, home=True)
+                               body: Body | None) -> None:  # fmt: skip
+        await self._resume(job, "home_then_resume", plotter, self._resume_options(body),
+                           home=True)  # fmt: skip
 
     async def resume_from(self, job: Job, plotter: str | None, body: Body | None) -> None:
         options: ResumeBody = _model(ResumeBody, body)
-        where = options.where()
-        if where is None:
+        if options.where() is None:
             raise Refused(422, "from: say where to resume from ({x, y}, {line} or {layer})")
-        await self._resume(job, "resume_from", plotter, where, options.overlap, options.home)
+        await self._resume(job, "resume_from", plotter, options, options.home)
 
     async def frame(self, job: Job, plotter: str | None, _body: Body | None) -> None:
         unit = self.queue.plotter(plotter or job.target or (
@@ -130,9 +132,13 @@ class JobActions:
         if options.from_ is not None:
             return await self.act(job_id, "resume_from", plotter, body)
         if options.home:
-            return await self.act(job_id, "home_then_resume", plotter)
-        action = "continue" if "continue" in job.actions else "resume"
-        return await self.act(job_id, action, plotter)
+            return await self.act(job_id, "home_then_resume", plotter, body)
+        if "continue" in job.actions:
+            if options.layers is not None:
+                raise Refused(422, "layers: a held job or a pen change continues as it is; "
+                                   "layers are chosen when resuming a stopped job")  # fmt: skip
+            return await self.act(job_id, "continue", plotter)
+        return await self.act(job_id, "resume", plotter, body)
 
     def hold_plotter(self, name: str | None) -> Job | None:
         """Feed hold of the plotter's job, or of its machine when no job runs (a jog, a
@@ -164,19 +170,34 @@ class JobActions:
             self.queue.plotter(plotter)  # 404 for an unknown one
             job.target = plotter
 
-    async def _resume(self, job: Job, action: str, plotter: str | None,
-                      where: dict[str, Any] | None, overlap: float,
+    @staticmethod
+    def _resume_options(body: Body | None) -> ResumeBody:
+        """A resume's body without a point: `layers` and `home` only."""
+        options: ResumeBody = _model(ResumeBody, body)
+        if options.from_ is not None or options.overlap:
+            raise Refused(422, "from: a resume from a point is the action resume_from")
+        return options
+
+    async def _resume(self, job: Job, action: str, plotter: str | None, options: ResumeBody,
                       home: bool | None) -> None:  # fmt: skip
-        """Resume `job` exactly (no `where`) or from a point, homing its plotter first when
-        `home` (None: when it is in Alarm). The job is held throughout: one racer wins."""
-        async with self.lifecycle.claim(job, action):
-            point = await self._point(job, where, overlap)
-            self._target(job, plotter)
-            unit = self.queue.candidates(job)[0]
-            if home or (home is None and unit.state == "Alarm"):
-                await self._home(job, unit)
-            if point is not None:
-                job.lines_done = point.line - 1
+        """Resume `job` exactly (no `from`) or from a point, homing its plotter first when
+        `home` (None: when it is in Alarm), then plotting the layers `options` choose. The
+        job is held throughout: one racer wins."""
+        chosen = job.plot_layers
+        if options.layers is not None:  # checked (422) before anything moves
+            self.queue.select_layers(job, options.layers, None)
+        try:
+            async with self.lifecycle.claim(job, action):
+                point = await self._point(job, options.where(), options.overlap)
+                self._target(job, plotter)
+                unit = self.queue.candidates(job)[0]
+                if home or (home is None and unit.state == "Alarm"):
+                    await self._home(job, unit)
+                if point is not None:
+                    job.lines_done = point.line - 1
+        except BaseException:
+            job.plot_layers = chosen  # refused or failed: the choice it had stands
+            raise
         self.queue.start(job, action, point)
 
     async def _point(self, job: Job, where: dict[str, Any] | None,

@@ -9,9 +9,10 @@ from __future__ import annotations
 import time
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, computed_field
+from pydantic import BaseModel, ConfigDict, Field, computed_field, model_validator
 from pydantic_core import to_jsonable_python
 
+from plotbridge.colours import label as colour_label
 from plotbridge.jobs.lifecycle import ACTIVE, RESUMABLE, allowed
 
 __all__ = ["ACTIVE", "AFTER_JOB", "RESUMABLE", "Bounds", "Imported", "Job", "JobState", "Layer"]
@@ -63,6 +64,14 @@ class Layer(BaseModel):
     """Its planned time still to come."""
     pen: int | None = None
     """The pen library's id of the pen that draws it ("Pen library"), or None."""
+    label: str = ""
+    """Its name as texts for people show it: a name that is a colour code becomes the
+    colour's word (`colours.label`: "#d40000" is "red")."""
+
+    @model_validator(mode="after")
+    def _label(self) -> Layer:
+        self.label = colour_label(self.name, self.colour)
+        return self
 
     @property
     def lines_total(self) -> int:

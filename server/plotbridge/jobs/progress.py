@@ -202,7 +202,7 @@ def follow(job: Job, measure: Measure | None, plan: Plan, line: int, at: Point |
         layer = job.layers[index] if index is not None else None
         job.done_point = {"line": line, "x": round(px, 3), "y": round(py, 3),
                           "layer": index + 1 if index is not None else None,
-                          "layer_name": layer.name if layer else None}  # fmt: skip
+                          "layer_name": layer.label if layer else None}  # fmt: skip
     for layer in job.layers:
         _follow_layer(layer, measure, plan, line, t, finished)
     job.summary = summary(job, state or job.state)

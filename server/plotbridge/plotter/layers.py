@@ -40,7 +40,7 @@ class LayerRuns:
             for number, (start, stop, layer) in enumerate(layer_runs(job.layers,
                                                                      job.plot_layers, line)):
                 if number:  # after a layer: the M0s (not sent) and skipped layers are done
-                    self.point.follow(job, start, None)
+                    self.point.parked(job, start)
                     prompt = self.changes.layer_prompt(job, layer, reink)
                     if not await self.changes.wait(job, prompt):
                         return "Ended"
@@ -80,7 +80,7 @@ class LayerRuns:
                 if line > end:
                     return state, due
                 continue  # the rest of the layer (travel) as it is
-            self.point.follow(job, line, None)
+            self.point.parked(job, line)
             if not await self.changes.wait(job, self.changes.reink_prompt(job, feed.pen,
                                                                           index)):
                 return "Ended", None

@@ -12,8 +12,9 @@ import asyncio
 import logging
 from collections.abc import Callable
 
+from plotbridge.colours import is_code
 from plotbridge.jobs.lifecycle import Lifecycle
-from plotbridge.jobs.model import Job
+from plotbridge.jobs.model import Job, Layer
 from plotbridge.pens import Pen, PenFeed, PenLibrary, servo_lines
 from plotbridge.plotter.link import Link
 
@@ -22,6 +23,19 @@ log = logging.getLogger("plotbridge.runner")
 PARK_S = 120.0  # s the park move may take
 
 Prompt = dict[str, object]
+
+
+def pen_to_load(layer: Layer, pen: Pen | None) -> str:
+    """What a pen-change prompt asks to load, after the layer's number: the pen by its
+    name, else the pen of the layer by the layer's name, else by the colour's word; never
+    a colour code (a layer split by colour is named by its code)."""
+    if layer.name and not is_code(layer.name):
+        named = f", '{layer.name}'"
+        return f"{named}: load pen '{pen.name}'" if pen is not None else f"{named}: load its pen"
+    colour = layer.label
+    if pen is not None:
+        return f" ({colour}): load pen '{pen.name}'" if colour else f": load pen '{pen.name}'"
+    return f": load the {colour} pen" if colour else ": load its pen"
 
 
 class PenChanges:
@@ -60,15 +74,13 @@ class PenChanges:
         """What to load before layer `index` (0-based); `reink`: the pen just used is due
         for re-inking too (said in the same prompt)."""
         layer = job.layers[index]
-        name, colour = layer.name or f"layer {index + 1}", layer.colour
         pen = self.pen_of(job, index)
-        load = (f"load pen '{pen.name}'" if pen is not None
-                else "load its pen" + (f" ({colour})" if colour else ""))  # fmt: skip
-        message = f"Layer {index + 1} of {len(job.layers)}, '{name}': {load}, then continue"
+        message = f"Layer {index + 1} of {len(job.layers)}{pen_to_load(layer, pen)}, then continue"
         if reink is not None:
             message += f" (pen '{reink.name}' is due for re-inking: {self.metres(reink)} drawn)"
-        return {"reason": "layer", "layer": index + 1, "layers": len(job.layers), "name": name,
-                "colour": colour, "pen": pen.name if pen else None, "message": message,
+        return {"reason": "layer", "layer": index + 1, "layers": len(job.layers),
+                "name": layer.label or f"layer {index + 1}", "colour": layer.colour,
+                "pen": pen.name if pen else None, "message": message,
                 "reink": reink.name if reink is not None else None}  # fmt: skip
 
     def reink_prompt(self, job: Job, pen: Pen, index: int) -> Prompt:

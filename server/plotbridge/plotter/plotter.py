@@ -181,6 +181,7 @@ class Plotter:
             "work_area": {"width": area.width, "height": area.height} if area else None,
             "job": job.id if job else None,
             "progress": job.progress if job else None,
+            "actions": job.actions if job else [],  # the lifecycle's, as on the job itself
             "machine": self.machine(),
         }
 
@@ -302,7 +303,7 @@ class Plotter:
     def settings(self) -> list[dict[str, Any]]:
         """The board's settings with their names, units, descriptions and ranges."""
         view = []
-        for number in sorted(self.link.settings):
+        for number in sorted(self.link.settings, key=settings_meta.shown_order):
             meta = settings_meta.SETTINGS.get(number)
             limits = settings_meta.RANGES.get(number) if self.checks_ranges else None
             view.append({

@@ -51,18 +51,31 @@ class StopPoint:
         self._orphan_at = 0.0
         self._orphan_writer: asyncio.Task[None] | None = None
         self._last_progress = 0.0
+        self._parked = False  # the carriage left the program: the mark stands
 
     # ---- a run ---------------------------------------------------------------------------
 
     def reset(self, line: int) -> None:
         self.floor, self.motion, self._mark = line, bytearray(), None
-        self.live, self._high = False, 0
+        self.live, self._high, self._parked = False, 0, False
         self._told()
 
     def streaming(self, motion: bytearray) -> None:
         """The motion flags of the stretch streaming now (filled as it is read); reports
         tell the pen's progress until `live` goes False (the stretch stands)."""
-        self.motion, self.live = motion, True
+        self.motion, self.live, self._parked = motion, True, False
+
+    def parked(self, job: Job, line: int) -> None:
+        """Everything before `line` is drawn and the carriage left the program (parked for
+        a pen, or to re-ink): the job's progress and its mark are `line`'s start until the
+        next stretch streams. The park position in reports meanwhile, or in the first one
+        after a stop, is no point of the program to resume from."""
+        self.follow(job, line, None)
+        measure = self._plan(job)[0]
+        self._parked = True
+        if measure is not None and line < len(measure.x):
+            self._keep(job, Mark(line, max(job.lines_acked, line), measure.x[line],
+                                 measure.y[line]))  # fmt: skip
 
     async def measure(self, job: Job) -> None:
         """Read the job's program for its progress (once per job; in a thread)."""
@@ -99,6 +112,8 @@ class StopPoint:
         if safe is None or status.x is None or status.y is None:
             return
         job.safe_line = safe
+        if self._parked:
+            return  # the park position: the mark at the boundary stands
         self._keep(job, Mark(safe, max(job.lines_acked, safe), status.x, status.y))
         if not self.live or safe < self._high:
             return  # parked for a pen, or an older report: the progress stands
@@ -144,8 +159,9 @@ class StopPoint:
             self._told()
             log.info("job %s: the steps stopped at %s, %s (%s, the first report after the "
                      "reset)", job.id, status.x, status.y, status.state)  # fmt: skip
-            last = max(job.lines_acked, self._mark.last)
-            self._keep(job, Mark(self._mark.first, last, status.x, status.y))
+            if not self._parked:  # parked: the boundary's mark is where it stopped
+                last = max(job.lines_acked, self._mark.last)
+                self._keep(job, Mark(self._mark.first, last, status.x, status.y))
             asyncio.get_running_loop().create_task(self.settle(job))
         self._ran_out(status)
 

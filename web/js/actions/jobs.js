@@ -1,8 +1,8 @@
 // Jobs: uploads and patterns, selection, placement, the actions a job offers (with the
 // layers to plot and the pen to load first), resume from a picked point, history.
 
-import { api, uploadJob } from "../api.js";
-import { actionRequest, can } from "../job-actions.js";
+import { ApiError, api, uploadJob } from "../api.js";
+import { actionMessage, actionRequest, can, isResumable, resumeChoice } from "../job-actions.js";
 import { askPermission } from "../notify.js";
 import { layerOfLine, nearestOnStroke } from "../preview-data.js";
 import { withPlacement } from "../reducer.js";
@@ -51,19 +51,66 @@ function uploadMessage(err) {
   return `Failed: ${err.message}`;
 }
 
-/** A job's layer choice (every layer ticked, from the first) unless the user changed it. */
+/** A job's layer choice (every layer ticked, from the first) unless the user changed it.
+ * A stopped or interrupted job's starts where it stopped (`start` null) with the layers it
+ * was plotting. */
 export function layerChoice(state, job) {
   const have = state.layerChoice[job.id];
   if (have) return have;
   const count = (job.layers || []).length;
   const plotted = job.plot_layers && job.plot_layers.length ? job.plot_layers : null;
-  return { ticked: plotted || Array.from({ length: count }, (_, i) => i + 1), start: plotted ? plotted[0] : 1 };
+  const ticked = plotted || Array.from({ length: count }, (_, i) => i + 1);
+  if (isResumable(job)) return { ticked, start: null };
+  return { ticked, start: plotted ? plotted[0] : 1 };
 }
 
-export function jobActions({ store, estop, core, all }) {
+/** Job actions over the WebSocket (`job_action`), REST while it is down. The server runs one
+ * client's job actions in order, so its answers come in the order they were asked. */
+function createJobChannel({ socket, core }) {
+  const pending = [];
+
+  function viaRest(req, retried = false) {
+    const call = req.method === "DELETE" ? api.del(req.path) : api.post(req.path, req.body);
+    if (!retried) return call;
+    // sent on a socket that closed before it answered: the server may have done it; then
+    // the lifecycle refuses this second copy (409, 404), and the job shows what happened
+    return call.catch((err) => {
+      if (err.status === 409 || err.status === 404) return core.loadJobs().then(() => null);
+      throw err;
+    });
+  }
+
+  return {
+    /** `action` on `job`: resolves with the job as the server answered (null: gone). */
+    send(job, action, opts) {
+      const req = actionRequest(job, action, opts);
+      if (!socket.send(actionMessage(job, action, opts))) return viaRest(req);
+      return new Promise((resolve, reject) => {
+        pending.push({ action, id: String(job.id), req, resolve, reject });
+      });
+    },
+    /** The socket's `ack` or `error` of a `job_action`. */
+    answered(msg) {
+      const i = msg.type === "ack"
+        ? pending.findIndex((p) => p.action === msg.action && (!msg.job || p.id === String(msg.job.id)))
+        : msg.action ? pending.findIndex((p) => p.action === msg.action) : pending.length - 1; // refused unread: the last
+      if (i < 0) return;
+      const [p] = pending.splice(i, 1);
+      if (msg.type === "ack") p.resolve(msg.job || null);
+      else p.reject(new ApiError(msg.status || 0, msg.detail ?? "refused"));
+    },
+    /** The socket closed: what it did not answer goes over REST. */
+    down() {
+      for (const p of pending.splice(0)) viaRest(p.req, true).then(p.resolve, p.reject);
+    },
+  };
+}
+
+export function jobActions({ store, estop, socket, core, all }) {
   const s = store.state;
   let uploadSeq = 0;
   let placementTimer = null;
+  const channel = createJobChannel({ socket, core });
 
   function added(record, job) {
     store.update(() => {
@@ -74,13 +121,12 @@ export function jobActions({ store, estop, core, all }) {
     setTimeout(() => all.dismissUpload(record.id), 4000);
   }
 
-  async function send(job, action, opts) {
-    const { method, path, body } = actionRequest(job, action, opts);
-    if (method === "DELETE") return api.del(path);
-    return api.post(path, body);
-  }
+  const send = (job, action, opts) => channel.send(job, action, opts);
 
   return {
+    onJobActionAnswer: (msg) => channel.answered(msg),
+    onJobSocketDown: () => channel.down(),
+
     uploadFile(file) {
       const id = `u${++uploadSeq}`;
       const record = { id, name: file.name, loaded: 0, total: file.size, status: "uploading", message: "", errors: [] };
@@ -222,6 +268,19 @@ export function jobActions({ store, estop, core, all }) {
         return;
       }
       const opts = { layers: layerChoice(s, job) };
+      if (action === "resume" || action === "home_then_resume") {
+        const chosen = resumeChoice(job, opts.layers);
+        if (chosen.error) {
+          core.notice(`resume “${job.name}”: ${chosen.error}`);
+          return;
+        }
+        const fromLayer = chosen.action === "resume_from";
+        // as a plain resume does, a resume from a layer homes a plotter in Alarm first
+        const board = s.plotters[job.plotter] || s.machine;
+        const home = action === "home_then_resume" || Boolean(board && board.state === "Alarm");
+        opts.body = fromLayer && home ? { ...chosen.body, home: true } : chosen.body;
+        if (fromLayer) action = "resume_from";
+      }
       if (action === "up" || action === "down") {
         const movable = s.jobs.filter((j) => can(j, "move"));
         opts.position = movable.indexOf(job) + (action === "up" ? -1 : 1);
@@ -236,7 +295,7 @@ export function jobActions({ store, estop, core, all }) {
           return;
         }
       }
-      if (action === "start" || action === "restart" || action === "resume") askPermission();
+      if (["start", "restart", "resume", "resume_from"].includes(action)) askPermission();
       try {
         const updated = await send(job, action, opts);
         if (action === "delete") {
@@ -248,10 +307,12 @@ export function jobActions({ store, estop, core, all }) {
         }
         if (action === "move") await core.loadJobs();
         else if (updated && updated.id !== undefined) core.upsertJob(updated);
-        if (action === "start" || action === "restart") {
+        if (["start", "restart", "resume", "resume_from"].includes(action)) {
           core.select(job.id);
           store.update((st) => {
             st.estop = null;
+            const { [job.id]: _used, ...others } = st.layerChoice; // the next stop starts afresh
+            st.layerChoice = others;
           });
         }
       } catch (err) {
@@ -296,11 +357,12 @@ export function jobActions({ store, estop, core, all }) {
       const job = s.jobs.find((j) => sameId(j.id, id));
       if (!job) return;
       const pick = s.resumePick && sameId(s.resumePick.jobId, id) ? s.resumePick : null;
-      const action = pick ? "resume_from" : home ? "home_then_resume" : "resume";
-      const req = actionRequest(job, action, { pick, overlap: s.resumeOverlap });
-      if (home) req.body = { ...req.body, home: true };
+      if (!pick) {
+        all.jobAction(job.id, home ? "home_then_resume" : "resume");
+        return;
+      }
       try {
-        const updated = await api.post(req.path, req.body);
+        const updated = await send(job, "resume_from", { pick, overlap: s.resumeOverlap, home, layers: layerChoice(s, job) });
         if (updated && updated.id !== undefined) core.upsertJob(updated);
         store.update((st) => {
           st.resumePick = null;
@@ -323,7 +385,7 @@ export function jobActions({ store, estop, core, all }) {
     async clearFinished(ids) {
       for (const id of ids) {
         try {
-          await api.del(`/api/jobs/${encodeURIComponent(id)}`);
+          await send({ id }, "delete");
         } catch (err) {
           core.notice(`delete: ${err.message}`);
         }

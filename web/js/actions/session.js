@@ -120,6 +120,7 @@ export function sessionActions({ store, socket, estop, core, all }) {
       } else if (msg.type === "fleet") core.apply(msg);
       else if (msg.type === "log") all.appendLog(Array.isArray(msg.lines) ? msg.lines : []);
       else if (msg.type === "ack" && msg.command === "estop") estop.onSocketAck();
+      else if ((msg.type === "ack" || msg.type === "error") && msg.command === "job_action") all.onJobActionAnswer(msg);
       else if (msg.type === "error" && msg.command === "command" && msg.confirm) {
         all.confirmCommand(msg.line, msg.detail);
       } else if (msg.type === "error") {
@@ -146,6 +147,7 @@ export function sessionActions({ store, socket, estop, core, all }) {
       // Resynchronize after a reconnect: messages may have been missed. While the
       // socket is down, poll over REST so the page does not show a stale state (and
       // knows at once whether the server is unreachable).
+      if (!open) all.onJobSocketDown(); // job actions it did not answer go over REST
       if (open !== wasOpen) resync();
       clearInterval(pollTimer);
       pollTimer = open ? null : setInterval(resync, POLL_MS);

@@ -2,8 +2,8 @@
 
 import { $, el, setAttr, setDisabled, setHidden, setText, syncList } from "../dom.js";
 import { layerChoice } from "../actions/jobs.js";
-import { bytes, duration, length, mm, percent } from "../format.js";
-import { can, isActive, jobButtons } from "../job-actions.js";
+import { bytes, duration, layerTitle, length, mm, percent } from "../format.js";
+import { can, isActive, isResumable, jobButtons, stoppedLayer } from "../job-actions.js";
 import { previewJob } from "../store.js";
 import { errorText, jobStateText } from "../words.js";
 import { penName } from "./pens.js";
@@ -15,16 +15,19 @@ const COLOUR = /^#[0-9a-f]{3,8}$/i;
 export const inQueue = (job) => ["start", "move", "stop", "resume"].some((a) => can(job, a));
 
 /** A job's layers as its row shows them: name, colour, pen, progress, what it takes,
- * whether it is ticked to plot and where the plot starts; `current` is the one being
- * drawn (or whose pen is due). Pure. */
+ * whether it is ticked to plot and where the plot starts (a stopped job's: where it
+ * stopped, `resumesHere`, unless another is chosen); `current` is the one being drawn (or
+ * whose pen is due). Pure. */
 export function layerRows(job, choice, pens = []) {
   const layers = job.layers || [];
   const due = job.pen_change ? job.pen_change.layer - 1 : -1;
   const drawing = isActive(job) && due < 0 ? layers.findIndex((l) => (l.progress || 0) < 1) : -1;
+  const here = isResumable(job) ? stoppedLayer(job) : 0;
+  const start = choice ? choice.start || here || 1 : 1;
   return layers.map((l, i) => ({
     key: `${i}:${l.first_line}`,
     number: i + 1,
-    name: l.name || `layer ${i + 1}`,
+    name: layerTitle(l, i + 1),
     colour: COLOUR.test(l.colour || "") ? l.colour : "",
     pen: l.pen ?? null,
     penName: l.pen === null || l.pen === undefined ? "" : penName(pens, l.pen),
@@ -32,7 +35,8 @@ export function layerRows(job, choice, pens = []) {
     info: `${percent(l.progress || 0)} · est. ${duration(l.estimate_s)} · ${length(l.pen_down_mm)}`,
     current: i === due || i === drawing,
     ticked: !choice || choice.ticked.includes(i + 1),
-    start: (choice ? choice.start : 1) === i + 1,
+    start: start === i + 1,
+    resumesHere: here === i + 1,
   }));
 }
 
@@ -241,7 +245,7 @@ function renderQueue(state) {
 /** The job's layers: tick which to plot and the one to start at (when it can start or be
  * plotted again), each layer's pen (while it does not run). */
 function renderLayers(list, job, state) {
-  const choosing = (can(job, "start") || can(job, "restart")) && (job.layers || []).length > 1;
+  const choosing = ["start", "restart", "resume"].some((a) => can(job, a)) && (job.layers || []).length > 1;
   const pens = state.pens.list;
   const rows = layerRows(job, choosing ? layerChoice(state, job) : null, pens);
   setHidden(list, rows.length === 0 || (rows.length === 1 && pens.length === 0));
@@ -253,7 +257,7 @@ function renderLayers(list, job, state) {
       el("span", { className: "swatch", "aria-hidden": "true" }),
       el("span", { className: "layer-name" }),
       el("label", { className: "start-at" },
-        el("input", { type: "radio", className: "start", name: `start-${job.id}` }), "start here"),
+        el("input", { type: "radio", className: "start", name: `start-${job.id}` }), el("span", {}, "start here")),
       el("progress", { max: 1 }),
       el("span", { className: "layer-info" }),
       el("select", { className: "layer-pen" }),
@@ -267,7 +271,8 @@ function renderLayers(list, job, state) {
       const start = li.querySelector(".start");
       setHidden(li.querySelector(".start-at"), !choosing);
       if (start.checked !== r.start) start.checked = r.start;
-      start.setAttribute("aria-label", `Start at layer ${r.number}`);
+      setText(li.querySelector(".start-at span"), r.resumesHere ? "resume here" : "start here");
+      start.setAttribute("aria-label", r.resumesHere ? `Resume in layer ${r.number}, where it stopped` : `Start at layer ${r.number}`);
       li.classList.toggle("skipped", choosing && !r.ticked);
       const bar = li.querySelector("progress");
       bar.value = r.progress;

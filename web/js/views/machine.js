@@ -16,7 +16,8 @@ function machineLabel(m) {
 /** "plotter2: " when there are several plotters, else "". */
 const whose = (state, name = state.plotter) => (state.plotterOrder.length > 1 && name ? `${name}: ` : "");
 
-/** The pen prompt of a job at a pen change, in words: names the pen, never its colour code. */
+/** The pen prompt of a job at a pen change, in words: names the pen, else the layer (its
+ * `name` is the layer's label: a colour in words), never a colour code. */
 export function penChangeText(job, pens = []) {
   const p = job.pen_change || {};
   if (p.reason === "reink") return p.message || "re-ink the pen, then continue";

@@ -3,6 +3,7 @@
 
 import { api } from "../api.js";
 import { $, el, setDisabled, setHidden, setText, syncList } from "../dom.js";
+import { layerTitle } from "../format.js";
 import { jobActive } from "../store.js";
 
 const SERVO_MIN = 500, SERVO_MAX = 2500; // the firmware's range for $60/$61 (µs)
@@ -32,7 +33,7 @@ export function penNeeded(state, job, choice) {
   const plotter = job.target || job.plotter || state.plotter || null;
   const loaded = loadedPen(state, state.plotterOrder.length > 1 ? plotter : null);
   if (loaded === layer.pen) return null;
-  return { pen: layer.pen, loaded, layer: first, layerName: layer.name || `layer ${first}`, plotter: state.plotterOrder.length > 1 ? plotter : "" };
+  return { pen: layer.pen, loaded, layer: first, layerName: layerTitle(layer, first), plotter: state.plotterOrder.length > 1 ? plotter : "" };
 }
 
 /** A pen's name from its id (never its colour code). */

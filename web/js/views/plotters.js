@@ -62,8 +62,10 @@ export function renderPlotters(state) {
       const connected = machine.connected !== false;
       setText(badge, connected ? machineStateText(machine.state || "?") : "not connected");
       badge.dataset.state = connected ? machine.state || "" : "Disconnected";
+      // the state first: on a phone the line ends in an ellipsis
       setText(node.querySelector(".plotter-job"), job
-        ? `${job.name}: ${jobStateText(job.state)}${job.progress ? `, ${percent(job.progress)}` : ""}` : "no job");
+        ? `${jobStateText(job.state)}${job.progress ? `, ${percent(job.progress)}` : ""}: ${job.name}` : "no job");
+      setAttr(node.querySelector(".plotter-job"), "title", job ? job.name : null);
       const bar = node.querySelector("progress");
       setHidden(bar, !job || !job.progress);
       if (job) bar.value = job.progress || 0;

@@ -4,6 +4,7 @@
 // "Home, then resume" where the job's actions offer it).
 
 import { $, setDisabled, setHidden, setText } from "../dom.js";
+import { layerTitle } from "../format.js";
 import { can } from "../job-actions.js";
 import { previewJob } from "../store.js";
 
@@ -17,7 +18,7 @@ export function bindResume(actions) {
 /** The picked point in words: its layer, where along its stroke, where on the paper. Pure. */
 export function pickText(job, pick) {
   const layer = pick.layer && job.layers && job.layers[pick.layer - 1];
-  const named = layer ? `layer ${pick.layer} “${layer.name || `layer ${pick.layer}`}”, ` : "";
+  const named = layer ? `layer ${pick.layer} “${layerTitle(layer, pick.layer)}”, ` : "";
   const along = Number.isFinite(pick.along) ? `${pick.along.toFixed(1)} mm along a ${(pick.length || 0).toFixed(1)} mm stroke, ` : "";
   return `From ${named}${along}at X ${pick.x.toFixed(2)} Y ${pick.y.toFixed(2)}`;
 }
