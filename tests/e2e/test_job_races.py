@@ -18,7 +18,7 @@ from tests.fixtures.server import TOKEN, ServerProcess, running_server
 pytestmark = pytest.mark.e2e
 
 NAMES = ("plotter1", "plotter2")
-ROUNDS = 5
+ROUNDS = 3
 PAIRS = {
     "two resumes from a point": (("resume_from", {"from": {"line": 40}}),
                                  ("resume_from", {"from": {"line": 40}})),
