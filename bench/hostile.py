@@ -27,6 +27,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from tests.fixtures import attacks
@@ -110,24 +111,34 @@ def streaming_rate(server: ServerProcess, job: dict, seconds: float) -> float:
 
 class Page:
     """A WebSocket opened before the attack (as a page's is), every message read by a
-    thread as a browser does; `stop()` times a stop of plotter1 to its ack."""
+    thread as a browser does; `stop()` times a stop of plotter1 to its ack. Dropped by
+    the server (it fell behind), it connects again as the page does; `reconnects` counts."""
 
     def __init__(self, server: ServerProcess) -> None:
-        url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
-        self.ws = connect(url, max_size=None)
+        self.url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
+        self.reconnects = 0
         self.acked = threading.Event()
-        threading.Thread(target=self._read, daemon=True).start()
+        self._open()
 
-    def _read(self) -> None:
+    def _open(self) -> None:
+        self.ws = connect(self.url, max_size=None)
+        threading.Thread(target=self._read, args=(self.ws,), daemon=True).start()
+
+    def _read(self, ws) -> None:
         with contextlib.suppress(Exception):
-            for text in self.ws:
+            for text in ws:
                 if json.loads(text) == {"type": "ack", "command": "estop"}:
                     self.acked.set()
 
     def stop(self) -> float:
         self.acked.clear()
         started = time.perf_counter()
-        self.ws.send(json.dumps({"type": "estop", "plotter": "plotter1"}))
+        try:
+            self.ws.send(json.dumps({"type": "estop", "plotter": "plotter1"}))
+        except ConnectionClosed:
+            self.reconnects += 1
+            self._open()
+            self.ws.send(json.dumps({"type": "estop", "plotter": "plotter1"}))
         if not self.acked.wait(30):
             raise RuntimeError("no WebSocket stop acknowledgement within 30 s")
         return time.perf_counter() - started
@@ -169,7 +180,7 @@ def measure(server: ServerProcess, name: str, attack, args, idle: dict | None) -
     result = {
         "rate": rate, "rest": attacks.summary(rest), "ws": attacks.summary(ws_times),
         "peak_mb": peak.stop(), "errors": attack.server_errors() if attack else 0,
-        "statuses": dict(attack.statuses) if attack else {},
+        "statuses": dict(attack.statuses) if attack else {}, "reconnects": page.reconnects,
     }  # fmt: skip
     base = idle or result
     print(f"\n== {name}")
@@ -184,7 +195,8 @@ def measure(server: ServerProcess, name: str, attack, args, idle: dict | None) -
           f">= 90 %: {verdict(ratio >= STREAM_GOAL)}")
     print(f"  plotters 2-4 still streaming after it: {streaming} of 3")
     print(f"  peak memory {result['peak_mb']:.0f} MB; 5xx answers: {result['errors']}; "
-          f"attacker saw {result['statuses']}")
+          f"attacker saw {result['statuses']}; the page reconnected {result['reconnects']} "
+          "times (dropped for falling behind)")
     return result
 
 
