@@ -10,6 +10,7 @@ import time
 from collections.abc import Iterator
 
 import pytest
+from plotbridge.people.store import TOKEN_OWNER, PeopleStore
 
 from tests.browser.conftest import QuietHandler, login
 from tests.fixtures.waits import wait_until
@@ -77,13 +78,16 @@ def test_the_csp_blocks_an_inline_script(desktop, server_virtual):
 
 
 def test_a_refused_websocket_shows_the_login_and_stops_retrying(desktop, server_virtual):
-    """A restart that finds no kept sessions (their file gone) ends the page's
-    session: its reconnect is refused with 4401, it shows the login and tries no more."""
+    """Sessions ended behind the page's back (by another process, then a restart) end
+    the page's session: its reconnect is refused with 4401, it shows the login and tries
+    no more."""
     page, _ = desktop
     login(page, server_virtual.url, server_virtual.token)
     sockets: list[str] = []
     page.on("websocket", lambda ws: sockets.append(ws.url))
-    (server_virtual.data_dir / "sessions.json").unlink()
+    store = PeopleStore(server_virtual.data_dir / "plotbridge.db")
+    store.end_sessions(TOKEN_OWNER, "token")
+    store.close()
     server_virtual.restart()
     page.wait_for_selector("#login-view:not([hidden])", timeout=60000)
     tried = len(sockets)

@@ -16,6 +16,7 @@ import { bindHistory, renderHistory } from "./views/history.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
 import { bindPens, penName, renderPens } from "./views/pens.js";
+import "./views/people.js"; // roles: hides what the role cannot do; approvals; people and keys
 import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
