@@ -356,7 +356,7 @@ async def serve(config: Config) -> int:
         (config.data_dir / LISTEN_FILE).write_text(f"{config.host} {config.port}\n")
         if generated and _stdout_is_journal():  # a service: the journal is readable
             #   by more than the token's owner, so the link stays out of it
-            log.info("a new token is in %s; `plotbridge token --data-dir %s` prints a "
+            log.info("a new token is in %s; `plotbridge token --data-dir %s` prints the "
                      "login link", config.token_file, config.data_dir)
         elif generated:  # later starts keep it out of logs: `plotbridge token` prints one
             print_login(config.host, config.port, config.data_dir)

@@ -355,8 +355,8 @@ class Plotbridge:
     def act(self, job_id: str, action: str, plotter: str | None = None,
             body: dict[str, Any] | None = None) -> Job:  # fmt: skip
         """One of the job's `actions` (start, hold, continue, stop, resume, home_then_resume,
-        resume_from, restart, cancel, frame); the server answers 409 with the actions it
-        allows when the job's state does not."""
+        resume_from, restart, cancel, frame, approve, decline with {"reason"}); the server
+        answers 409 with the actions it allows when the job's state does not."""
         params = {"plotter": plotter} if plotter else None
         return self.request("POST", f"/api/jobs/{job_id}/{action}", action.replace("_", " "),
                             params=params, json=body)  # fmt: skip

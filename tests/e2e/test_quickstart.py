@@ -18,7 +18,8 @@ from tests.fixtures.server import free_port
 from tests.fixtures.waits import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
-LOGIN_LINE = re.compile(r"one-time login link for the admin.*:\n(http://\S+/login\.html)#(\S+)")
+LOGIN_LINE = re.compile(
+    r"one-time login link for the admin.*\nplotbridge: open (http://\S+/login\.html)#(\S+)")
 SQUARE = "G21\nG90\nG0 X10 Y10\nM3\nG1 X30 Y10 F3000\nG1 X30 Y30\nG1 X10 Y30\nG1 X10 Y10\nM5\n"
 
 

@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import http.server
 import json
+import os
 import sqlite3
+import subprocess
+import sys
 import threading
 import time
 from contextlib import closing
@@ -63,11 +66,16 @@ def test_submitter_operator_viewer_and_a_revoked_key(server, plotter):
         assert approved.status_code == 200, approved.text
         assert server.wait_job(job["id"], ("done", "failed", "stopped"), 120)["state"] == "done"
         assert_same_drawing(server.preview(job["id"])["strokes"], plotter.trace()["strokes"])
-        # another is declined: its sender sees why
+        # another is declined (by the command line, the operator's key): its sender sees why
         refused = submitter.post("/api/jobs", files=files).json()
         reason = "please use the A5 paper"
-        assert operator.post(f"/api/jobs/{refused['id']}/decline",
-                             json={"reason": reason}).status_code == 200  # fmt: skip
+        env = {k: v for k, v in os.environ.items() if not k.startswith("PLOTBRIDGE_")}
+        declined = subprocess.run(
+            [sys.executable, "-m", "plotbridge", "act", refused["id"], "decline", "--reason",
+             reason, "--url", server.url, "--json"], env={**env, "PLOTBRIDGE_TOKEN":
+             keys["operator"]}, capture_output=True, text=True, timeout=60)  # fmt: skip
+        assert declined.returncode == 0, declined.stderr
+        assert json.loads(declined.stdout)["state"] == "cancelled"
         seen = submitter.get(f"/api/jobs/{refused['id']}").json()
         assert seen["state"] == "cancelled" and seen["approval"]["reason"] == reason
         # a viewer stops a running job within the usual bound
