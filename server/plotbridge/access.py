@@ -114,6 +114,9 @@ ROUTES: dict[tuple[str, str], Rule] = {
     ("WS", "/api/ws"): (V, False),
 }  # fmt: skip
 
+PUBLIC_PATHS = frozenset(path for (_, path), (need, _) in ROUTES.items() if need is PUBLIC)
+"""The paths that need no credential (the guard lets them through, the API docs say so)."""
+
 WS_MESSAGES: dict[str, Role] = {
     "estop": V,  # handled first, before any other check
     "pause": O,

@@ -56,10 +56,12 @@ def test_make_run_from_a_clean_clone_serves_and_plots(tmp_path):
                               "the first page", every=0.1, errors=(httpx.HTTPError,))
             first_page_s = time.monotonic() - started
             assert page.status_code == 200 and "<html" in page.text.lower()
-            assert browser.post("/api/login", json={"link": code}).status_code == 204  # its page
+            page_sends = {"X-Plotbridge": "1"}  # as the page's api.js does
+            login = {"json": {"link": code}, "headers": page_sends}
+            assert browser.post("/api/login", **login).status_code == 204  # its page
             assert "plotbridge_session" in browser.cookies
             assert browser.get("/api/machine").status_code == 200  # the cookie logs in
-            assert browser.post("/api/login", json={"link": code}).status_code == 401  # once
+            assert browser.post("/api/login", **login).status_code == 401  # once
 
         ARTIFACTS.mkdir(exist_ok=True)
         (ARTIFACTS / "quickstart.txt").write_text(f"make run to first page: {first_page_s:.1f} s\n")

@@ -19,6 +19,7 @@ from urllib.parse import parse_qs
 
 from starlette.requests import ClientDisconnect
 
+from plotbridge.access import PUBLIC_PATHS
 from plotbridge.guard.headers import security_headers
 from plotbridge.guard.hosts import host_allowed, origin_allowed, own_names
 from plotbridge.guard.limits import body_limit
@@ -35,7 +36,6 @@ ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 BODY_IDLE_TIMEOUT = 10.0  # s without a byte of a body that has not all arrived: 408
 CSRF_HEADER = b"x-plotbridge"  # the page adds it; a form or no-cors fetch cannot
 UNSAFE = ("POST", "PUT", "PATCH", "DELETE")
-PUBLIC = ("/api/health", "/api/session", "/api/identity", "/api/login", "/api/logout")
 WS_PER_CLIENT = 8  # open WebSockets per client address (the page needs one)
 COOKIE = "plotbridge_session"
 
@@ -149,7 +149,7 @@ class Guard:
         api = path.startswith("/api/")
         identity = await self.checks.identify(scope, headers, None)
         via = identity.via if identity is not None else None
-        if api and path not in PUBLIC and via is None:
+        if api and path not in PUBLIC_PATHS and via is None:
             return await _answer(
                 send, 401, "missing or wrong token: send 'Authorization: Bearer TOKEN' or log in",
                 [(b"www-authenticate", b"Bearer")],
