@@ -108,7 +108,8 @@ async def audit(
     return await c.access.read(c.access.store.audit, limit, before)
 
 
-@router.get("/audit/export")
+@router.get("/audit/export", response_class=StreamingResponse, responses={
+    200: {"description": "one JSON object per line", "content": {"application/x-ndjson": {}}}})
 async def audit_export(c: Parts) -> StreamingResponse:
     """The whole log as JSON lines, oldest first."""
     entries = await c.access.read(lambda: list(c.access.store.audit_all()))
