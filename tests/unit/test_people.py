@@ -213,3 +213,18 @@ def test_a_submitters_upload_waits_for_approval_and_a_decline_says_why(app_clien
     assert client.post("/api/jobs", files=files, headers=sub).json()["state"] == "queued"
     client.put("/api/settings/approval", json={"mode": "all"}, headers=bearer(TOKEN))
     assert client.post("/api/jobs", files=files, headers=op).json()["state"] == "awaiting_approval"
+
+
+def test_an_upload_that_waits_for_approval_is_not_handed_to_the_fleet(app_client):
+    """`fleet=true` from a submitter: the job waits here for an operator (no MQTT here, so
+    an operator's `fleet=true` is refused 409: the field was looked at)."""
+    app, client, _ = app_client
+    keys = keys_per_role(app)
+    files = {"file": ("a.gcode", "G1 X1 Y1\n")}
+    waiting = client.post("/api/jobs", files=files, data={"fleet": "true"},
+                          headers=bearer(keys["submitter"]))  # fmt: skip
+    assert waiting.status_code == 201 and waiting.json()["state"] == "awaiting_approval"
+    assert "fleet" not in waiting.json()
+    offered = client.post("/api/jobs", files=files, data={"fleet": "true"},
+                          headers=bearer(keys["operator"]))  # fmt: skip
+    assert offered.status_code == 409 and "--mqtt" in offered.text
