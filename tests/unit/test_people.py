@@ -6,7 +6,10 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import sqlite3
+import threading
 import time
+from contextlib import closing
 
 import pytest
 from plotbridge import auth as authmod
@@ -98,6 +101,29 @@ def test_logout_and_a_rotated_token_close_their_websockets(app_client):
     assert client.get("/api/me", headers={"cookie": f"plotbridge_session={again}"}
                       ).status_code == 401  # fmt: skip
     assert client.get("/api/me", headers=bearer("n" * 24)).json()["role"] == "admin"
+
+
+def test_a_logout_holds_while_its_write_waits_and_another_writer_changes_the_file(app_client):
+    """The jobs and pens write the same file: a reload then must not bring back a session
+    this process ended but has not written yet."""
+    app, client, data = app_client
+    access = app.state.components.access
+    session = client.post("/api/login", json={"token": TOKEN}).cookies["plotbridge_session"]
+    client.cookies.clear()
+    cookie = {"cookie": f"plotbridge_session={session}", "x-plotbridge": "1"}
+    assert client.get("/api/me", headers=cookie).status_code == 200
+    gate = threading.Event()
+    access._writer.submit(gate.wait, 10)  # the writer thread is busy: the logout's write waits
+    try:
+        assert client.post("/api/logout", headers=cookie).status_code == 204
+        with closing(sqlite3.connect(data / "plotbridge.db")) as other, other:
+            other.execute("CREATE TABLE IF NOT EXISTS elsewhere (x)")  # another writer
+            other.execute("INSERT INTO elsewhere VALUES (1)")
+        assert client.get("/api/me", headers=cookie).status_code == 401
+    finally:
+        gate.set()
+    access.refresh()
+    assert client.get("/api/me", headers=cookie).status_code == 401
 
 
 def test_every_way_of_sending_a_credential_counts_and_the_right_one_is_never_held(app_client):

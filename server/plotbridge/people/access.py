@@ -16,6 +16,7 @@ import contextlib
 import hmac
 import logging
 import secrets
+import threading
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -71,6 +72,8 @@ class Access:
         self.failures = Failures()
         self.server_id = store.server_id()
         self._writer = ThreadPoolExecutor(1, thread_name_prefix="plotbridge-people")
+        self._unwritten = 0  # session writes queued on the writer thread
+        self._count_lock = threading.Lock()
         self._watched: dict[int, tuple[Identity, Callable[[], None]]] = {}
         self._watcher: asyncio.Task[None] | None = None
         self._next_token_look = 0.0
@@ -99,13 +102,21 @@ class Access:
     def refresh(self) -> None:
         """Take another process's changes and a rotated token; close what they revoked."""
         changed = self._reload_token()
-        mark = self.store.changed_mark()
-        if mark != self._mark:
-            self._mark = mark
-            self.known = self.store.snapshot()
-            changed = True
-        if changed:
+        if self._reload_store() or changed:
             self.revalidate()
+
+    def _reload_store(self) -> bool:
+        """Take the store's state when another connection wrote since (a cheap pragma; the
+        jobs and pens share the file, so it may be theirs). Not while this process's own
+        session writes are queued: the store does not hold them yet (a later look will)."""
+        if self._unwritten:
+            return False
+        mark = self.store.changed_mark()
+        if mark == self._mark:
+            return False
+        self._mark = mark
+        self.known = self.store.snapshot()
+        return True
 
     def _stamp(self) -> tuple[int, int] | None:
         try:
@@ -142,11 +153,8 @@ class Access:
     # ---- credentials -----------------------------------------------------------------------
 
     def _current(self) -> None:
-        """Reload before answering if another process wrote (a cheap pragma)."""
-        mark = self.store.changed_mark()
-        if mark != self._mark:
-            self._mark = mark
-            self.known = self.store.snapshot()
+        """Reload before answering if another process wrote."""
+        if self._reload_store():
             self.revalidate()
 
     def by_secret(self, secret: str, via: str) -> Identity | None:
@@ -239,9 +247,9 @@ class Access:
         while len(sessions) >= MAX_SESSIONS:
             oldest = min(sessions, key=lambda k: sessions[k][2])
             del sessions[oldest]
-            self._write(self.store.end_session, oldest)
+            self._write_known(self.store.end_session, oldest)
         sessions[hashed] = (owner, kind, expires)
-        self._write(self.store.add_session, hashed, owner, kind, expires)
+        self._write_known(self.store.add_session, hashed, owner, kind, expires)
         return session
 
     def login_token(self, token: str) -> str | None:
@@ -267,7 +275,7 @@ class Access:
         if identity is None or identity.via != "cookie":
             return
         self.known.sessions.pop(identity.secret, None)
-        self._write(self.store.end_session, identity.secret)
+        self._write_known(self.store.end_session, identity.secret)
         self.revalidate()
 
     def end_everywhere(self, identity: Identity) -> None:
@@ -277,7 +285,7 @@ class Access:
         for hashed, (who, how, _) in list(self.known.sessions.items()):
             if how == kind and who.lower() == owner.lower():
                 del self.known.sessions[hashed]
-        self._write(self.store.end_sessions, owner, kind)
+        self._write_known(self.store.end_sessions, owner, kind)
         self.revalidate()
 
     # ---- changes made through the API ------------------------------------------------------
@@ -342,6 +350,18 @@ class Access:
     def _write(self, fn: Callable[..., Any], *args: Any) -> None:
         future = self._writer.submit(fn, *args)
         future.add_done_callback(_log_failure)
+
+    def _write_known(self, fn: Callable[..., Any], *args: Any) -> None:
+        """A write of what `known` mirrors (sessions): no reload until it is in the store."""
+        with self._count_lock:
+            self._unwritten += 1
+        future = self._writer.submit(fn, *args)
+        future.add_done_callback(self._written)
+
+    def _written(self, future: Any) -> None:
+        with self._count_lock:
+            self._unwritten -= 1
+        _log_failure(future)
 
 
 def _log_failure(future: Any) -> None:
