@@ -4,10 +4,11 @@ The connection protocol (`connections.GuardedH11`) hands the lane each request's
 head (request line and headers) as soon as it is complete, before h11, the
 ASGI task, the middleware, FastAPI's dependencies or any worker thread see it.
 A stop route (`POST /api/estop`, `/api/machine/estop`,
-`/api/plotters/NAME/machine/estop`) that passes the guard's own checks (Host,
-an identity whose role may stop by the role table -- every role: access.py --,
-Origin) is acted on there: the reset bytes are written and the
-answer goes out in the same loop callback, then the connection closes. Anything
+`/api/plotters/NAME/machine/estop`) that passes the guard's own checks (Host;
+who is asking, from people.Access's memory, with a role the table in access.py lets
+stop, which is every role; Origin) is acted on there and audited: the reset bytes
+are written and the answer goes out in the same loop callback, then the connection
+closes. Anything
 else goes on to the app as before. A connection over the connection caps may
 send only this (docs/INTERNALS.md, "The stop lane").
 """
