@@ -21,6 +21,8 @@ from fastapi.openapi.docs import (
 from fastapi.responses import HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
+from plotbridge.access import PUBLIC_PATHS
+
 ASSETS_DIR = Path(fastapi_offline.__file__).resolve().parent / "static"
 ASSETS_URL = "/docs/assets"
 CSP = (
@@ -43,10 +45,10 @@ TAGS: tuple[tuple[str, str, str], ...] = (
     ("/api/settings", "settings", "Server settings: webhooks"),
     ("/", "session", "Log in and out, health, server facts"),
 )
-PUBLIC_PATHS = frozenset({"/api/health", "/api/session", "/api/login", "/api/logout", "/login"})
 SECURITY_SCHEMES = {
     "token": {"type": "http", "scheme": "bearer",
-              "description": "`Authorization: Bearer TOKEN` (the token `plotbridge token` prints)"},
+              "description": "`Authorization: Bearer TOKEN`: the data directory's token, or "
+                             "an API key (`plotbridge keys add NAME --role ROLE`)"},
     "session": {"type": "apiKey", "in": "cookie", "name": "plotbridge_session",
                 "description": "the browser's session after `POST /api/login`; a request that "
                                "changes something also sends the header `X-Plotbridge: 1`"},

@@ -9,17 +9,16 @@ from contextlib import asynccontextmanager
 from dataclasses import dataclass
 from functools import partial
 
-from fastapi import FastAPI, Request
+from fastapi import Depends, FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 from plotbridge import __version__
-from plotbridge.api import jobs, notify, pens, plotters, session, ws
-from plotbridge.api.deps import Components, error
+from plotbridge.api import jobs, notify, pens, people, plotters, session, ws
+from plotbridge.api.deps import Components, authorize, error
 from plotbridge.api.plotters import emergency_stop
 from plotbridge.apidocs import mount_docs
-from plotbridge.auth import Auth
 from plotbridge.config import Config
 from plotbridge.errors import Refused
 from plotbridge.events import EventHub
@@ -35,6 +34,8 @@ from plotbridge.mqtt.service import MqttService
 from plotbridge.mqtt.verbs import Verbs
 from plotbridge.notify import Webhooks
 from plotbridge.pens import PenLibrary
+from plotbridge.people import Access, PeopleStore
+from plotbridge.people.migrate import take_old_sessions
 from plotbridge.plotter.link import Link
 from plotbridge.plotter.plotter import Plotter, WorkArea
 from plotbridge.queue import JobQueue
@@ -68,7 +69,8 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     events = EventHub()
     clients = Hub()
     events.subscribe(clients.broadcast)
-    webhooks = Webhooks(list(config.webhooks), config.data_dir, config.db_path)
+    webhooks = Webhooks(list(config.webhooks), config.data_dir, config.db_path,
+                        allow_local=config.webhook_allow_local)  # fmt: skip
     events.subscribe(webhooks.publish)
     config.jobs_dir.mkdir(parents=True, exist_ok=True)
     config.tmp_dir.mkdir(exist_ok=True)
@@ -78,6 +80,9 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     importer = Importer(config.jobs_dir, limits=config.import_limits)
     importer.clean()
     library = PenLibrary(config.db_path, events)
+    people_store = PeopleStore(config.db_path)
+    take_old_sessions(config.data_dir / "sessions.json", people_store)
+    access = Access(people_store, token, config.token_file)
     lifecycle = Lifecycle(store, events)
     units = [Plotter(b.name, b.link, events, config.jobs_dir, lifecycle, virtual=b.virtual,
                      work_area=b.work_area, profile=b.profile,
@@ -89,13 +94,14 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
                      pens=library)  # fmt: skip
     queue.load()
     actions = JobActions(queue, lifecycle)
-    mqtt = (MqttService(config.mqtt, Verbs(queue, actions), events, public_url(config),  # type: ignore[arg-type]
+    mqtt = (MqttService(config.mqtt, Verbs(queue, actions, access), events, public_url(config),  # type: ignore[arg-type]
                         config.data_dir)
             if config.mqtt else None)  # fmt: skip
 
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         await webhooks.start()
+        access.start()
         for plotter in units:
             plotter.start()
         if mqtt:
@@ -108,6 +114,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
             for plotter in units:
                 await plotter.stop()
             await webhooks.close()
+            await access.close()
             importer.close()
             library.close()
             store.close()
@@ -115,14 +122,14 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
     app = FastAPI(
         title="plotbridge", version=__version__, lifespan=lifespan, docs_url=None,
         redoc_url=None, openapi_url="/openapi.json", responses=ERROR_RESPONSES,
+        dependencies=[Depends(authorize)],  # every route's role: plotbridge.access
     )  # fmt: skip
     mount_docs(app)  # /docs and /redoc from the package's own assets (offline)
-    auth = Auth(token, config.token_file, config.data_dir / "sessions.json")
-    checks = Checks(auth, config.allowed_hosts)
+    checks = Checks(access, config.allowed_hosts)
     app.add_middleware(Guard, checks=checks, upload_limit=config.upload_limit)
     LANE.bind(checks, partial(emergency_stop, queue))  # the real server's stop lane
     app.state.mqtt = mqtt
-    app.state.components = Components(config, auth, events, queue, actions, clients, library,
+    app.state.components = Components(config, access, events, queue, actions, clients, library,
                                       webhooks)
 
     @app.exception_handler(Refused)
@@ -147,7 +154,7 @@ def create_app(config: Config, boards: list[Board], token: str) -> FastAPI:
         return error(500, f"internal error: {type(exc).__name__}: {exc}")
 
     for router in (session.router, plotters.router, jobs.router, pens.router, notify.router,
-                   ws.router, fleet_router):
+                   people.router, ws.router, fleet_router):
         app.include_router(router)
     if config.web_dir is not None and config.web_dir.is_dir():
         app.mount("/", StaticFiles(directory=config.web_dir, html=True), name="web")

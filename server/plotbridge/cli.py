@@ -9,7 +9,6 @@ import gc
 import logging
 import math
 import os
-import socket
 import sys
 from pathlib import Path
 from typing import Any
@@ -27,6 +26,8 @@ from plotbridge.config import (
 )
 from plotbridge.jobs.model import AFTER_JOB
 from plotbridge.mqtt import settings as mqtt_settings
+from plotbridge.people import cli as people_cli
+from plotbridge.people.cli import LISTEN_FILE, listening_port
 
 log = logging.getLogger("plotbridge")
 
@@ -171,6 +172,10 @@ def add_serve_arguments(parser: argparse.ArgumentParser) -> None:
              "comma-separated; more in the settings)",
     )  # fmt: skip
     parser.add_argument(
+        "--webhook-allow-local", action="store_true", default=_env_flag("WEBHOOK_ALLOW_LOCAL"),
+        help="let webhook URLs from the settings reach this machine or link-local addresses",
+    )  # fmt: skip
+    parser.add_argument(
         "--zeroconf", action=argparse.BooleanOptionalAction,
         default=str(_env("ZEROCONF", "1")).strip().lower() not in ("0", "false", "no", "off"),
         help="announce the server on the LAN by mDNS (default on; env PLOTBRIDGE_ZEROCONF=0)",
@@ -240,6 +245,7 @@ def config_from_args(args: argparse.Namespace) -> Config:
         after_job=args.after_job,
         park=args.park,
         webhooks=webhooks_from_args(args),
+        webhook_allow_local=args.webhook_allow_local,
         log_level=args.log_level,
         zeroconf=args.zeroconf,
         web_dir=find_web_dir(),
@@ -252,21 +258,6 @@ def config_from_args(args: argparse.Namespace) -> Config:
     )
 
 
-LISTEN_FILE = "listen"  # DATA_DIR/listen: "HOST PORT" of the running server, for `token`
-
-
-def login_hosts(host: str) -> list[str]:
-    """The names a phone on the LAN reaches the server by: listening on every address, the
-    LAN addresses and the zeroconf name (NAME.local, which mdns.py announces); else the
-    host it listens on."""
-    if host not in ("0.0.0.0", "::", ""):
-        return [f"[{host}]" if ":" in host else host]
-    from plotbridge import mdns
-
-    lan = [a for a in mdns.machine_addresses() if ":" not in a]
-    return [*lan[:1], f"{socket.gethostname().split('.')[0]}.local"]
-
-
 def _stdout_is_journal() -> bool:
     """Standard output is systemd's journal (JOURNAL_STREAM names its device:inode; a child
     that inherited the variable with its output elsewhere is not)."""
@@ -277,27 +268,10 @@ def _stdout_is_journal() -> bool:
     return os.environ.get("JOURNAL_STREAM") == f"{st.st_dev}:{st.st_ino}"
 
 
-def print_login(host: str, port: int, token: str) -> None:
-    """The login link and its QR code (for a phone's camera) on the console: by the LAN
-    address where there is one (every phone resolves it), and by NAME.local."""
-    import io
-
-    import segno
-
-    urls = [f"http://{name}:{port}/login?token={token}" for name in login_hosts(host)]
-    qr = io.StringIO()
-    segno.make(urls[0], error="l").terminal(out=qr, compact=True)
-    also = "".join(f"\n            or {url}" for url in urls[1:])
-    print(f"plotbridge: open {urls[0]}{also}\n{qr.getvalue()}", flush=True)
-
-
-def listening_port(data_dir: Path) -> int:
-    """The port the server with this data directory listens on (DATA_DIR/listen), else
-    PLOTBRIDGE_PORT, else 8000."""
-    try:
-        return int((data_dir / LISTEN_FILE).read_text().split()[1])
-    except (OSError, IndexError, ValueError):
-        return int(_env("PORT", 8000))
+def print_login(host: str, port: int, data_dir: Path) -> None:
+    """A one-time login link for the token's admin and its QR code, on the console (never
+    the token itself in a URL: the link becomes a session once opened)."""
+    people_cli.print_token_link(data_dir.expanduser(), host, port)
 
 
 def resolve_token(config: Config) -> tuple[str, bool]:
@@ -384,8 +358,8 @@ async def serve(config: Config) -> int:
             #   by more than the token's owner, so the link stays out of it
             log.info("a new token is in %s; `plotbridge token --data-dir %s` prints the "
                      "login link", config.token_file, config.data_dir)
-        elif generated:  # later starts keep it out of logs: `plotbridge token` prints it
-            print_login(config.host, config.port, token)
+        elif generated:  # later starts keep it out of logs: `plotbridge token` prints one
+            print_login(config.host, config.port, config.data_dir)
         log.info(
             "serving on %s:%d, data in %s, open-file limit %d, plotters: %s",
             config.host, config.port, config.data_dir, file_limit,
@@ -425,18 +399,18 @@ def token_command(args: argparse.Namespace) -> int:
 
     path = args.token_file or args.data_dir.expanduser() / "token"
     try:
+        path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
         if args.rotate:
-            path.parent.mkdir(parents=True, exist_ok=True, mode=0o700)
-            token = new_token()
-            write_private(path, token + "\n")
-            print(f"plotbridge: new token in {path}; every session has ended", flush=True)
+            write_private(path, new_token() + "\n")
+            print(f"plotbridge: new token in {path}; every session of the token has ended",
+                  flush=True)  # fmt: skip
         else:
-            token, _ = load_or_create_token(path)
+            load_or_create_token(path)
     except (OSError, TokenRefused) as exc:
         print(f"plotbridge token: {exc}", file=sys.stderr)
         return 1
     port = args.port if args.port is not None else listening_port(args.data_dir.expanduser())
-    print_login(args.host, port, token)
+    print_login(args.host, port, args.data_dir)
     return 0
 
 
@@ -448,6 +422,7 @@ def main(argv: list[str] | None = None) -> int:
     token_parser = commands.add_parser("token", help="print the login link, or --rotate the token")
     add_token_arguments(token_parser)
     submit_parser = commands.add_parser("submit", help="upload a drawing to a server")
+    people_cli.add_commands(commands, Path(_env("DATA_DIR", default_data_dir())))
     if argv[:1] != ["serve"]:  # the client modules stay out of the server's process
         from plotbridge import commands as verbs
         from plotbridge import submit
@@ -459,6 +434,8 @@ def main(argv: list[str] | None = None) -> int:
         return submit.run(args)
     if args.command == "token":
         return token_command(args)
+    if args.command in ("keys", "users"):
+        return people_cli.run(args)
     if args.command != "serve":
         return verbs.run(args)
     logsetup.setup(args.log_level)

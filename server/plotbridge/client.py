@@ -8,15 +8,20 @@
         pb.wait(job["id"], progress=lambda job: print(job["progress"]))
 
 The URL and token default to `PLOTBRIDGE_URL` and `PLOTBRIDGE_TOKEN` (or a
-token file: `token_file=` or `PLOTBRIDGE_TOKEN_FILE`); without a URL the
-client looks for a server on the LAN (zeroconf). Every failure is a
-`PlotbridgeError` whose message says what the server answered.
+token file: `token_file=` or `PLOTBRIDGE_TOKEN_FILE`); the token may be an API key
+(`plotbridge keys add`). Without a URL the client looks for servers on the LAN
+(zeroconf) and sends its key only to one that proves it holds that key; with
+`server_id=` (or `PLOTBRIDGE_SERVER_ID`: the id `keys add` printed) a server at a given
+URL must prove that too, and be that server. Every failure is a `PlotbridgeError`
+whose message says what the server answered.
 """
 
 from __future__ import annotations
 
+import hmac
 import json
 import os
+import secrets
 import time
 from collections.abc import AsyncIterator, Callable, Iterable
 from pathlib import Path
@@ -24,6 +29,8 @@ from typing import IO, Any
 from urllib.parse import quote, urlencode
 
 import httpx
+
+from plotbridge.people.proof import digest, key_id, server_proof
 
 Job = dict[str, Any]
 PLACEMENT = ("paper", "margin", "fit", "rotate", "scale", "dx", "dy", "optimize", "pen_dialect")
@@ -108,8 +115,23 @@ def read_token(token: str | None = None, token_file: str | os.PathLike[str] | No
     return text
 
 
-def find_url(timeout: float = DISCOVER_TIMEOUT_S) -> str:
-    """The URL of the one plotbridge server announced on the LAN."""
+def proves(url: str, token: str, server_id: str | None = None) -> bool:
+    """Does the server at `url` hold this key (and is it `server_id`, when given)? Asked
+    without sending the key: the server answers an HMAC only the key's maker can."""
+    nonce = secrets.token_hex(16)
+    try:
+        answer = httpx.get(f"{url}/api/identity", params={"key": key_id(token), "nonce": nonce},
+                           timeout=5.0).json()  # fmt: skip
+        proof, server = str(answer.get("proof")), str(answer.get("server"))
+    except (httpx.HTTPError, ValueError, AttributeError):
+        return False
+    expected = server_proof(digest(token), nonce, server)
+    return hmac.compare_digest(proof, expected) and server_id in (None, server)
+
+
+def find_url(token: str, server_id: str | None = None, timeout: float = DISCOVER_TIMEOUT_S) -> str:
+    """The URL of the one server on the LAN that proves it holds this key (zeroconf only
+    proposes: an impostor announcing itself never gets the key)."""
     from plotbridge.mdns import discover
 
     try:
@@ -121,10 +143,15 @@ def find_url(timeout: float = DISCOVER_TIMEOUT_S) -> str:
             f"no plotbridge server answered on the LAN within {timeout:g} s: "
             "pass --url or set PLOTBRIDGE_URL"
         )
-    if len({f.url for f in found}) > 1:
-        names = ", ".join(f"{f.name} ({f.url})" for f in found)
-        raise SetupError(f"several plotbridge servers on the LAN, choose one with --url: {names}")
-    return found[0].url
+    urls = list(dict.fromkeys(f.url for f in found))
+    holding = [url for url in urls if proves(url, token, server_id)]
+    if not holding:
+        raise SetupError(f"{len(urls)} server(s) announced on the LAN ({', '.join(urls)}), none "
+                         "holds this key: pass --url, or a key made for one of them")
+    if len(holding) > 1:
+        raise SetupError(f"several servers hold this key, choose one with --url: "
+                         f"{', '.join(holding)}")  # fmt: skip
+    return holding[0]
 
 
 class Plotbridge:
@@ -137,12 +164,17 @@ class Plotbridge:
         *,
         token_file: str | os.PathLike[str] | None = None,
         timeout: float = 60.0,
+        server_id: str | None = None,
     ) -> None:
         self.token = read_token(token, token_file)
+        server_id = server_id or os.environ.get("PLOTBRIDGE_SERVER_ID") or None
         url = url or os.environ.get("PLOTBRIDGE_URL") or os.environ.get("PLOTBRIDGE_SERVER")
-        self.url = (url or find_url()).rstrip("/")
+        self.url = (url or find_url(self.token, server_id)).rstrip("/")
         if "://" not in self.url:
             self.url = f"http://{self.url}"
+        if url and server_id and not proves(self.url, self.token, server_id):
+            raise SetupError(f"{self.url} is not server {server_id}, or does not hold this key: "
+                             "the key is not sent")  # fmt: skip
         self._http = httpx.Client(
             base_url=self.url, timeout=timeout,
             headers={"Authorization": f"Bearer {self.token}"},
@@ -339,8 +371,8 @@ class Plotbridge:
     def act(self, job_id: str, action: str, plotter: str | None = None,
             body: dict[str, Any] | None = None) -> Job:  # fmt: skip
         """One of the job's `actions` (start, hold, continue, stop, resume, home_then_resume,
-        resume_from, restart, cancel, frame); the server answers 409 with the actions it
-        allows when the job's state does not."""
+        resume_from, restart, cancel, frame, approve, decline with {"reason"}); the server
+        answers 409 with the actions it allows when the job's state does not."""
         params = {"plotter": plotter} if plotter else None
         return self.request("POST", f"/api/jobs/{job_id}/{action}", action.replace("_", " "),
                             params=params, json=body)  # fmt: skip

@@ -91,7 +91,8 @@ def resume(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
 
 
 def act(pb: Plotbridge, args: argparse.Namespace) -> tuple[Any, str]:
-    job = pb.act(args.job, args.action, args.plotter)
+    body = {"reason": args.reason} if args.reason is not None else None
+    job = pb.act(args.job, args.action, args.plotter, body)
     return job, f"job {_job_line(job)}"
 
 
@@ -120,8 +121,9 @@ def add_verbs(commands: argparse._SubParsersAction) -> None:
         elif verb == "act":
             parser.add_argument("job", help="job id")
             parser.add_argument("action", help="start, hold, continue, stop, resume, "
-                                "home_then_resume, restart, cancel, frame")
+                                "home_then_resume, restart, cancel, frame, approve, decline")
             parser.add_argument("--plotter", help="the plotter to run it on (start, resume)")
+            parser.add_argument("--reason", help="decline: why (the sender sees it)")
         else:
             parser.add_argument("--plotter", help="plotter name (default: the first)")
         if verb == "stop":

@@ -164,6 +164,7 @@ class Config:
     after_job: str = "none"  # park | home | none: the default "after the job" action
     park: tuple[float, float] = (0.0, 0.0)  # mm, where "park" leaves the carriage
     webhooks: tuple[str, ...] = ()  # --webhook URLs (more in DATA_DIR/webhooks.json)
+    webhook_allow_local: bool = False  # settings' webhooks may reach this machine
     web_dir: Path | None = None
     import_limits: Limits = field(default_factory=Limits)
     mqtt: object | None = None  # plotbridge.mqtt.settings.MqttSettings; None: MQTT is off

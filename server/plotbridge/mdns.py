@@ -150,6 +150,9 @@ def _found(info: ServiceInfo) -> Found | None:
     )  # fmt: skip
 
 
+SETTLE_S = 0.5  # s to keep listening after the first server answers
+
+
 def discover(timeout: float = 3.0, interfaces: Any = None) -> list[Found]:
     """plotbridge servers answering on the LAN within `timeout` seconds (blocking)."""
     if interfaces is None:
@@ -164,6 +167,9 @@ def discover(timeout: float = 3.0, interfaces: Any = None) -> list[Found]:
         )  # fmt: skip
         deadline = time.monotonic() + timeout
         while not names and time.monotonic() < deadline:
+            time.sleep(0.05)
+        settled = min(deadline, time.monotonic() + SETTLE_S)
+        while time.monotonic() < settled:  # the others announcing too (an impostor first)
             time.sleep(0.05)
         browser.cancel()
         found = []

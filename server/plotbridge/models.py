@@ -29,7 +29,16 @@ LayerPens = dict[LayerRef, PenRef]
 
 
 class LoginBody(Strict):
-    token: str
+    """The token, or the code of a one-time login link (`plotbridge users add`)."""
+
+    token: str | None = Field(None, max_length=256)
+    link: str | None = Field(None, max_length=256)
+
+
+class DeclineBody(Strict):
+    """Why an upload is declined: its sender sees it."""
+
+    reason: str = Field(min_length=1, max_length=500)
 
 
 class PenBody(Strict):

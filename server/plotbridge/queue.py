@@ -106,7 +106,9 @@ class JobQueue:
     async def create(self, *, kind: str, source: Path | str, filename: str, name: str,
                      options: dict[str, Any], placement: dict[str, Any],
                      target: str | None = None, after: str | None = None,
-                     pens: dict[str, Any] | None = None) -> Job:  # fmt: skip
+                     pens: dict[str, Any] | None = None,
+                     owner: str | None = None,
+                     approval: dict[str, Any] | None = None) -> Job:  # fmt: skip
         """Import an upload (a file already on disk) or a pattern into a new queued job;
         `pens` names pens for some of its layers (the others get their default pen)."""
         plotter = self._planned_for(target)
@@ -117,7 +119,8 @@ class JobQueue:
         job = Job(id=job_id, name=name, kind=kind, source=kept, filename=filename,
                   options=options, placement=placement, target=target, after=after,
                   format=result.format, lines_total=result.lines_total,
-                  estimate_s=result.estimate_s)  # fmt: skip
+                  estimate_s=result.estimate_s, owner=owner, approval=approval,
+                  state="awaiting_approval" if approval else "queued")  # fmt: skip
         job.imported(result)
         try:
             self._assign_pens(job, pens)

@@ -14,6 +14,7 @@ import asyncio
 import json
 import logging
 import time
+from collections.abc import Callable
 from typing import Any
 
 from starlette.websockets import WebSocket
@@ -65,10 +66,15 @@ class SendPace:
         self.used = 0
 
 
+View = Callable[[dict[str, Any]], dict[str, Any] | None]
+
+
 class Client:
-    def __init__(self, ws: WebSocket, pace: SendPace) -> None:
+    def __init__(self, ws: WebSocket, pace: SendPace, view: View | None = None) -> None:
         self.ws = ws
         self.pace = pace
+        self.view = view  # what this client is shown of a message (None: all of it)
+        self.identity: Any = None  # who is connected (people.Identity)
         self.queue: asyncio.Queue[str | None] = asyncio.Queue(QUEUE_SIZE)
         self.dropped = False
         self.task: asyncio.Task[None] | None = None
@@ -97,8 +103,8 @@ class Hub:
         self.clients: set[Client] = set()
         self.pace = SendPace()
 
-    def add(self, ws: WebSocket) -> Client:
-        client = Client(ws, self.pace)
+    def add(self, ws: WebSocket, view: View | None = None) -> Client:
+        client = Client(ws, self.pace, view)
         self.clients.add(client)
         return client
 
@@ -110,11 +116,14 @@ class Hub:
             return
         text = json.dumps(message, separators=(",", ":"))
         for client in list(self.clients):
-            if not client.offer(text):
+            if client.view is not None:
+                self.send(client, message)
+            elif not client.offer(text):
                 self._drop(client)
 
     def send(self, client: Client, message: dict[str, Any]) -> None:
-        if not client.offer(json.dumps(message, separators=(",", ":"))):
+        shown = message if client.view is None else client.view(message)
+        if shown is not None and not client.offer(json.dumps(shown, separators=(",", ":"))):
             self._drop(client)
 
     def _drop(self, client: Client) -> None:

@@ -66,7 +66,7 @@ def test_every_tab_fits_a_phone_and_stop_never_covers_content(browser, server_vi
         phone.goto(f"{url}/login?token=a-stale-token-from-last-week")
         phone.wait_for_selector("#login-view:not([hidden])")
         assert "no longer valid" in phone.locator("#login-notice").text_content()
-        phone.goto(f"{url}/?link#token={token}")
+        phone.goto(f"{url}/login?token={token}")
         phone.wait_for_selector("#app:not([hidden])")
         phone.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
         tabs = phone.locator(".tab").evaluate_all(
@@ -87,7 +87,7 @@ def test_every_tab_fits_a_phone_and_stop_never_covers_content(browser, server_vi
     desk, page_errors = new_page(browser, DESKTOP)
     console = watch_console(desk)
     try:
-        desk.goto(f"{url}/?link#token={token}")
+        desk.goto(f"{url}/login?token={token}")
         desk.wait_for_selector("#app:not([hidden])")
         desk.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
         for tab in TABS:

@@ -10,8 +10,10 @@ import time
 from collections.abc import Iterator
 
 import pytest
+from plotbridge.people.store import TOKEN_OWNER, PeopleStore
 
 from tests.browser.conftest import QuietHandler, login
+from tests.fixtures.people import plotbridge_cli
 from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
@@ -77,13 +79,16 @@ def test_the_csp_blocks_an_inline_script(desktop, server_virtual):
 
 
 def test_a_refused_websocket_shows_the_login_and_stops_retrying(desktop, server_virtual):
-    """A restart that finds no kept sessions (their file gone) ends the page's
-    session: its reconnect is refused with 4401, it shows the login and tries no more."""
+    """Sessions ended behind the page's back (by another process, then a restart) end
+    the page's session: its reconnect is refused with 4401, it shows the login and tries
+    no more."""
     page, _ = desktop
     login(page, server_virtual.url, server_virtual.token)
     sockets: list[str] = []
     page.on("websocket", lambda ws: sockets.append(ws.url))
-    (server_virtual.data_dir / "sessions.json").unlink()
+    store = PeopleStore(server_virtual.data_dir / "plotbridge.db")
+    store.end_sessions(TOKEN_OWNER, "token")
+    store.close()
     server_virtual.restart()
     page.wait_for_selector("#login-view:not([hidden])", timeout=60000)
     tried = len(sockets)
@@ -91,9 +96,18 @@ def test_a_refused_websocket_shows_the_login_and_stops_retrying(desktop, server_
     assert len(sockets) == tried
 
 
-def test_a_login_link_leaves_no_token_in_the_address_bar(desktop, server_virtual):
+def test_a_login_link_leaves_no_secret_in_the_address_bar(desktop, server_virtual):
+    """A one-time link's code leaves the address bar before anything is pressed; the token's
+    old link (/login?token=) lands on / with a session."""
     page, _ = desktop
-    page.goto(f"{server_virtual.url}/#token={server_virtual.token}")
+    made = plotbridge_cli("users", "add", "lee", "--role", "viewer", "--data-dir",
+                          str(server_virtual.data_dir), "--host", "127.0.0.1",
+                          "--port", str(server_virtual.port))  # fmt: skip
+    link = next(word for word in made.stdout.split() if "/login.html#" in word)
+    page.goto(link)
+    page.wait_for_selector("#link-login:not([disabled])")
+    assert "#" not in page.evaluate("() => location.href")
+    page.context.clear_cookies()
+    page.goto(f"{server_virtual.url}/login?token={server_virtual.token}")
     page.wait_for_selector("#app:not([hidden])")
-    assert server_virtual.token not in page.url
     assert server_virtual.token not in page.evaluate("() => location.href")

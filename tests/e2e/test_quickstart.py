@@ -18,7 +18,8 @@ from tests.fixtures.server import free_port
 from tests.fixtures.waits import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
-LOGIN_LINE = re.compile(r"plotbridge: open (http://\S+/login\?token=(\S+))")
+LOGIN_LINE = re.compile(
+    r"one-time login link for the admin.*\nplotbridge: open (http://\S+/login\.html)#(\S+)")
 SQUARE = "G21\nG90\nG0 X10 Y10\nM3\nG1 X30 Y10 F3000\nG1 X30 Y30\nG1 X10 Y30\nG1 X10 Y10\nM5\n"
 
 
@@ -49,18 +50,23 @@ def test_make_run_from_a_clean_clone_serves_and_plots(tmp_path):
         )  # fmt: skip
     try:
         match = wait_for_login_line(log, proc, timeout=420)
-        url, token = match.group(1).replace(f"{os.uname().nodename}:", "127.0.0.1:"), match.group(2)
+        url, code = match.group(1).replace(f"{os.uname().nodename}:", "127.0.0.1:"), match.group(2)
         with httpx.Client(base_url=f"http://127.0.0.1:{port}", timeout=30) as browser:
             page = wait_until(lambda: browser.get(url, follow_redirects=True), bool, 60,
                               "the first page", every=0.1, errors=(httpx.HTTPError,))
             first_page_s = time.monotonic() - started
             assert page.status_code == 200 and "<html" in page.text.lower()
+            page_sends = {"X-Plotbridge": "1"}  # as the page's api.js does
+            login = {"json": {"link": code}, "headers": page_sends}
+            assert browser.post("/api/login", **login).status_code == 204  # its page
             assert "plotbridge_session" in browser.cookies
             assert browser.get("/api/machine").status_code == 200  # the cookie logs in
+            assert browser.post("/api/login", **login).status_code == 401  # once
 
         ARTIFACTS.mkdir(exist_ok=True)
         (ARTIFACTS / "quickstart.txt").write_text(f"make run to first page: {first_page_s:.1f} s\n")
 
+        token = (clone / "data" / "token").read_text().strip()
         api = httpx.Client(
             base_url=f"http://127.0.0.1:{port}", timeout=30,
             headers={"Authorization": f"Bearer {token}"},

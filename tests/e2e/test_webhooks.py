@@ -132,7 +132,14 @@ def test_layered_job_events_arrive_once_in_order_after_a_500(plotter, tmp_path, 
     assert events[1]["details"]["layer"] == 2
 
 
-def test_estop_is_not_delayed_by_a_hanging_receiver(server, plotter, receiver):
+def test_estop_is_not_delayed_by_a_hanging_receiver(plotter, tmp_path, receiver):
+    link = ["--serial", str(plotter.port)]
+    with running_server(tmp_path / "server-data", link, ["--webhook-allow-local"]) as server:
+        estop_beside_a_hanging_receiver(server, plotter, receiver)
+
+
+def estop_beside_a_hanging_receiver(server: ServerProcess, plotter: Any, receiver: Receiver
+                                    ) -> None:  # fmt: skip
     saved = server.client.put("/api/settings/webhooks", json={"urls": [receiver.url]})
     assert saved.status_code == 200, saved.text
     refused = server.client.put("/api/settings/webhooks", json={"urls": ["ftp://host/x"]})
@@ -196,7 +203,14 @@ def test_events_waiting_at_a_kill_arrive_once_each_after_the_restart(plotter, tm
     assert delivered["delivered"] == 2 and delivered["dropped"] == 0
 
 
-def test_stop_button_alarm_and_a_lost_link_are_told(server, plotter, receiver):
+def test_stop_button_alarm_and_a_lost_link_are_told(plotter, tmp_path, receiver):
+    link = ["--serial", str(plotter.port)]
+    with running_server(tmp_path / "server-data", link, ["--webhook-allow-local"]) as server:
+        stop_button_alarm_and_lost_link(server, plotter, receiver)
+
+
+def stop_button_alarm_and_lost_link(server: ServerProcess, plotter: Any, receiver: Receiver
+                                    ) -> None:  # fmt: skip
     saved = server.client.put("/api/settings/webhooks", json={"urls": [receiver.url]})
     assert saved.status_code == 200, saved.text
     server.home()

@@ -1,5 +1,6 @@
 """The stop lane (guard/stoplane.py) and the acceptor's first look at a head
-(guard/acceptor.py), with the guard's real checks and a recording stop verb."""
+(guard/acceptor.py), with the guard's real checks (a real people.Access on a store in a
+temporary directory) and a recording stop verb."""
 
 from __future__ import annotations
 
@@ -7,29 +8,20 @@ import json
 import socket
 
 import pytest
+from plotbridge.access import Role
 from plotbridge.errors import Refused
 from plotbridge.guard.acceptor import Acceptor, may_be_stop
 from plotbridge.guard.middleware import Checks
 from plotbridge.guard.stoplane import LANE, NEED_MORE, StopLane
+from plotbridge.people import Access, PeopleStore
 
 from tests.fixtures.waits import settle
 
 TOKEN = "lane-test-token-0123456"
 
 
-class Auth:
-    def check_header(self, value: str) -> bool:
-        return value == f"Bearer {TOKEN}"
-
-    def check_session(self, value: str | None) -> bool:
-        return value == "session-1"
-
-    def check_token(self, value: str | None) -> bool:
-        return value == TOKEN
-
-
 @pytest.fixture
-def lane():
+async def lane(tmp_path):
     stops: list[tuple] = []
 
     def stop(name, every, source, origin):
@@ -38,10 +30,24 @@ def lane():
         stops.append((name, every, source, origin))
         return {"status": "stopped"}
 
+    store = PeopleStore(tmp_path / "plotbridge.db")
+    store.add_person("kid", Role.viewer)
+    viewer_key = store.add_key("wall-panel", Role.viewer)
+    access = Access(store, TOKEN)
     lane = StopLane()
-    lane.bind(Checks(Auth()), stop)
+    lane.bind(Checks(access), stop)
     lane.stops = stops
-    return lane
+    lane.session = access.new_session("kid", "person")  # a viewer's login
+    lane.viewer_key = viewer_key
+    yield lane
+    await access.close()
+
+
+def audited(lane) -> list[tuple]:
+    """(who, action, page) of the audit log, oldest first (read after the writes before)."""
+    access = lane.checks.access
+    entries = access._writer.submit(lambda: list(access.store.audit_all())).result()
+    return [(e["who"], e["action"], (e["detail"] or {}).get("page")) for e in entries]
 
 
 def head(path: str, *headers: str, body: bytes = b"") -> bytes:
@@ -65,8 +71,20 @@ def test_a_stop_with_the_token_is_acted_on_and_answered(lane):
     assert status(lane.answer(head("/api/plotters/nope/machine/estop", auth)))[0] == 404
 
 
+def test_every_role_may_stop_in_the_lane(lane):
+    """STOP is everyone's: a viewer's key and a viewer's session stop there too."""
+    key = f"Authorization: Bearer {lane.viewer_key}"
+    assert status(lane.answer(head("/api/machine/estop", key)))[0] == 202
+    cookie = f"Cookie: plotbridge_session={lane.session}"
+    assert status(lane.answer(head("/api/estop", cookie, "X-Plotbridge: 1",
+                                   "X-Plotbridge-Page: p-2")))[0] == 202  # fmt: skip
+    assert len(lane.stops) == 2
+    assert audited(lane) == [("key wall-panel", "POST /api/machine/estop", None),
+                             ("kid", "POST /api/estop", "p-2")]  # fmt: skip
+
+
 def test_what_the_guard_would_refuse_goes_on_to_the_app(lane):
-    cookie = "Cookie: plotbridge_session=session-1"
+    cookie = f"Cookie: plotbridge_session={lane.session}"
     for request in (
         head("/api/machine/estop"),  # no token: the app answers 401
         head("/api/machine/estop", "Authorization: Bearer wrong-token-000000"),

@@ -31,6 +31,7 @@ EXPECTED: dict[str, set[str]] = {
                 "delete"},
     "interrupted": {"resume", "home_then_resume", "resume_from", "restart", "cancel", "frame",
                     "delete"},
+    "awaiting_approval": {"approve", "decline", "cancel", "delete"},
 }  # fmt: skip
 
 

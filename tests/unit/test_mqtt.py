@@ -158,9 +158,48 @@ def test_hold_and_continue_follow_the_jobs_actions():
             assert name == "p"
             return Unit()
 
-    verbs = Verbs(Queue(), None)  # type: ignore[arg-type]
+    verbs = Verbs(Queue(), None, None)  # type: ignore[arg-type]
     assert verbs.refused_by_job("p", "hold") == "p's job j1 allows stop, continue now"
     assert verbs.refused_by_job("p", "continue") is None
     assert verbs.refused_by_job("p", "home") is None
     Unit.job = None  # no job: the machine itself holds
     assert verbs.refused_by_job("p", "hold") is None
+
+
+def test_mqtt_acts_as_the_bridges_operator_by_the_role_table():
+    """Each verb asks the role table as MQTT's operator and is audited under that name;
+    what needs more than an operator is refused (403), a STOP never."""
+    from plotbridge.access import Role
+    from plotbridge.errors import Refused
+    from plotbridge.people.access import MQTT
+    from plotbridge.people.actor import ACTOR
+
+    audit: list[tuple] = []
+    done: list[str] = []
+
+    class Access:
+        def audit(self, who, what, target=None, detail=None):
+            audit.append((who.who, what, target, detail))
+
+    class Actions:
+        def hold_plotter(self, name):
+            done.append(f"hold {name} by {ACTOR.get()}")
+
+    class Queue:
+        def estop(self, name, source):
+            done.append(f"stop {name}")
+
+    verbs = Verbs(Queue(), Actions(), Access())  # type: ignore[arg-type]
+    verbs.hold("p")
+    verbs.estop("p", "MQTT")
+    assert done == [f"hold p by {MQTT.who}", "stop p"]
+    assert [(who, what) for who, what, *_ in audit] == [
+        (MQTT.who, "MQTT hold"), (MQTT.who, "MQTT stop (MQTT)")]
+    assert MQTT.role == Role.operator
+    try:
+        verbs._as_mqtt("MQTT settings", Role.admin, None)
+    except Refused as exc:
+        assert exc.status == 403 and "needs admin" in exc.detail
+    else:
+        raise AssertionError("an admin's verb was not refused to MQTT's operator")
+    assert audit[-1][3] == {"refused": 403}

@@ -330,8 +330,20 @@ def test_http_and_https_urls_are_taken():
         assert check_url(url) == url
 
 
+async def test_settings_refuse_this_machine_and_link_local_unless_allowed(tmp_path):
+    app, _link = make_app(tmp_path, webhooks=("http://127.0.0.1:9/fixed",))  # the owner's
+    async with serving(app) as client:
+        for url, why in (("http://127.0.0.1:9/a", "loopback"), ("http://localhost:22/", "loopback"),
+                         ("http://[::1]:9/", "loopback"), ("http://169.254.169.254/", "link-local"),
+                         ("http://0.0.0.0:9/", "unspecified")):  # fmt: skip
+            refused = await client.put("/api/settings/webhooks", json={"urls": [url]})
+            assert refused.status_code == 422 and why in refused.text, (url, refused.text)
+            assert "--webhook-allow-local" in refused.text
+
+
 async def test_settings_api_saves_checks_and_shows_the_urls(tmp_path):
-    app, _link = make_app(tmp_path, webhooks=("http://127.0.0.1:9/fixed",))
+    app, _link = make_app(tmp_path, webhooks=("http://127.0.0.1:9/fixed",),
+                          webhook_allow_local=True)  # fmt: skip
     async with serving(app) as client:
         shown = (await client.get("/api/settings/webhooks")).json()
         assert shown["fixed"] == ["http://127.0.0.1:9/fixed"] and shown["urls"] == []
@@ -351,6 +363,6 @@ async def test_settings_api_saves_checks_and_shows_the_urls(tmp_path):
     kept = json.loads((tmp_path / "webhooks.json").read_text())
     assert kept == {"urls": urls}
     assert (tmp_path / "webhooks.json").stat().st_mode & 0o077 == 0
-    app, _link = make_app(tmp_path)  # a restart reads them back
+    app, _link = make_app(tmp_path, webhook_allow_local=True)  # a restart reads them back
     async with serving(app) as client:
         assert (await client.get("/api/settings/webhooks")).json()["urls"] == urls

@@ -16,6 +16,7 @@ import { bindHistory, renderHistory } from "./views/history.js";
 import { bindJobs, renderJobs } from "./views/jobs.js";
 import { bindMachine, renderMachine } from "./views/machine.js";
 import { bindPens, penName, renderPens } from "./views/pens.js";
+import "./views/people.js"; // roles: hides what the role cannot do; approvals; people and keys
 import { bindPlotters, renderPlotters } from "./views/plotters.js";
 import { bindResume, renderResume } from "./views/resume.js";
 import { bindSettings, renderSettings } from "./views/settings.js";
@@ -236,17 +237,9 @@ async function start() {
   bind();
   preview = new PreviewCanvas($("#preview"));
   preview.onPick = (p) => actions.pickAt(p);
-  // A login link's token (#token=...) is exchanged for a session at once and taken
-  // out of the address bar and the history.
-  const linkToken = new URLSearchParams(location.hash.slice(1)).get("token");
-  if (linkToken) history.replaceState(null, "", location.pathname);
   tabFromHash();
   // for debugging in the browser console, and for the browser tests' measurements
   window.plotbridge = { store, actions, preview };
-  if (linkToken) {
-    await actions.login(linkToken, true);
-    return;
-  }
   // A stale login link (/login?token=OLD) lands here with ?link=stale: the login page says why.
   const stale = new URLSearchParams(location.search).get("link") === "stale";
   if (stale) history.replaceState(null, "", location.pathname + location.hash);

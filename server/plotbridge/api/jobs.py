@@ -9,12 +9,15 @@ from fastapi import APIRouter, Body, Query, Request
 from fastapi import Path as PathParam
 from fastapi.responses import FileResponse, JSONResponse, Response
 
-from plotbridge.api.deps import GUARD, Parts, upload_error
+from plotbridge.api.deps import GUARD, Parts, Who, upload_error
 from plotbridge.errors import Refused
 from plotbridge.jobs.model import AFTER_JOB, Job
 from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, upload_openapi
 from plotbridge.mqtt.api import fleet_upload
 from plotbridge.pens.model import parse_layer_pens
+from plotbridge.people import Identity
+from plotbridge.people.approval import needs_approval
+from plotbridge.people.views import job_view, jobs_view
 from plotbridge.upload import UploadRefused, parse_upload_fields, receive, refuse_unusable
 
 router = APIRouter(prefix="/api", dependencies=GUARD)
@@ -24,20 +27,23 @@ Target = Annotated[
 
 
 @router.get("/jobs", response_model=list[Job])
-async def list_jobs(c: Parts) -> list[dict[str, Any]]:
-    return c.queue.list()
+async def list_jobs(c: Parts, who: Who) -> JSONResponse:
+    """As this person sees them (people/views.py: a submitter's own; `actions` theirs)."""
+    assert who is not None
+    return JSONResponse(jobs_view(who, c.queue.list()))
 
 
 @router.post("/jobs", status_code=201, response_model=Job, openapi_extra=upload_openapi())
-async def upload(request: Request, c: Parts) -> Any:
+async def upload(request: Request, c: Parts, who: Who) -> Any:
+    assert who is not None
     # the quota's room is reserved before a byte is written: the declared size, else the limit
     declared = request.headers.get("content-length", "")
     size = int(declared) if declared.isdigit() else c.config.upload_limit
     async with c.queue.importer.reserve(min(size, c.config.upload_limit)):
-        return await _upload(request, c)
+        return await _upload(request, c, who)
 
 
-async def _upload(request: Request, c: Parts) -> Any:
+async def _upload(request: Request, c: Parts, who: Identity) -> Any:
     config = c.config
     try:
         path, filename, fields = await receive(request, config.tmp_dir, config.upload_limit)
@@ -66,17 +72,22 @@ async def _upload(request: Request, c: Parts) -> Any:
             kind, source = "file", path
             filename = filename or params.get("filename") or params.get("name") or "upload"
         name = (params.get("name") or Path(filename).name or "untitled")[:200]
+        approval = ({"start": start, "decision": None}
+                    if needs_approval(c.access.approval_mode, who.role) else None)  # fmt: skip
         options["name"] = name
         job = await c.queue.create(kind=kind, source=source, filename=filename, name=name,
                                    options=options, placement=placement,
                                    target=params.get("plotter") or None,
-                                   after=after, pens=pens)  # fmt: skip
+                                   after=after, pens=pens, owner=who.who,
+                                   approval=approval)  # fmt: skip
     except UploadRefused as exc:
         return upload_error(exc.status, exc.message)
     finally:
         if path is not None:
             path.unlink(missing_ok=True)
-    if (offered := await fleet_upload(request, params, job)) is not None:  # MQTT fleet
+    request.state.audit = {"job": job.id, "name": name, "awaiting_approval": bool(approval)}
+    # MQTT fleet (`fleet=true`): only a job that waits for no approval leaves this bridge
+    if not approval and (offered := await fleet_upload(request, params, job)) is not None:
         return offered
     answer = job.public()
     if start and job.state == "queued":
@@ -88,8 +99,9 @@ async def _upload(request: Request, c: Parts) -> Any:
 
 
 @router.get("/jobs/{job_id}", response_model=Job)
-async def get_job(job_id: str, c: Parts) -> dict[str, Any]:
-    return c.queue.get(job_id).public()
+async def get_job(job_id: str, c: Parts, who: Who) -> JSONResponse:
+    assert who is not None
+    return JSONResponse(job_view(who, c.queue.get(job_id).public()))
 
 
 @router.patch("/jobs/{job_id}", response_model=Job)

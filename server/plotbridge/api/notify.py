@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, HTTPException
 
 from plotbridge.api.deps import GUARD, Parts
 from plotbridge.models import Webhooks, WebhooksBody
@@ -19,4 +19,7 @@ async def get_webhooks(c: Parts) -> dict[str, Any]:
 
 @router.put("/webhooks", response_model=Webhooks)
 async def put_webhooks(body: WebhooksBody, c: Parts) -> dict[str, Any]:
-    return await c.webhooks.replace(body.urls)
+    try:
+        return await c.webhooks.replace(body.urls)
+    except ValueError as exc:  # a URL reaching this machine (notify/targets.py)
+        raise HTTPException(422, str(exc)) from None

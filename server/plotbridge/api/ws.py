@@ -11,9 +11,13 @@ from typing import Any
 from fastapi import APIRouter, WebSocket
 from pydantic import ValidationError
 
-from plotbridge.api.deps import Components, page_id
+from plotbridge.access import WS_MESSAGES, Role, may_act
+from plotbridge.api.deps import Components, Who, page_id
 from plotbridge.errors import Refused
 from plotbridge.models import JogBody
+from plotbridge.people import Identity
+from plotbridge.people.actor import ACTOR
+from plotbridge.people.views import message_view
 from plotbridge.ws import Client
 
 log = logging.getLogger("plotbridge.api.ws")
@@ -28,10 +32,15 @@ Command = tuple[str, dict[str, Any]]
 
 
 @router.websocket("/api/ws")
-async def websocket(ws: WebSocket) -> None:
+async def websocket(ws: WebSocket, who: Who) -> None:
     c: Components = ws.app.state.components
+    assert who is not None  # access.ROUTES: a login is needed
     await ws.accept()  # the guard has checked the session or token, the Origin and the Host
-    client = c.clients.add(ws)
+    view = None if who.role == Role.admin else (lambda message: message_view(who, message))
+    client = c.clients.add(ws, view)
+    client.identity = who
+    ACTOR.set(who.who)  # the tasks below act as this person (an approval's "by")
+    untrack = c.access.track(who, lambda: _revoked(ws, client))
     for message in c.queue.snapshot_messages():
         c.clients.send(client, message)
     client.task = asyncio.create_task(client.pump())
@@ -39,11 +48,49 @@ async def websocket(ws: WebSocket) -> None:
     try:
         await asyncio.wait({client.task, receiver}, return_when=asyncio.FIRST_COMPLETED)
     finally:
+        untrack()
         c.clients.remove(client)
         for task in (client.task, receiver):
             task.cancel()
         with contextlib.suppress(Exception):
             await ws.close()
+
+
+def _revoked(ws: WebSocket, client: Client) -> None:
+    """Logged out, rotated or revoked: close with 4401 at once."""
+    asyncio.get_running_loop().create_task(_close(ws, 4401, "signed out or revoked"))
+    if client.task is not None:
+        client.task.cancel()
+
+
+async def _close(ws: WebSocket, code: int, reason: str) -> None:
+    with contextlib.suppress(Exception):
+        await ws.close(code=code, reason=reason)
+
+
+def refusal(c: Components, who: Identity, kind: Any,
+            message: dict[str, Any]) -> dict[str, Any] | None:  # fmt: skip
+    """The 403 answer when `who` may not send this message (plotbridge.access)."""
+    need = WS_MESSAGES.get(kind) if isinstance(kind, str) else None
+    if need is None:
+        return None  # an unknown type: answered as such
+    if kind == "job_action":
+        job = message.get("job")
+        action = str(message.get("action"))
+        own = False
+        if isinstance(job, str) and who.role == Role.submitter:
+            try:
+                own = c.queue.get(job).owner == who.who
+            except Refused:
+                return None  # an unknown job: answered as such
+        if may_act(who.role, action, own):
+            return None
+        detail = f"{who.who} is a {who.role.name}: may not {action.replace('_', ' ')} it"
+    elif who.role >= need:
+        return None
+    else:
+        detail = f"{who.who} is a {who.role.name}: {kind} needs {need.name}"
+    return {"type": "error", "command": kind, "status": 403, "detail": detail}
 
 
 async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
@@ -67,21 +114,42 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
             if kind == "estop":  # first thing, before anything else (never rate-limited);
                 # answered at once, ahead of the events queued for this client
                 await ws.send_text(json.dumps(_estop(c, body), separators=(",", ":")))
+                _audit(c, client.identity, kind, body)
             elif not client.rate.take():
                 await ws.close(code=1008, reason="too many messages")
                 return
             elif body is None:
                 c.clients.send(client, {"type": "error", "command": None, "detail": kind})
-            elif kind in AWAITING or (kind == "resume" and RESUME_WORDS & body.keys()):
-                try:
-                    waiting.put_nowait((kind, body))
-                except asyncio.QueueFull:
-                    c.clients.send(client, {"type": "error", "command": kind, "detail":
-                                            "too many commands waiting for the board"})
+            elif (refused := refusal(c, client.identity, kind, body)) is not None:
+                c.clients.send(client, refused)
+                _audit(c, client.identity, kind, body, refused=403)
             else:
-                c.clients.send(client, await _command(c, kind, body))
+                _audit(c, client.identity, kind, body)
+                if kind in AWAITING or (kind == "resume" and RESUME_WORDS & body.keys()):
+                    try:
+                        waiting.put_nowait((kind, body))
+                    except asyncio.QueueFull:
+                        c.clients.send(client, {"type": "error", "command": kind, "detail":
+                                                "too many commands waiting for the board"})
+                else:
+                    c.clients.send(client, await _command(c, kind, body))
     finally:
         worker.cancel()
+
+
+AUDITED = frozenset({"estop", "pause", "resume", "command", "job_action"})  # not jog: chatty
+
+
+def _audit(c: Components, who: Identity, kind: Any, body: dict[str, Any] | None,
+           **more: Any) -> None:  # fmt: skip
+    """One audit entry for a message that changes something (never waits)."""
+    if kind in AUDITED:
+        body = body or {}
+        detail = {"action": body.get("action"), "plotter": body.get("plotter"),
+                  "page": page_id(body.get("page")), "line": body.get("line"), **more}
+        target = body.get("job") if isinstance(body.get("job"), str) else None
+        c.access.audit(who, f"WS {kind}", target, {k: v for k, v in detail.items()
+                                                   if v is not None})  # fmt: skip
 
 
 def _estop(c: Components, body: dict[str, Any] | None) -> dict[str, Any]:

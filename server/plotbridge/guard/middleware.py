@@ -2,7 +2,8 @@
 
 Order for an HTTP request, each step before the app reads the body:
 Host allow-list -> declared body size -> authentication (routes other than health
-and login) -> CSRF (cookie-authenticated changes) -> login lockout; then the body
+and login; a wrong credential's answer is held: people/failures.py) -> CSRF
+(cookie-authenticated changes); then the body
 is counted while the app reads it (413 past the route's bound, 408 if it stalls)
 and every response gets the security headers.
 """
@@ -18,11 +19,11 @@ from urllib.parse import parse_qs
 
 from starlette.requests import ClientDisconnect
 
+from plotbridge.access import PUBLIC_PATHS
 from plotbridge.guard.headers import security_headers
 from plotbridge.guard.hosts import host_allowed, origin_allowed, own_names
 from plotbridge.guard.limits import body_limit
 from plotbridge.guard.logs import escape
-from plotbridge.guard.ratelimit import LoginLimiter
 
 log = logging.getLogger("plotbridge.guard")
 
@@ -35,8 +36,6 @@ ASGIApp = Callable[[Scope, Receive, Send], Awaitable[None]]
 BODY_IDLE_TIMEOUT = 10.0  # s without a byte of a body that has not all arrived: 408
 CSRF_HEADER = b"x-plotbridge"  # the page adds it; a form or no-cors fetch cannot
 UNSAFE = ("POST", "PUT", "PATCH", "DELETE")
-PUBLIC = ("/api/health", "/api/session", "/api/login", "/api/logout")
-LOGIN_PATHS = ("/api/login", "/login")
 WS_PER_CLIENT = 8  # open WebSockets per client address (the page needs one)
 COOKIE = "plotbridge_session"
 
@@ -53,7 +52,7 @@ def _cookie(headers: dict[bytes, bytes], name: str) -> str | None:
     return None
 
 
-def _client(scope: Scope) -> str:
+def client_address(scope: Scope) -> str:
     client = scope.get("client")
     return str(client[0]) if client else "?"
 
@@ -71,26 +70,37 @@ async def _answer(send: Send, status: int, detail: str, extra: list | None = Non
     await send({"type": "http.response.body", "body": body})
 
 
+def _credentials(headers: dict[bytes, bytes], query_token: str | None) -> dict[str, str | None]:
+    scheme, _, value = headers.get(b"authorization", b"").decode("latin-1").partition(" ")
+    return {"bearer": value.strip() if scheme.lower() == "bearer" else None,
+            "cookie": _cookie(headers, COOKIE), "query": query_token}  # fmt: skip
+
+
 class Checks:
     """The questions asked of every request's headers: the guard's, and the stop
-    lane's (guard/stoplane.py), which asks them before the app sees the request."""
+    lane's (guard/stoplane.py), which asks them before the app sees the request.
+    Who is asking is people/access.py's answer (`access`: its `Access`)."""
 
-    def __init__(self, auth: Any, allowed_hosts: tuple[str, ...] = ()) -> None:
-        self.auth = auth
+    def __init__(self, access: Any, allowed_hosts: tuple[str, ...] = ()) -> None:
+        self.access = access
         self.names = own_names(allowed_hosts)
 
     def host_ok(self, headers: dict[bytes, bytes]) -> bool:
         return host_allowed(headers.get(b"host", b"").decode("latin-1"), self.names)
 
-    def authenticated(self, headers: dict[bytes, bytes], query_token: str | None) -> str | None:
-        """'bearer', 'cookie', 'query', or None."""
-        if self.auth.check_header(headers.get(b"authorization", b"").decode("latin-1")):
-            return "bearer"
-        if self.auth.check_session(_cookie(headers, COOKIE)):
-            return "cookie"
-        if query_token is not None and self.auth.check_token(query_token):
-            return "query"
-        return None
+    async def identify(self, scope: Scope, headers: dict[bytes, bytes],
+                       query_token: str | None) -> Any:  # fmt: skip
+        """Who is asking (an `Identity`), kept in the scope for the app; None if nobody.
+        A wrong credential counts as a failure and its answer is held (people/failures.py)."""
+        identity = await self.access.identify(
+            **_credentials(headers, query_token), address=client_address(scope))
+        scope.setdefault("state", {})["identity"] = identity
+        return identity
+
+    def known(self, headers: dict[bytes, bytes]) -> Any:
+        """Who is asking, from what the server holds in memory: no wait, no disk, no
+        failure counted (a wrong credential goes on to the guard, which counts it)."""
+        return self.access.lookup(**_credentials(headers, None))
 
     def own_origin(self, headers: dict[bytes, bytes]) -> bool | None:
         """True/False: the Origin is/is not this server's; None: no Origin sent."""
@@ -114,7 +124,6 @@ class Guard:
         self.app = app
         self.checks = checks
         self.upload_limit = upload_limit
-        self.logins = LoginLimiter()
         self.websockets: dict[str, int] = {}
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
@@ -130,7 +139,7 @@ class Guard:
     async def _http(self, scope: Scope, receive: Receive, send: Send) -> None:
         headers = _headers(scope)
         method, path = scope["method"], scope["path"]
-        client = _client(scope)
+        client = client_address(scope)
         if not self.checks.host_ok(headers):
             return await _answer(send, 400, "the Host header names no address of this server")
         limit = body_limit(method, path, self.upload_limit)
@@ -138,8 +147,9 @@ class Guard:
         if length and (not length.isdigit() or int(length) > limit):
             return await _answer(send, 413, f"request body larger than {limit} bytes")
         api = path.startswith("/api/")
-        via = self.checks.authenticated(headers, None)
-        if api and path not in PUBLIC and via is None:
+        identity = await self.checks.identify(scope, headers, None)
+        via = identity.via if identity is not None else None
+        if api and path not in PUBLIC_PATHS and via is None:
             return await _answer(
                 send, 401, "missing or wrong token: send 'Authorization: Bearer TOKEN' or log in",
                 [(b"www-authenticate", b"Bearer")],
@@ -147,19 +157,11 @@ class Guard:
         if self.checks.cross_site(method, headers, via):
             log.warning("refused cross-site %s %s from %s", method, escape(path), client)
             return await _answer(send, 403, "cross-site request refused (Origin)")
-        login = path in LOGIN_PATHS
-        if login:
-            wait = self.logins.wait(client)
-            if wait > 0:
-                return await _answer(
-                    send, 429, f"too many failed logins; try again in {wait:.0f} s",
-                    [(b"retry-after", str(int(wait) + 1).encode())],
-                )  # fmt: skip
-        await self._run(scope, receive, send, limit, path, client, login)
+        await self._run(scope, receive, send, limit, path, client)
 
     async def _run(
         self, scope: Scope, receive: Receive, send: Send,
-        limit: int, path: str, client: str, login: bool,
+        limit: int, path: str, client: str,
     ) -> None:  # fmt: skip
         received = 0
         started = False
@@ -194,9 +196,6 @@ class Guard:
                 return
             if message["type"] == "http.response.start":
                 started = True
-                if login and message["status"] == 401:
-                    self.logins.failed(client)
-                    log.warning("failed login from %s", client)
                 own = message.get("headers", ())
                 named = {name.lower() for name, _ in own}  # a page's own policy wins
                 message = {**message, "headers": [*own, *(h for h in extra if h[0] not in named)]}
@@ -214,12 +213,12 @@ class Guard:
         """Refusals are sent as close codes after accepting (a browser sees no code
         for an HTTP refusal): 4401 not logged in, 4403 foreign origin, 1013 too many."""
         headers = _headers(scope)
-        client = _client(scope)
+        client = client_address(scope)
         if not self.checks.host_ok(headers):
             return await self._ws_refuse(receive, send, 4403, "host not allowed")
         query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
         token = query.get("token", [None])[0]
-        if self.checks.authenticated(headers, token) is None:
+        if await self.checks.identify(scope, headers, token) is None:
             return await self._ws_refuse(receive, send, 4401, "missing or wrong token")
         if self.checks.own_origin(headers) is False:
             return await self._ws_refuse(receive, send, 4403, "origin not allowed")

@@ -4,9 +4,11 @@ The connection protocol (`connections.GuardedH11`) hands the lane each request's
 head (request line and headers) as soon as it is complete, before h11, the
 ASGI task, the middleware, FastAPI's dependencies or any worker thread see it.
 A stop route (`POST /api/estop`, `/api/machine/estop`,
-`/api/plotters/NAME/machine/estop`) that passes the guard's own checks (Host,
-token or session, Origin) is acted on there: the reset bytes are written and the
-answer goes out in the same loop callback, then the connection closes. Anything
+`/api/plotters/NAME/machine/estop`) that passes the guard's own checks (Host;
+who is asking, from people.Access's memory, with a role the table in access.py lets
+stop, which is every role; Origin) is acted on there and audited: the reset bytes
+are written and the answer goes out in the same loop callback, then the connection
+closes. Anything
 else goes on to the app as before. A connection over the connection caps may
 send only this (docs/INTERNALS.md, "The stop lane").
 """
@@ -21,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 from urllib.parse import unquote
 
+from plotbridge.access import may, rule
 from plotbridge.errors import Refused
 from plotbridge.guard.headers import security_headers
 
@@ -31,6 +34,9 @@ BODY_MAX = 1024  # a stop's body is not read: a larger declared one goes the usu
 PAGE_HEADER = b"x-plotbridge-page"
 _PAGE_ID = re.compile(r"[A-Za-z0-9_-]{1,64}")
 _ROUTE = re.compile(r"/api/(?:(estop)|machine/estop|plotters/([A-Za-z0-9_-]{1,64})/machine/estop)")
+ESTOP = "/api/estop"  # the role table's rows of the three routes
+MACHINE_ESTOP = "/api/machine/estop"
+PLOTTER_ESTOP = "/api/plotters/{name}/machine/estop"
 
 # (plotter or None for the first, every plotter, source, page id) -> the answer's body
 StopVerb = Callable[[str | None, bool, str, str | None], dict[str, Any]]
@@ -99,7 +105,11 @@ class StopLane:
         if head is None or head.method != "POST":
             return None
         route = _ROUTE.fullmatch(head.path.partition("?")[0])
-        if route is None or not self._allowed(head.headers):
+        if route is None:
+            return None
+        template = ESTOP if route[1] else PLOTTER_ESTOP if route[2] else MACHINE_ESTOP
+        identity = self._allowed(head.headers, template)
+        if identity is None:
             return None
         if len(data) < head.size + int(head.headers.get(b"content-length", b"0")):
             return NEED_MORE
@@ -108,22 +118,31 @@ class StopLane:
         try:
             body = self.stop(route[2], route[1] is not None, "REST", origin)
         except Refused as exc:  # no plotter of that name
-            return response(exc.status, {"detail": exc.detail})
-        return response(202, body)
+            status, body = exc.status, {"detail": exc.detail}
+        else:
+            status = 202
+        detail = {"page": origin, "refused": status if status >= 400 else None}
+        self.checks.access.audit(identity, f"POST {template}", route[2],
+                                 {k: v for k, v in detail.items() if v is not None})  # fmt: skip
+        return response(status, body)
 
-    def _allowed(self, headers: dict[bytes, bytes]) -> bool:
-        """The guard's answer would be the route's: Host, authentication, Origin,
-        no body to read (none, or a small one declared by its length)."""
+    def _allowed(self, headers: dict[bytes, bytes], template: str) -> Any:
+        """Who is stopping (an `Identity`), when the guard's answer would be the route's:
+        Host, an identity the role table lets stop, Origin, no body to read (none, or a
+        small one declared by its length); else None (the request goes on to the app)."""
         if b"transfer-encoding" in headers:
-            return False
+            return None
         length = headers.get(b"content-length", b"0")
         if not length.isdigit() or int(length) > BODY_MAX:
-            return False
+            return None
         checks = self.checks
         if not checks.host_ok(headers):
-            return False
-        via = checks.authenticated(headers, None)
-        return via is not None and not checks.cross_site("POST", headers, via)
+            return None
+        identity = checks.known(headers)
+        need, owner_rule = rule("POST", template)
+        if identity is None or not may(identity.role, need, False, owner_rule):
+            return None
+        return None if checks.cross_site("POST", headers, identity.via) else identity
 
 
 LANE = StopLane()

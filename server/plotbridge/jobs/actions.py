@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from typing import Any
 
 from pydantic import ValidationError
@@ -18,7 +19,8 @@ from pydantic import ValidationError
 from plotbridge.errors import Refused
 from plotbridge.jobs.lifecycle import Lifecycle
 from plotbridge.jobs.model import Job
-from plotbridge.models import MoveBody, PatchJobBody, ResumeBody, StartBody
+from plotbridge.models import DeclineBody, MoveBody, PatchJobBody, ResumeBody, StartBody
+from plotbridge.people.actor import ACTOR
 from plotbridge.plotter.plotter import HOMING_S, Plotter
 from plotbridge.queue import JobQueue
 from plotbridge.resume import PickError, ResumePoint, pick
@@ -119,6 +121,27 @@ class JobActions:
 
     async def delete(self, job: Job, _plotter: str | None, _body: Body | None) -> None:
         await self.queue.delete(job.id)
+
+    def approve(self, job: Job, plotter: str | None, _body: Body | None) -> None:
+        """It joins the queue; and starts, if its sender asked to start it (the approval
+        stands when it cannot start now: the answer's job says so)."""
+        asked = dict(job.approval or {})
+        decision = {**asked, "decision": "approved", "by": ACTOR.get(), "at": time.time()}
+        self.lifecycle.move(job, "approve", approval=decision)
+        if asked.get("start"):
+            self._target(job, plotter)
+            try:
+                self.queue.start(job, "start")
+            except Refused as exc:
+                log.info("job %s approved; not started: %s", job.id, exc.detail)
+
+    def decline(self, job: Job, _plotter: str | None, body: Body | None) -> None:
+        """Cancelled, with the reason its sender sees (`approval.reason`, `error`)."""
+        reason = _model(DeclineBody, body).reason
+        who = ACTOR.get()
+        decision = {**(job.approval or {}), "decision": "declined", "by": who,
+                    "reason": reason, "at": time.time()}  # fmt: skip
+        self.lifecycle.move(job, "decline", approval=decision, error=f"declined by {who}: {reason}")
 
     # ---- the legacy forms ---------------------------------------------------------------
 

@@ -38,10 +38,12 @@ class State(StrEnum):
     CANCELLED = "cancelled"
     STOPPED = "stopped"
     INTERRUPTED = "interrupted"
+    AWAITING_APPROVAL = "awaiting_approval"  # an upload an operator approves or declines
 
 
 Q, W, R, P, C = State.QUEUED, State.WAITING, State.RUNNING, State.PAUSED, State.PEN_CHANGE
 D, F, X, S, N = State.DONE, State.FAILED, State.CANCELLED, State.STOPPED, State.INTERRUPTED
+AW = State.AWAITING_APPROVAL
 
 ACTIVE: frozenset[State] = frozenset({R, P, C})
 """A plotter runs the job: it takes no other, and the job cannot be deleted."""
@@ -52,7 +54,7 @@ RESUMABLE: frozenset[State] = frozenset({S, N})
 
 ACTIONS: tuple[str, ...] = (
     "start", "hold", "continue", "stop", "resume", "home_then_resume", "resume_from",
-    "restart", "cancel", "frame", "move", "edit", "delete",
+    "restart", "cancel", "frame", "move", "edit", "delete", "approve", "decline",
 )  # fmt: skip
 """What may be asked of a job, in the order the API lists them."""
 EVENTS: tuple[str, ...] = (
@@ -78,11 +80,13 @@ TABLE: dict[tuple[State, str], State | None] = {
     **_rows("home_then_resume", RESUMABLE, R),
     **_rows("resume_from", SETTLED, R),
     **_rows("restart", SETTLED, R),  # or `wait`
-    **_rows("cancel", [Q, W, *ACTIVE, *RESUMABLE], X),
+    **_rows("cancel", [AW, Q, W, *ACTIVE, *RESUMABLE], X),
     **_rows("frame", [Q, W, *SETTLED], _SAME),
     **_rows("move", [Q, W], _SAME),
     **_rows("edit", [Q], _SAME),
-    **_rows("delete", [Q, W, *SETTLED], GONE),
+    **_rows("delete", [AW, Q, W, *SETTLED], GONE),
+    **_rows("approve", [AW], Q),  # then started, if its sender asked to start it
+    **_rows("decline", [AW], X),  # with the reason its sender sees
     # events
     **_rows("wait", [Q, W, *SETTLED], W),  # a start or restart no plotter can take now
     **_rows("dispatch", [Q, W], R),  # a free plotter took it

@@ -19,7 +19,7 @@ __all__ = ["ACTIVE", "AFTER_JOB", "RESUMABLE", "Bounds", "Imported", "Job", "Job
 
 JobState = Literal[
     "queued", "waiting", "running", "paused", "pen_change", "done", "failed", "cancelled",
-    "stopped", "interrupted",
+    "stopped", "interrupted", "awaiting_approval",
 ]  # fmt: skip (jobs/lifecycle.py's State)
 
 AfterJob = Literal["park", "home", "none"]
@@ -148,6 +148,11 @@ class Job(BaseModel):
     """What the plotter does once this job is done; None: the server's default."""
     plot_layers: list[int] | None = None
     """The 1-based numbers of the layers a start plots (the start's `layers`); None: all."""
+    owner: str | None = None
+    """Who uploaded it, as the audit log names them ("ann", "key ci", "token (first admin)")."""
+    approval: dict[str, Any] | None = None
+    """An upload that needs approval: {"start": started once approved, "decision": None,
+    "approved" or "declined", "by", "reason" (a decline's, shown to the sender), "at"}."""
     pen_change: dict[str, Any] | None = None
     """In `pen_change`: {"reason" ("layer" or "reink"), "layer" (1-based), "layers", "name",
     "colour", "pen" (its name or None), "message"}."""

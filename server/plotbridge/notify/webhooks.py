@@ -26,6 +26,7 @@ from plotbridge.events import Message
 from plotbridge.notify.delivery import Delivery
 from plotbridge.notify.notices import NoticeWatcher
 from plotbridge.notify.outbox import Outbox, Pending
+from plotbridge.notify.targets import LocalTarget, refuse_local
 
 log = logging.getLogger("plotbridge.notify")
 
@@ -91,8 +92,10 @@ def write_settings(path: Path, urls: list[str]) -> None:
 
 
 class Webhooks:
-    def __init__(self, fixed: list[str], data_dir: Path, db_path: Path, **delivery: Any) -> None:
+    def __init__(self, fixed: list[str], data_dir: Path, db_path: Path,
+                 allow_local: bool = False, **delivery: Any) -> None:  # fmt: skip
         self.fixed = check_urls(fixed)
+        self.allow_local = allow_local  # settings URLs may reach this machine (targets.py)
         self.path = data_dir / SETTINGS_FILE
         self.saved = read_settings(self.path)
         self._delivery = delivery  # Delivery's limit and delays (tests shorten them)
@@ -161,6 +164,9 @@ class Webhooks:
     async def replace(self, urls: list[str]) -> dict[str, Any]:
         """New saved URLs (ValueError when one is unusable). A URL kept keeps its queue."""
         checked = check_urls(urls)
+        if not self.allow_local:
+            for url in checked:
+                await refuse_local(url)
         async with self._lock:
             await asyncio.to_thread(write_settings, self.path, checked)
             self.saved = checked
@@ -183,5 +189,10 @@ class Webhooks:
 
     async def _post(self, url: str, body: bytes, headers: dict[str, str]) -> int:
         assert self._client is not None
+        if not self.allow_local and url not in self.fixed:
+            try:
+                await refuse_local(url)
+            except LocalTarget as exc:
+                raise httpx.ConnectError(str(exc)) from None
         response = await self._client.post(url, content=body, headers=headers)
         return response.status_code

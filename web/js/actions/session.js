@@ -61,7 +61,7 @@ export function sessionActions({ store, socket, estop, core, all }) {
       return machine;
     },
 
-    async login(token, fromLink = false) {
+    async login(token) {
       store.update((st) => {
         st.login = { busy: true, error: "" };
       });
@@ -75,11 +75,7 @@ export function sessionActions({ store, socket, estop, core, all }) {
       } catch (err) {
         store.update((st) => {
           st.view = "login";
-          st.login = { busy: false, error: "" };
-          if (err.status === 401 && fromLink) {
-            st.loginNotice = "This login link is no longer valid (the server's token changed). "
-              + "Enter the current token, or open the new link printed on the server's console.";
-          } else st.login.error = err.status === 401 ? "Wrong token." : err.message;
+          st.login = { busy: false, error: err.status === 401 ? "Wrong token." : err.message };
         });
       }
     },
