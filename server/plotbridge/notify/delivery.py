@@ -17,7 +17,6 @@ event carries an `id` for the receiver to recognise a repeat.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import json
 import logging
 from collections import deque
@@ -75,11 +74,12 @@ class Delivery:
         self._task = asyncio.get_running_loop().create_task(self._run(), name="webhook")
 
     async def close(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
-            self._task = None
+        """Ends the delivery task; cancelled again should an await inside it have swallowed
+        the cancel (asyncio.wait_for in 3.11 can)."""
+        task, self._task = self._task, None
+        while task is not None and not task.done():
+            task.cancel()
+            await asyncio.wait({task}, timeout=1.0)
 
     def put(self, event: str, body: dict[str, Any]) -> None:
         """Queue one event (never waits)."""

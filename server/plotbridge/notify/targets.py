@@ -25,8 +25,10 @@ async def _addresses(host: str) -> set[str]:
     except ValueError:
         pass
     loop = asyncio.get_running_loop()
-    try:
-        found = await asyncio.wait_for(loop.getaddrinfo(host, None), RESOLVE_TIMEOUT_S)
+    try:  # asyncio.timeout, not wait_for: 3.11's wait_for may swallow a cancel that comes
+        # as the lookup ends, and the delivery being closed then never ends (seen in a test)
+        async with asyncio.timeout(RESOLVE_TIMEOUT_S):
+            found = await loop.getaddrinfo(host, None)
     except (OSError, TimeoutError):
         return set()  # not resolvable now: checked again before each post
     return {str(info[4][0]).split("%")[0] for info in found}
