@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.browser.conftest import new_page, screenshot
+from tests.browser.conftest import login, new_page, screenshot
 from tests.fixtures.drawings import drawing
 from tests.fixtures.server import running_server
 
@@ -53,7 +53,7 @@ def test_three_plotter_cards_stay_compact_on_a_phone(browser, tmp_path):
         page, errors = new_page(browser, PHONE, is_mobile=True, has_touch=True,
                                 device_scale_factor=2)  # fmt: skip
         try:
-            page.goto(f"{server.url}/?link#token={server.token}")
+            login(page, server.url, server.token)
             page.wait_for_selector("#plotters:not([hidden])")
             page.wait_for_function(
                 """([a, b]) => { const jobs = window.plotbridge.store.state.jobs;
@@ -62,7 +62,8 @@ def test_three_plotter_cards_stay_compact_on_a_phone(browser, tmp_path):
                 arg=[running, stopped])  # fmt: skip
             page.wait_for_selector('#plotter-cards [data-plotter="plotter2"] '
                                    '.card-actions button[data-verb="resume"]')  # fmt: skip
-            page.wait_for_timeout(300)  # a frame for the layout
+            page.evaluate("() => new Promise((r) => requestAnimationFrame(() => "
+                          "requestAnimationFrame(r)))")  # the layout of the last render
             screenshot(page, "phone-three-plotters")
             measured = page.evaluate(CARDS)
             print(f"card heights at 390x844: {measured}")
