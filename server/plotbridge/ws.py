@@ -5,7 +5,10 @@ a client whose queue is full has fallen behind and is dropped, so a slow or dead
 client never delays the others, the link or an emergency stop. The sends of one
 event to hundreds of clients are spread over loop passes (`SendPace`): each pass
 sends at most SENDS_PER_PASS, and what the selector reported in between (a stop's
-request) runs before the rest.
+request) runs before the rest. A state message (a plotter's machine report, a job's
+progress, the fleet view) still waiting for a client is replaced by a newer one of the
+same thing: a client that is slow but reading is sent the latest state, not every state
+it missed, and never falls behind on them; a job's transition is never replaced.
 """
 
 from __future__ import annotations
@@ -69,20 +72,49 @@ class SendPace:
 View = Callable[[dict[str, Any]], dict[str, Any] | None]
 
 
+def state_key(message: dict[str, Any]) -> tuple[str | None, bool]:
+    """What `message` is the state of (None: an event of its own), and whether it is only
+    the latest state of that (a newer one may replace it) rather than a transition."""
+    kind = message.get("type")
+    if kind == "machine":
+        return f"machine:{message.get('plotter')}", True
+    if kind == "job" and isinstance(message.get("job"), dict):
+        return f"job:{message['job'].get('id')}", "transition" not in message
+    if kind == "fleet":
+        return "fleet", True
+    return None, False
+
+
+Queued = tuple[str | None, str | None]  # (key of a state in `latest`, None) or (None, text)
+
+
 class Client:
     def __init__(self, ws: WebSocket, pace: SendPace, view: View | None = None) -> None:
         self.ws = ws
         self.pace = pace
         self.view = view  # what this client is shown of a message (None: all of it)
         self.identity: Any = None  # who is connected (people.Identity)
-        self.queue: asyncio.Queue[str | None] = asyncio.Queue(QUEUE_SIZE)
+        self.queue: asyncio.Queue[Queued | None] = asyncio.Queue(QUEUE_SIZE)
+        self.latest: dict[str, str] = {}  # states waiting to be sent, newest text by key
         self.dropped = False
         self.task: asyncio.Task[None] | None = None
         self.rate = RateLimit()
 
-    def offer(self, text: str) -> bool:
+    def offer(self, text: str, key: str | None = None, latest: bool = False) -> bool:
+        """Queue `text`; False when the queue is full. A `latest` state replaces the one of
+        the same `key` still waiting (in its place); a transition of a key makes the state
+        waiting for it stale (it is not sent) and goes at the end."""
+        if key is not None and latest and key in self.latest:
+            self.latest[key] = text
+            return True
+        if key is not None:
+            self.latest.pop(key, None)
         try:
-            self.queue.put_nowait(text)
+            if latest and key is not None:
+                self.queue.put_nowait((key, None))
+                self.latest[key] = text
+            else:
+                self.queue.put_nowait((None, text))
             return True
         except asyncio.QueueFull:
             return False
@@ -90,9 +122,14 @@ class Client:
     async def pump(self) -> None:
         """Send queued messages until closed (None) or the socket fails."""
         while True:
-            text = await self.queue.get()
-            if text is None:
+            item = await self.queue.get()
+            if item is None:
                 return
+            key, text = item
+            if key is not None:
+                text = self.latest.pop(key, None)
+                if text is None:  # made stale by a transition since
+                    continue
             while not self.pace.take():  # noqa: ASYNC110 (waits for the next pass, not an event)
                 await asyncio.sleep(0)
             await self.ws.send_text(text)
@@ -115,15 +152,18 @@ class Hub:
         if not self.clients:
             return
         text = json.dumps(message, separators=(",", ":"))
+        key, latest = state_key(message)
         for client in list(self.clients):
             if client.view is not None:
-                self.send(client, message)
-            elif not client.offer(text):
+                self.send(client, message, key, latest)
+            elif not client.offer(text, key, latest):
                 self._drop(client)
 
-    def send(self, client: Client, message: dict[str, Any]) -> None:
+    def send(self, client: Client, message: dict[str, Any], key: str | None = None,
+             latest: bool = False) -> None:  # fmt: skip
         shown = message if client.view is None else client.view(message)
-        if shown is not None and not client.offer(json.dumps(shown, separators=(",", ":"))):
+        if shown is not None and not client.offer(json.dumps(shown, separators=(",", ":")),
+                                                  key, latest):  # fmt: skip
             self._drop(client)
 
     def _drop(self, client: Client) -> None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import json
 
 from plotbridge.guard.hosts import origin_allowed
 from plotbridge.ws import QUEUE_SIZE, SENDS_PER_PASS, Hub
@@ -68,3 +69,26 @@ async def test_one_event_to_many_clients_is_sent_over_several_loop_passes():
     assert passes >= 3
     for client in clients:
         client.task.cancel()
+
+
+async def test_a_slow_client_gets_the_latest_state_and_every_transition():
+    """States (machine reports, a job's progress) waiting for a client are replaced by
+    newer ones: thousands of reports never fill its queue; transitions all arrive, in
+    order, and a state made stale by a transition is not sent after it."""
+    hub = Hub()
+    slow = hub.add(ListSocket())
+    job = {"id": "j", "state": "running"}
+    for n in range(QUEUE_SIZE * 4):
+        hub.broadcast({"type": "machine", "plotter": "p", "machine": {"n": n}})
+        hub.broadcast({"type": "job", "job": {**job, "progress": n}})
+    hub.broadcast({"type": "job", "job": {**job, "state": "stopped"},
+                   "transition": {"from": "running", "to": "stopped", "cause": "estop"}})
+    hub.broadcast({"type": "machine", "plotter": "p", "machine": {"n": "last"}})
+    assert not slow.dropped
+    slow.task = asyncio.create_task(slow.pump())
+    await settle(lambda: slow.queue.empty() and len(slow.ws.sent) == 2)
+    sent = [json.loads(text) for text in slow.ws.sent]
+    assert [m["machine"]["n"] for m in sent if m["type"] == "machine"] == ["last"]
+    jobs = [m for m in sent if m["type"] == "job"]  # the stale progress made way for the
+    assert len(jobs) == 1 and jobs[0]["job"]["state"] == "stopped"  # transition
+    slow.task.cancel()
