@@ -67,7 +67,11 @@ class Smoke:
         return self.expect(self.http.get("/api/machine"), 200)
 
     def login(self) -> str:
-        self.expect(self.http.get("/login", params={"token": "wrong-token-1234567"}), 401)
+        stale = self.http.get("/login", params={"token": "wrong-token-1234567"})
+        if stale.status_code != 303 or "link=stale" not in stale.headers.get("location", "") \
+                or self.http.cookies:  # fmt: skip
+            raise SmokeFailed(f"a wrong token's link gave {stale.status_code} "
+                              f"to {stale.headers.get('location')}, not the login page")
         answer = self.http.get("/login", params={"token": self.token})
         if answer.status_code != 303 or not self.http.cookies:
             raise SmokeFailed(f"the login link gave {answer.status_code}, no session cookie")
