@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import asyncio
 import json
+from types import SimpleNamespace
 
+from plotbridge.api import ws as ws_route
 from plotbridge.guard.hosts import origin_allowed
 from plotbridge.ws import QUEUE_SIZE, SENDS_PER_PASS, Hub
 
@@ -92,3 +94,15 @@ async def test_a_slow_client_gets_the_latest_state_and_every_transition():
     jobs = [m for m in sent if m["type"] == "job"]  # the stale progress made way for the
     assert len(jobs) == 1 and jobs[0]["job"]["state"] == "stopped"  # transition
     slow.task.cancel()
+
+
+def test_console_lines_that_only_ask_are_not_audited():
+    """A `$$` changes nothing: no audit row (a client repeating it wrote one each time);
+    a setting's change is audited."""
+    rows: list[tuple] = []
+    c = SimpleNamespace(access=SimpleNamespace(audit=lambda *row: rows.append(row)))
+    for line in ("$$", " $g ", "$#", "?"):
+        ws_route._audit(c, None, "command", {"line": line})
+    assert rows == []
+    ws_route._audit(c, None, "command", {"line": "$110=5000"})
+    assert len(rows) == 1 and rows[0][1] == "WS command"

@@ -138,13 +138,18 @@ async def _receive(c: Components, ws: WebSocket, client: Client) -> None:
 
 
 AUDITED = frozenset({"estop", "pause", "resume", "command", "job_action"})  # not jog: chatty
+READ_ONLY = frozenset({"$", "$$", "$#", "$G", "$I", "$N", "?"})  # console lines that only ask
 
 
 def _audit(c: Components, who: Identity, kind: Any, body: dict[str, Any] | None,
            **more: Any) -> None:  # fmt: skip
-    """One audit entry for a message that changes something (never waits)."""
+    """One audit entry for a message that changes something (never waits): not for a
+    console line that only asks (a client repeating `$$` wrote a row each time)."""
+    body = body or {}
+    line = body.get("line")
+    if kind == "command" and isinstance(line, str) and line.strip().upper() in READ_ONLY:
+        return
     if kind in AUDITED:
-        body = body or {}
         detail = {"action": body.get("action"), "plotter": body.get("plotter"),
                   "page": page_id(body.get("page")), "line": body.get("line"), **more}
         target = body.get("job") if isinstance(body.get("job"), str) else None
