@@ -13,7 +13,7 @@ from tests.fixtures.drawings import drawing
 from tests.fixtures.mosquitto import Broker
 from tests.fixtures.mqtt_bridges import bridge_server, mqtt_args
 from tests.fixtures.server import ServerProcess
-from tests.fixtures.trace import assert_stopped, stop_clock
+from tests.fixtures.trace import rest_stop_mid_stroke
 from tests.fixtures.waits import wait_until
 
 pytestmark = pytest.mark.e2e
@@ -99,12 +99,7 @@ def test_retained_garbage_flood_changes_nothing(plotter, broker, tmp_path):
     try:
         server.home()
         flooding.start()
-        job = server.submit(drawing(circles=6))
-        server.wait_drawing(job["id"])
-        sent = stop_clock(plotter)
-        response = server.client.post("/api/machine/estop")
-        assert response.status_code == 202
-        assert_stopped(server, plotter, job["id"], sent)
+        rest_stop_mid_stroke(server, plotter, drawing(circles=6))
         stop_flood.set()
         flooding.join(10)
         plot_one(server)  # and jobs still finish

@@ -23,6 +23,7 @@ from tests.fixtures.trace import (
     assert_same_drawing,
     assert_stopped,
     drawn_once_mm,
+    rest_stop_mid_stroke,
     stop_clock,
     stroke_length,
     wait_still,
@@ -50,12 +51,7 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
     once = drawn_once_mm(server, plotter, drawing(circles=6))
     plotter.clear()
-    job = server.submit(drawing(circles=6))
-    server.wait_drawing(job["id"])
-    sent = stop_clock(plotter)
-    response = server.client.post("/api/machine/estop")
-    assert response.status_code == 202
-    assert_stopped(server, plotter, job["id"], sent)
+    job = rest_stop_mid_stroke(server, plotter, drawing(circles=6))
     # the next job waits until the alarm is cleared, saying why
     other = server.submit(drawing(), start=False)
     waiting = server.client.post(f"/api/jobs/{other['id']}/start").json()
