@@ -99,7 +99,8 @@ def shoot(url: str, token: str, out: Path) -> list[str]:
             page.goto(f"{url}/")
             page.wait_for_selector("#login-view:not([hidden])")
             page.screenshot(path=str(out / f"login-{size}.png"))
-            page.goto(f"{url}/?link#token={token}")  # another address: a full load
+            page.fill("#login-token", token)  # logged in as a person would, by the form
+            page.click("#login-submit")
             page.wait_for_selector("#app:not([hidden])")
             page.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'")
             for tab in TABS:
