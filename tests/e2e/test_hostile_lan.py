@@ -232,7 +232,7 @@ def test_a_token_holding_flood_beside_four_streaming_plotters(limited):
     flood = attacks.authenticated_flood(limited.url, limited.token, addresses=60,
                                         silent=200).start()  # fmt: skip
     try:
-        time.sleep(2)  # the flood at full tilt
+        wait_until(lambda: flood.progress.value, lambda n: n >= 200, 90, "the flood's sockets")
         url = limited.url.replace("http", "ws") + f"/api/ws?token={limited.token}"
         with connect(url, max_size=None) as ws:
             ws_latency = attacks.ws_stop(ws)
