@@ -99,7 +99,7 @@ def test_retained_garbage_flood_changes_nothing(plotter, broker, tmp_path):
     try:
         server.home()
         flooding.start()
-        rest_stop_mid_stroke(server, plotter, drawing(circles=6))
+        rest_stop_mid_stroke(server, plotter)
         stop_flood.set()
         flooding.join(10)
         plot_one(server)  # and jobs still finish

@@ -16,7 +16,7 @@ from plotbridge.plotter.runner import JOB_POLL_HZ
 from websockets.sync.client import connect
 
 from tests.fixtures.attacks import import_workers
-from tests.fixtures.drawings import FEED, drawing, many_circles_svg
+from tests.fixtures.drawings import FEED, SQUARE_STROKE, drawing, many_circles_svg
 from tests.fixtures.server import running_server
 from tests.fixtures.trace import (
     ESTOP_REDRAW_MM,
@@ -49,9 +49,9 @@ def test_plot_matches_preview(server, plotter):
 
 def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
-    once = drawn_once_mm(server, plotter, drawing(circles=6))
+    once = drawn_once_mm(server, plotter, SQUARE_STROKE)
     plotter.clear()
-    job = rest_stop_mid_stroke(server, plotter, drawing(circles=6))
+    job = rest_stop_mid_stroke(server, plotter)
     # the next job waits until the alarm is cleared, saying why
     other = server.submit(drawing(), start=False)
     waiting = server.client.post(f"/api/jobs/{other['id']}/start").json()
