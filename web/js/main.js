@@ -99,7 +99,7 @@ function renderNotice(state) {
 
 function render(state) {
   const inApp = state.view === "app";
-  setHidden($("#login-view"), inApp);
+  setHidden($("#login-view"), state.view !== "login"); // neither shows while starting
   setHidden($("#app"), !inApp);
   if (!inApp) {
     setText($("#login-error"), state.login.error);

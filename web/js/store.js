@@ -10,7 +10,7 @@ export const DEFAULT_PLACEMENT = { paper: "", landscape: false, margin: 10, fit:
 
 export function initialState() {
   return {
-    view: "login",            // "login" | "app"
+    view: "starting",         // "starting" (the session not yet asked) | "login" | "app"
     tab: "plot",              // "plot" | "history" | "control" | "pens" | "settings" | "console"
     login: { busy: false, error: "" },
     loginNotice: "",          // why the login page shows (a stale link)
