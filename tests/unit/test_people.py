@@ -13,6 +13,7 @@ from contextlib import closing
 
 import pytest
 from plotbridge import auth as authmod
+from plotbridge.access import Role
 from plotbridge.jobs.imports import Importer
 from plotbridge.people.store import PeopleStore
 from starlette.testclient import TestClient
@@ -57,6 +58,29 @@ def test_a_key_removed_by_another_process_is_refused_at_once_and_its_websocket_c
         assert client.get("/api/jobs", headers=key).status_code == 401
         assert closed_code(ws) == 4401
     assert client.get("/api/jobs", headers=bearer(keys["viewer"])).status_code == 200
+
+
+def test_writes_to_the_jobs_tables_do_not_reload_the_people(app_client, monkeypatch):
+    """The jobs share the database file and write it all the time: a request checks a
+    stamp the people writes leave, not SQLite, and reloads only after such a write."""
+    app, client, data = app_client
+    key = bearer(keys_per_role(app)["operator"])
+    assert client.get("/api/jobs", headers=key).status_code == 200
+    loads = []
+    store = app.state.components.access.store
+    monkeypatch.setattr(store, "snapshot", lambda real=store.snapshot: loads.append(1) or real())
+    with closing(sqlite3.connect(data / "plotbridge.db")) as other:  # another connection
+        other.execute("CREATE TABLE IF NOT EXISTS busy (n)")
+        for n in range(20):
+            other.execute("INSERT INTO busy VALUES (?)", (n,))
+            other.commit()
+            assert client.get("/api/jobs", headers=key).status_code == 200
+    assert loads == []
+    other_store = PeopleStore(data / "plotbridge.db")
+    other_store.add_person("bea", Role.viewer)
+    other_store.close()
+    assert client.get("/api/jobs", headers=key).status_code == 200
+    assert loads == [1]
 
 
 def test_a_person_logs_in_once_by_link_and_is_removed(app_client):

@@ -106,9 +106,9 @@ class Access:
             self.revalidate()
 
     def _reload_store(self) -> bool:
-        """Take the store's state when another connection wrote since (a cheap pragma; the
-        jobs and pens share the file, so it may be theirs). Not while this process's own
-        session writes are queued: the store does not hold them yet (a later look will)."""
+        """Take the store's state when a people write (this process's or another's) came
+        since: a stat of the store's stamp, no SQLite. Not while this process's own session
+        writes are queued: the store does not hold them yet (a later look will)."""
         if self._unwritten:
             return False
         mark = self.store.changed_mark()

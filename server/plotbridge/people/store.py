@@ -6,15 +6,19 @@ SHA-256 digest (all are 192 random bits or more, so no slow hash is needed). The
 are additive (created if missing): the jobs' `user_version` does not change.
 
 `PeopleStore` is blocking (sqlite3). The command line (`plotbridge keys|users`) writes to
-it while a server runs; the server sees such a change through `PRAGMA data_version`
-(`changed()`), reloads, and refuses a removed key at once.
+it while a server runs. Every write of what `Snapshot` mirrors replaces a stamp file beside
+the database; the server stats it (`changed_mark()`, microseconds, no SQLite: the jobs
+write the same file all the time) before it answers, reloads when it changed, and so
+refuses a removed key at once.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import re
 import secrets
+import tempfile
 import threading
 import time
 from collections.abc import Iterator
@@ -77,6 +81,7 @@ class Snapshot:
 class PeopleStore:
     def __init__(self, path: Path) -> None:
         self._lock = threading.Lock()
+        self._stamp = path.with_name(path.name + "-people")
         self._db = connect(path, SCHEMA[0])
         self._db.execute("PRAGMA busy_timeout = 5000")  # the CLI and the server share it
         for statement in SCHEMA[1:]:
@@ -91,9 +96,26 @@ class PeopleStore:
         with self._lock:
             return self._db.execute(sql, args).fetchall()
 
-    def changed_mark(self) -> int:
-        """Changes when another connection (another process) has written the file."""
-        return int(self._run("PRAGMA data_version")[0][0])
+    def changed_mark(self) -> tuple[int, int, int] | None:
+        """Changes with every write of what `Snapshot` mirrors, by any process."""
+        try:
+            stat = os.stat(self._stamp)
+        except FileNotFoundError:
+            return None
+        return (stat.st_ino, stat.st_mtime_ns, stat.st_ctime_ns)
+
+    def _mirrored(self, sql: str, args: tuple = ()) -> int:
+        """A write of what `Snapshot` mirrors: its row count; the stamp is new after it."""
+        with self._lock:
+            count = self._db.execute(sql, args).rowcount
+        self._changed()
+        return count
+
+    def _changed(self) -> None:
+        """A new stamp file (a new inode: ownership and clock resolution do not matter)."""
+        fd, temporary = tempfile.mkstemp(prefix=".people-", dir=self._stamp.parent)
+        os.close(fd)
+        os.replace(temporary, self._stamp)
 
     def snapshot(self) -> Snapshot:
         people = {name.lower(): Role.parse(role)
@@ -117,8 +139,8 @@ class PeopleStore:
         return rows[0][0] if rows else default
 
     def set_setting(self, name: str, value: str) -> None:
-        self._run("INSERT OR REPLACE INTO access_settings (name, value) VALUES (?, ?)",
-                  (name, value))  # fmt: skip
+        self._mirrored("INSERT OR REPLACE INTO access_settings (name, value) VALUES (?, ?)",
+                       (name, value))  # fmt: skip
 
     def server_id(self) -> str:
         """This server's lasting identity (made once, kept in its database)."""
@@ -132,8 +154,8 @@ class PeopleStore:
         check_name(name, "a person's")
         if self._run("SELECT 1 FROM people WHERE name = ?", (name,)):
             raise ValueError(f"there is already a person named {name!r}")
-        self._run("INSERT INTO people (name, role, created) VALUES (?, ?, ?)",
-                  (name, role.name, time.time()))  # fmt: skip
+        self._mirrored("INSERT INTO people (name, role, created) VALUES (?, ?, ?)",
+                       (name, role.name, time.time()))  # fmt: skip
 
     def remove_person(self, name: str) -> bool:
         """Their sessions and links go too."""
@@ -144,6 +166,7 @@ class PeopleStore:
                 self._db.execute(f"DELETE FROM {table} WHERE owner = ? COLLATE NOCASE "
                                  "AND kind = 'person'", (name,))  # fmt: skip
             self._db.execute("COMMIT")
+        self._changed()
         return bool(found)
 
     def people(self) -> list[dict[str, Any]]:
@@ -161,12 +184,12 @@ class PeopleStore:
             raise ValueError(f"there is already a key named {name!r}")
         kid = secrets.token_hex(4)
         key = f"{KEY_PREFIX}_{kid}_{secrets.token_urlsafe(32)}"
-        self._run("INSERT INTO api_keys (name, kid, digest, role, created) VALUES (?,?,?,?,?)",
-                  (name, kid, digest(key), role.name, time.time()))  # fmt: skip
+        self._mirrored("INSERT INTO api_keys (name, kid, digest, role, created) "
+                       "VALUES (?, ?, ?, ?, ?)", (name, kid, digest(key), role.name, time.time()))
         return key
 
     def remove_key(self, name: str) -> bool:
-        return bool(self._delete("DELETE FROM api_keys WHERE name = ?", (name,)))
+        return bool(self._mirrored("DELETE FROM api_keys WHERE name = ?", (name,)))
 
     def keys(self) -> list[dict[str, Any]]:
         return [{"name": n, "role": r, "id": k, "created": c} for n, r, k, c in self._run(
@@ -179,15 +202,15 @@ class PeopleStore:
     # ---- sessions and login links ----------------------------------------------------------
 
     def add_session(self, session_digest: str, owner: str, kind: str, expires: float) -> None:
-        self._run("INSERT OR REPLACE INTO sessions (digest, owner, kind, expires) "
-                  "VALUES (?, ?, ?, ?)", (session_digest, owner, kind, expires))  # fmt: skip
+        self._mirrored("INSERT OR REPLACE INTO sessions (digest, owner, kind, expires) "
+                       "VALUES (?, ?, ?, ?)", (session_digest, owner, kind, expires))
 
     def end_session(self, session_digest: str) -> None:
-        self._delete("DELETE FROM sessions WHERE digest = ?", (session_digest,))
+        self._mirrored("DELETE FROM sessions WHERE digest = ?", (session_digest,))
 
     def end_sessions(self, owner: str, kind: str) -> int:
-        return self._delete("DELETE FROM sessions WHERE owner = ? COLLATE NOCASE AND kind = ?",
-                            (owner, kind))  # fmt: skip
+        return self._mirrored("DELETE FROM sessions WHERE owner = ? COLLATE NOCASE AND "
+                              "kind = ?", (owner, kind))  # fmt: skip
 
     def new_link(self, owner: str, kind: str) -> str:
         """A one-time login code for `owner`; earlier unused ones are void."""
