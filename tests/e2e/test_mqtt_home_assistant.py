@@ -9,7 +9,7 @@ import json
 
 import pytest
 
-from tests.fixtures.drawings import SQUARE_STROKE, THREE_LAYERS
+from tests.fixtures.drawings import THREE_LAYERS, square_stroke
 from tests.fixtures.mqtt_bridges import PREFIX, bridge_server, discovered, state
 from tests.fixtures.trace import assert_stopped, stop_clock
 
@@ -61,7 +61,7 @@ def test_stop_button_mid_job_and_progress_entities(ha_bridge, plotter):
     configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) == 15 and c,
                             20, "the bridge's discovery configs")
     server.home()
-    job = server.submit(SQUARE_STROKE)
+    job = server.submit(square_stroke())
     progress = configs["plotter1_progress"]
 
     def moving(lst):

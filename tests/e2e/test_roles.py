@@ -23,7 +23,7 @@ from plotbridge.client import Plotbridge, proves
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from tests.fixtures.drawings import drawing
+from tests.fixtures.drawings import drawing, square_stroke
 from tests.fixtures.people import cli_key, plotbridge_cli
 from tests.fixtures.server import ServerProcess, running_server
 from tests.fixtures.trace import assert_same_drawing, assert_stopped, stop_clock
@@ -79,9 +79,9 @@ def test_submitter_operator_viewer_and_a_revoked_key(server, plotter):
         seen = submitter.get(f"/api/jobs/{refused['id']}").json()
         assert seen["state"] == "cancelled" and seen["approval"]["reason"] == reason
         # a viewer stops a running job within the usual bound
-        running = operator.post("/api/jobs", files={"file": ("b.gcode", drawing(circles=6))}).json()
+        running = operator.post("/api/jobs", files={"file": ("b.gcode", square_stroke())}).json()
         assert operator.post(f"/api/jobs/{running['id']}/start").status_code == 200
-        server.wait_progress(running["id"], 40)
+        server.wait_drawing(running["id"])
         sent = stop_clock(plotter)
         stopped = viewer.post("/api/machine/estop", headers={"x-plotbridge-page": "page-9"})
         assert stopped.status_code == 202 and time.monotonic() - sent.at < STOP_BOUND

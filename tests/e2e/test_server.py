@@ -16,7 +16,7 @@ from plotbridge.plotter.runner import JOB_POLL_HZ
 from websockets.sync.client import connect
 
 from tests.fixtures.attacks import import_workers
-from tests.fixtures.drawings import FEED, SQUARE_STROKE, drawing, many_circles_svg
+from tests.fixtures.drawings import FEED, drawing, many_circles_svg, square_stroke
 from tests.fixtures.server import running_server
 from tests.fixtures.trace import (
     ESTOP_REDRAW_MM,
@@ -49,7 +49,7 @@ def test_plot_matches_preview(server, plotter):
 
 def test_estop_rest_mid_job_then_resume(server, plotter):
     server.home()
-    once = drawn_once_mm(server, plotter, SQUARE_STROKE)
+    once = drawn_once_mm(server, plotter, square_stroke())
     plotter.clear()
     job = rest_stop_mid_stroke(server, plotter)
     # the next job waits until the alarm is cleared, saying why
@@ -72,8 +72,8 @@ def test_estop_rest_mid_job_then_resume(server, plotter):
 
 def test_estop_does_not_wait_for_an_import(server, plotter):
     server.home()
-    job = server.submit(drawing(circles=15))  # long enough to outlast the upload's start
-    server.wait_progress(job["id"], 20)
+    job = server.submit(square_stroke(laps=4))  # long enough to outlast the upload's start
+    server.wait_drawing(job["id"])
     big = many_circles_svg(20_000)  # seconds of import work
     with ThreadPoolExecutor(1) as pool:
         uploading = pool.submit(
@@ -82,7 +82,7 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
         assert server.proc is not None
         wait_until(lambda: import_workers(server.proc.pid), bool, 30, "an import worker")
         assert not uploading.done()
-        assert server.job(job["id"])["lines_done"] < 600, "the job ran out before the stop"
+        assert server.job(job["id"])["lines_done"] < 780, "the job ran out before the stop"
         sent = stop_clock(plotter)
         response = server.client.post("/api/machine/estop")
         answered = time.monotonic() - sent.at
@@ -93,7 +93,7 @@ def test_estop_does_not_wait_for_an_import(server, plotter):
 
 def test_estop_websocket_mid_job(server, plotter):
     server.home()
-    job = server.submit(drawing(circles=6))
+    job = server.submit(square_stroke())
     url = server.url.replace("http", "ws") + f"/api/ws?token={server.token}"
     with connect(url) as ws:
         first = json.loads(ws.recv(5))

@@ -19,7 +19,7 @@ from typing import Any
 
 import pytest
 
-from tests.fixtures.drawings import THREE_LAYERS, drawing
+from tests.fixtures.drawings import THREE_LAYERS, drawing, square_stroke
 from tests.fixtures.server import ServerProcess, running_server
 from tests.fixtures.trace import assert_stopped, stop_clock
 from tests.fixtures.waits import wait_until
@@ -146,8 +146,8 @@ def estop_beside_a_hanging_receiver(server: ServerProcess, plotter: Any, receive
     assert refused.status_code == 422 and "only http:// and https://" in refused.text
     server.home()
     receiver.go.clear()  # from now on the receiver takes the request and never answers
-    job = server.submit(drawing(circles=6))
-    server.wait_progress(job["id"], 40)
+    job = server.submit(square_stroke())
+    server.wait_drawing(job["id"])
     deadline = time.monotonic() + 10
     while receiver.pending == 0:  # the job_started post hangs at the receiver
         assert time.monotonic() < deadline, "the server posted no job_started"
