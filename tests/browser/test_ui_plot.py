@@ -20,6 +20,7 @@ from tests.fixtures.pages import (
     spiral_svg,
     upload,
     wait_job_state,
+    wait_text,
 )
 
 pytestmark = pytest.mark.browser
@@ -160,7 +161,7 @@ def plot_stop_unlock_next(
         server.wait_machine(lambda m: m["state"] == "Run", timeout=10)
     # manual control is locked while the job runs
     page.click(".tab[data-tab=control]")
-    assert page.locator("#control-lock").text_content().startswith("Disabled while a job")
+    wait_text(page, "#control-lock", "Disabled while a job")
     assert all(b.is_disabled() for b in page.locator("#tab-control button").all())
     page.click(".tab[data-tab=plot]")
 

@@ -10,7 +10,15 @@ from __future__ import annotations
 import pytest
 
 from tests.browser.conftest import DESKTOP, PHONE, login, new_page, screenshot
-from tests.fixtures.pages import SQUARE_SVG, circles_svg, job_id, job_row, upload, wait_job_state
+from tests.fixtures.pages import (
+    SQUARE_SVG,
+    circles_svg,
+    job_id,
+    job_row,
+    upload,
+    wait_job_state,
+    wait_text,
+)
 
 pytestmark = pytest.mark.browser
 
@@ -24,13 +32,6 @@ def api_job(server, name: str, data: bytes, start: bool = False) -> dict:
     )  # fmt: skip
     assert response.status_code == 201, response.text
     return response.json()
-
-
-def wait_text(page, selector: str, text: str, timeout: float = 20_000) -> None:
-    page.wait_for_function(
-        "([sel, text]) => (document.querySelector(sel)?.textContent ?? '').includes(text)",
-        arg=[selector, text], timeout=timeout,
-    )  # fmt: skip
 
 
 @pytest.fixture

@@ -61,7 +61,7 @@ def test_stop_button_mid_job_and_progress_entities(ha_bridge, plotter):
     configs = listener.wait(lambda lst: (c := discovered(lst, "A")) and len(c) == 15 and c,
                             20, "the bridge's discovery configs")
     server.home()
-    job = server.submit(square_stroke())
+    job = server.submit(square_stroke(laps=3))  # outlasts the waits for MQTT progress
     progress = configs["plotter1_progress"]
 
     def moving(lst):
