@@ -300,7 +300,7 @@ export function jobActions({ store, estop, socket, core, all }) {
         const updated = await send(job, action, opts);
         if (action === "delete") {
           store.update((st) => {
-            st.jobs = st.jobs.filter((j) => j !== job);
+            st.jobs = st.jobs.filter((j) => !sameId(j.id, job.id));
             delete st.previews[job.id];
           });
           return;
