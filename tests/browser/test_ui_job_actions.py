@@ -1,7 +1,7 @@
 """A job's actions from the page, through a real server and the virtual plotter, in headless
 Chromium: each goes over the WebSocket as one `job_action` message (no REST call while the
-socket is up), over REST while it is down, and what a closing socket left unanswered goes
-over REST too; a stopped job resumes with the layers ticked on its row from the layer
+socket is up), over REST while it is down, and what a closing socket (or an open one that
+does not answer) left unanswered goes over REST too; a stopped job resumes with the layers ticked on its row from the layer
 chosen there (the simulator's trace: only that layer is drawn); layers split by colour are
 named in words on the page and in the pen-change prompt, never by a colour code."""
 
@@ -151,4 +151,14 @@ def test_actions_go_over_the_socket_and_a_stopped_job_resumes_the_layers_chosen(
     page.evaluate(SOCKET_UP)
     page.wait_for_function("() => window.plotbridge.store.state.socket.status === 'open'",
                            timeout=20_000)  # fmt: skip
+
+    # an open socket that never answers (its frame lost): the action goes over REST
+    page.evaluate("() => { window.__send = WebSocket.prototype.send;"
+                  " WebSocket.prototype.send = function (m) {"
+                  " if (!String(m).includes('job_action')) window.__send.call(this, m); }; }")
+    page.click(".tab[data-tab=history]")
+    history.locator("button[data-verb=delete]").click()
+    history.wait_for(state="detached", timeout=20_000)
+    assert traffic.rest[-1] == f"DELETE /api/jobs/{job_id}", traffic.rest
+    assert server.client.get(f"/api/jobs/{job_id}").status_code == 404
     assert not errors, errors

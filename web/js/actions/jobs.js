@@ -65,14 +65,26 @@ export function layerChoice(state, job) {
 }
 
 /** Job actions over the WebSocket (`job_action`), REST while it is down. The server runs one
- * client's job actions in order, so its answers come in the order they were asked. */
+ * client's job actions in order, so its answers come in the order they were asked. An
+ * action the socket has not answered in ANSWER_MS (a socket that hangs without closing)
+ * goes over REST. */
+const ANSWER_MS = 5000;
+
 function createJobChannel({ socket, core }) {
   const pending = [];
+
+  function overRest(p) {
+    const i = pending.indexOf(p);
+    if (i < 0) return; // answered meanwhile
+    pending.splice(i, 1);
+    clearTimeout(p.timer);
+    viaRest(p.req, true).then(p.resolve, p.reject);
+  }
 
   function viaRest(req, retried = false) {
     const call = req.method === "DELETE" ? api.del(req.path) : api.post(req.path, req.body);
     if (!retried) return call;
-    // sent on a socket that closed before it answered: the server may have done it; then
+    // sent on a socket that closed or hung before it answered: the server may have done it; then
     // the lifecycle refuses this second copy (409, 404), and the job shows what happened
     return call.catch((err) => {
       if (err.status === 409 || err.status === 404) return core.loadJobs().then(() => null);
@@ -86,7 +98,9 @@ function createJobChannel({ socket, core }) {
       const req = actionRequest(job, action, opts);
       if (!socket.send(actionMessage(job, action, opts))) return viaRest(req);
       return new Promise((resolve, reject) => {
-        pending.push({ action, id: String(job.id), req, resolve, reject });
+        const p = { action, id: String(job.id), req, resolve, reject };
+        p.timer = setTimeout(() => overRest(p), ANSWER_MS);
+        pending.push(p);
       });
     },
     /** The socket's `ack` or `error` of a `job_action`. */
@@ -96,12 +110,13 @@ function createJobChannel({ socket, core }) {
         : msg.action ? pending.findIndex((p) => p.action === msg.action) : pending.length - 1; // refused unread: the last
       if (i < 0) return;
       const [p] = pending.splice(i, 1);
+      clearTimeout(p.timer);
       if (msg.type === "ack") p.resolve(msg.job || null);
       else p.reject(new ApiError(msg.status || 0, msg.detail ?? "refused"));
     },
     /** The socket closed: what it did not answer goes over REST. */
     down() {
-      for (const p of pending.splice(0)) viaRest(p.req, true).then(p.resolve, p.reject);
+      for (const p of [...pending]) overRest(p);
     },
   };
 }
