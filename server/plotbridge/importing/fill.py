@@ -5,11 +5,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import shapely
 import shapely.affinity
 import shapely.prepared
 from shapely.geometry import LineString, MultiLineString, Polygon, box
 from shapely.geometry.base import BaseGeometry
+
+from . import geos
 
 MAX_HATCH_LINES = 20_000     # per shape: a finer hatch is refused with a warning
 
@@ -39,23 +40,21 @@ def region(rings: list[np.ndarray], rule: str) -> BaseGeometry:
         if poly.is_valid:
             return poly
     # Split the plane along every ring's edges, then keep the faces the rule fills.
-    edges = shapely.unary_union([LineString(r) for r in rings])
-    faces = list(shapely.get_parts(shapely.polygonize(shapely.get_parts(edges))))
+    faces = geos.faces(geos.union([LineString(r) for r in rings]))
     if not faces:
         return Polygon()
     inside = np.array([f.representative_point().coords[0] for f in faces])
     w = _winding(rings, inside)
     keep = (w % 2 == 1) if rule == "evenodd" else (w != 0)
-    return shapely.unary_union([f for f, k in zip(faces, keep, strict=True) if k])
+    return geos.union([f for f, k in zip(faces, keep, strict=True) if k])
 
 
 def clip_lines(lines: list[np.ndarray], area: BaseGeometry) -> list[np.ndarray]:
     """The parts of the polylines inside the area."""
     if area.is_empty:
         return []
-    out = shapely.intersection(MultiLineString([ln for ln in lines if len(ln) > 1]), area)
-    return [np.asarray(g.coords) for g in shapely.get_parts(shapely.line_merge(out))
-            if isinstance(g, LineString) and len(g.coords) > 1]
+    return geos.merged_lines(MultiLineString([ln for ln in lines if len(ln) > 1])
+                             .intersection(area))
 
 
 def rect(x0: float, y0: float, x1: float, y1: float) -> BaseGeometry:
@@ -80,9 +79,8 @@ def _hatch_once(area: BaseGeometry, spacing: float, angle: float) -> list[np.nda
     if not len(ys):
         return []
     scan = MultiLineString([[(x0 - 1, y), (x1 + 1, y)] for y in ys])
-    cut = shapely.intersection(scan, rot)
     rows: dict[int, list[np.ndarray]] = {}
-    for g in shapely.get_parts(cut):
+    for g in geos.parts(scan.intersection(rot)):
         if isinstance(g, LineString) and len(g.coords) > 1:
             c = np.asarray(g.coords)
             k = round((c[0, 1] - ys[0]) / spacing)

@@ -19,11 +19,10 @@ from pathlib import Path
 from xml.etree.ElementTree import Element
 
 import numpy as np
-import shapely
 from shapely.geometry import Polygon
 from shapely.geometry.base import BaseGeometry
 
-from . import curves, fill, pathdata, svgtext
+from . import curves, fill, geos, pathdata, svgtext
 from .curves import Affine, compose, viewbox_transform
 from .fillplan import FillPlan, named_colour
 from .models import ErrorLog, ImportFailed, ImportOptions
@@ -504,27 +503,22 @@ class SvgReader(ClipMixin, MarkerMixin):
             layer.strokes.extend(list(map(tuple, ln.tolist())) for ln in lines)
 
     def _clip_to_page(self) -> None:
-        """Clips the lines that cross the page's edge, all in one shapely call."""
+        """Clips the lines that cross the page's edge, all at once (geos.clip_each)."""
         if not self._page_clip:
             return
         flat = [ln for _, _, lines in self._page_clip for ln in lines]
         owner = [k for k, (_, _, lines) in enumerate(self._page_clip) for _ in lines]
-        index = np.repeat(np.arange(len(flat)), [len(ln) for ln in flat])
         pts = np.vstack(flat)
         w, h = self.page
         for k, top in ((0, w), (1, h)):    # points just off an edge onto it
             col = pts[:, k]
             col[(col < 0) & (col >= -EDGE_MM)] = 0.0
             col[(col > top) & (col <= top + EDGE_MM)] = top
-        lines = shapely.linestrings(pts, indices=index)
         # an intersection keeps what lies on the page's edge (clip_by_rect drops it)
-        clipped = shapely.intersection(lines, fill.rect(0.0, 0.0, w, h))
+        clipped = geos.clip_each(pts, [len(ln) for ln in flat], fill.rect(0.0, 0.0, w, h))
         pieces: list[list] = [[] for _ in self._page_clip]
-        for k, geom in zip(owner, clipped, strict=True):
-            for part in shapely.get_parts(shapely.line_merge(geom)):
-                coords = shapely.get_coordinates(part)
-                if len(coords) > 1:
-                    pieces[k].append(list(map(tuple, coords.tolist())))
+        for k, found in zip(owner, clipped, strict=True):
+            pieces[k].extend(list(map(tuple, coords.tolist())) for coords in found)
         slots: dict[int, dict[int, list]] = {}
         for (layer, index, _), found in zip(self._page_clip, pieces, strict=True):
             slots.setdefault(id(layer), {})[index] = found

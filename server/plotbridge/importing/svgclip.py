@@ -17,11 +17,10 @@ from dataclasses import replace
 from xml.etree.ElementTree import Element
 
 import numpy as np
-import shapely
 from shapely.geometry import MultiLineString, Polygon
 from shapely.geometry.base import BaseGeometry
 
-from . import curves, fill
+from . import curves, fill, geos
 from .curves import Affine, compose
 from .svgstyle import ROOT_STYLE, cascade, href, length, local, opacity, paint, url_id
 
@@ -118,7 +117,7 @@ class ClipMixin:
                 if area is not None:
                     region = region.intersection(area)
             parts.append(region)
-        return shapely.unary_union(parts) if parts else Polygon()
+        return geos.union(parts) if parts else Polygon()
 
     def _text_area(self, elem: Element, ctx) -> BaseGeometry:
         """Text in a clip path: its glyph strokes, widened."""
