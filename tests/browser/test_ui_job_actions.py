@@ -1,9 +1,10 @@
 """A job's actions from the page, through a real server and the virtual plotter, in headless
 Chromium: each goes over the WebSocket as one `job_action` message (no REST call while the
 socket is up), over REST while it is down, and what a closing socket (or an open one that
-does not answer) left unanswered goes over REST too; a stopped job resumes with the layers ticked on its row from the layer
-chosen there (the simulator's trace: only that layer is drawn); layers split by colour are
-named in words on the page and in the pen-change prompt, never by a colour code."""
+does not answer) left unanswered goes over REST too; a stopped job resumes with the layers
+ticked on its row from the layer chosen there (the simulator's trace: only that layer is
+drawn); layers split by colour are named in words on the page and in the pen-change
+prompt, never by a colour code."""
 
 from __future__ import annotations
 

@@ -12,9 +12,9 @@ import pytest
 from tests.browser.conftest import DESKTOP, PHONE, login, new_page, screenshot
 from tests.fixtures.pages import (
     SQUARE_SVG,
-    circles_svg,
     job_id,
     job_row,
+    spiral_svg,
     upload,
     wait_job_state,
     wait_text,
@@ -50,9 +50,9 @@ def test_stop_shows_on_every_page_and_goes_with_its_cause(two_pages, server, plo
     server.wait_job(done["id"], "done", timeout=60)
     for page in (here, there):
         login(page, server.url, server.token)
-    long = api_job(server, "stopped-circles.svg", circles_svg(20), start=True)
-    wait_job_state(there, "stopped-circles.svg", ("running",))
-    server.wait_machine(lambda m: m["state"] == "Run", timeout=20)
+    long = api_job(server, "stopped-spiral.svg", spiral_svg(20), start=True)
+    wait_job_state(there, "stopped-spiral.svg", ("running",))
+    server.wait_drawing(long["id"])  # on a moving carriage: Alarm, which the unlock clears
 
     here.click("#estop")
     here.wait_for_selector("#estop-panel[data-phase=stopped]")
@@ -72,7 +72,7 @@ def test_stop_shows_on_every_page_and_goes_with_its_cause(two_pages, server, plo
     # after a reload the preview is the stopped job's, not the earlier finished one
     there.reload()
     there.wait_for_selector("#app:not([hidden])")
-    wait_text(there, "#preview-title", "stopped-circles.svg")
+    wait_text(there, "#preview-title", "stopped-spiral.svg")
     there.wait_for_function("() => (window.plotbridge.preview.geom?.strokes.count ?? 0) > 0")
 
     # the server goes away: both headers say so instead of the last state; it comes back
