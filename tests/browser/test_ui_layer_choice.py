@@ -1,8 +1,9 @@
 """Layers chosen on the page, through a real server and the virtual plotter, in headless
 Chromium: the job row lists each layer (colour, pen, length, estimate); unticking one and
 choosing the layer to start at plots only those layers (the simulator's trace); the pen
-the first plotted layer needs is asked for at Start, by name; and in every state the job
-passes through, its row offers exactly the job's `actions` from the server's own JSON."""
+the first plotted layer needs is asked for at Start, by name, and at a resume from a
+layer's start; and in every state the job passes through, its row offers exactly the
+job's `actions` from the server's own JSON."""
 
 from __future__ import annotations
 
@@ -105,13 +106,21 @@ def test_start_layer_and_ticks_plot_only_those_layers_with_the_pen_asked(desktop
 
 
 def test_a_row_offers_exactly_its_actions_in_every_state(desktop, server):
+    """...and a resume from a later layer's start asks for that layer's pen first."""
     page, errors = desktop
     server.home()
+    server.client.post("/api/pens", json={"name": "Blue fineliner", "colour": "#1f5fbf",
+                                          "up_us": 1000, "down_us": 2000})  # fmt: skip
     login(page, server.url, server.token)
     upload(page, NAME, THREE_LAYERS.encode())
     wait_job_state(page, NAME, ("queued",))
     job_id = job_row(page, NAME).get_attribute("data-key")
     assert_offers_its_actions(page, server, job_id)  # queued
+    layers = job_row(page, NAME).locator("li.layer")
+    layers.nth(2).locator("select.layer-pen").select_option(label="Blue fineliner")
+    page.wait_for_function(
+        "id => window.plotbridge.store.state.jobs.find((j) => j.id === id).layers[2].pen !== null",
+        arg=job_id)  # fmt: skip
     job_row(page, NAME).locator("button[data-verb=start]").click()  # no pens: no prompt
     server.wait_pen_change(job_id, 2)
     wait_job_state(page, NAME, ("pen_change",))
@@ -128,4 +137,14 @@ def test_a_row_offers_exactly_its_actions_in_every_state(desktop, server):
     title = page.locator("#estop-title").text_content()
     assert "another" not in title, title  # this page sent it
     assert_offers_its_actions(page, server, job_id)  # stopped: resume, home then resume...
+
+    layers.nth(2).locator("input.start").check()  # go on from layer 3: its pen is asked for
+    job_row(page, NAME).locator("button[data-verb=resume]").click()
+    page.wait_for_selector("#pen-prompt:not([hidden])")
+    prompt = page.locator("#pen-prompt-text").text_content()
+    assert "goes on from layer 3" in prompt and "load pen “Blue fineliner”" in prompt, prompt
+    assert server.job(job_id)["state"] == "stopped"  # nothing moves before the answer
+    page.click("#pen-prompt button[data-answer=loaded]")
+    done = server.wait_job(job_id, ("done", "failed", "stopped"), 120)
+    assert done["state"] == "done", done
     assert not errors, errors

@@ -67,7 +67,8 @@ function renderPreview(state) {
   preview.setDone(done, tail);
 }
 
-/** Before a start: load the pen its first layer needs (named, never a colour code). */
+/** Before a start, or a resume from a layer's start: load the pen that layer needs
+ * (named, never a colour code). */
 function renderPenPrompt(state) {
   const p = state.penPrompt;
   setHidden($("#pen-prompt"), !p);
@@ -78,7 +79,10 @@ function renderPenPrompt(state) {
   const last = p.loaded === null || p.loaded === undefined
     ? "plotbridge does not know which pen is loaded"
     : `the plotter last drew with “${name(p.loaded)}”`;
-  setText($("#pen-prompt-text"), `“${job ? job.name : "the job"}” starts with layer ${p.layer} “${p.layerName}”: load pen “${name(p.pen)}”${on} (${last}).`);
+  const resuming = p.action === "resume" || p.action === "home_then_resume";
+  const goes = resuming ? "goes on from" : "starts with";
+  setText($("#pen-prompt-text"), `“${job ? job.name : "the job"}” ${goes} layer ${p.layer} “${p.layerName}”: load pen “${name(p.pen)}”${on} (${last}).`);
+  setText($("#pen-prompt button[data-answer=loaded]"), resuming ? "Pen loaded: resume" : "Pen loaded: start");
 }
 
 function renderNotice(state) {

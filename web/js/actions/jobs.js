@@ -138,6 +138,18 @@ export function jobActions({ store, estop, socket, core, all }) {
 
   const send = (job, action, opts) => channel.send(job, action, opts);
 
+  /** The pen prompt, when the first layer plotted needs a pen other than the loaded one;
+   * its answer runs `action` again (penPromptAnswer). True when it asked. */
+  function askPen(job, action, layers) {
+    const need = penNeeded(s, job, layers);
+    if (need) {
+      store.update((st) => {
+        st.penPrompt = { jobId: job.id, action, ...need };
+      });
+    }
+    return Boolean(need);
+  }
+
   return {
     onJobActionAnswer: (msg) => channel.answered(msg),
     onJobSocketDown: () => channel.down(),
@@ -290,6 +302,8 @@ export function jobActions({ store, estop, socket, core, all }) {
           return;
         }
         const fromLayer = chosen.action === "resume_from";
+        // from a layer's start, as at Start: that layer's pen is asked for first
+        if (fromLayer && !confirmedPen && askPen(job, action, opts.layers)) return;
         // as a plain resume does, a resume from a layer homes a plotter in Alarm first
         const board = s.plotters[job.plotter] || s.machine;
         const home = action === "home_then_resume" || Boolean(board && board.state === "Alarm");
@@ -301,14 +315,8 @@ export function jobActions({ store, estop, socket, core, all }) {
         opts.position = movable.indexOf(job) + (action === "up" ? -1 : 1);
         action = "move";
       }
-      if ((action === "start" || action === "restart") && !confirmedPen) {
-        const need = penNeeded(s, job, opts.layers);
-        if (need) {
-          store.update((st) => {
-            st.penPrompt = { jobId: job.id, action, ...need };
-          });
-          return;
-        }
+      if ((action === "start" || action === "restart") && !confirmedPen && askPen(job, action, opts.layers)) {
+        return;
       }
       if (["start", "restart", "resume", "resume_from"].includes(action)) askPermission();
       try {
