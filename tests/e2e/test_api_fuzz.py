@@ -45,7 +45,7 @@ def test_api_never_fails_with_a_server_error(fuzz_server: ServerProcess):
     for operation in operations:
 
         @given(case=operation.as_strategy())
-        @settings(max_examples=20, deadline=None, database=None,
+        @settings(max_examples=12, deadline=None, database=None,
                   suppress_health_check=list(HealthCheck))  # fmt: skip
         def call(case) -> None:
             case.call_and_validate(base_url=fuzz_server.url, headers=headers, checks=CHECKS)
