@@ -35,7 +35,7 @@ log = logging.getLogger("plotbridge.guard")
 
 PROBATION = 64  # connections over the caps waiting to show whether they are a stop
 PROBATION_TIMEOUT = 2.0  # s such a connection has to send its stop
-PER_WAKE = 256  # connections accepted per call, so the loop's other work goes on between
+PER_WAKE = 64  # connections accepted per call, so the loop's other work goes on between
 _STOP_PREFIX = b"POST /api/"
 _BUSY_BODY = b'{"detail": "too many open connections; try again shortly"}'
 BUSY = (
