@@ -232,6 +232,8 @@ class Runner:
         if not job.active:
             return
         job.resume_line = self.point.resume_line(job)
+        if job.resume_line > job.lines_done + 1:  # acks since the last report: it ran on
+            self.point.follow(job, job.resume_line, None)
         self._finish(job, "interrupted", "the link to the plotter was lost")
         asyncio.get_running_loop().create_task(self.point.settle(job))
 

@@ -179,7 +179,10 @@ class StopPoint:
             log.warning("job %s: no progress at its stop: %s", job.id, exc)
             return
         if not job.active:
-            self.follow(job, point.line, point.at)
+            if job.resume_line is not None and point.line < job.resume_line:
+                self.follow(job, job.resume_line, None)  # the board ran on past the mark
+            else:
+                self.follow(job, point.line, point.at)
             self.lifecycle.publish(job)
 
     # ---- a server killed mid-job --------------------------------------------------------
