@@ -58,12 +58,17 @@ async def add_person(body: NewBody, c: Parts, who: Who, request: Request) -> dic
     return {"name": body.name, "role": body.role, "link": login_url(request, code)}
 
 
+async def _removed(c: Parts, who: Who, remove: Any, name: str, what: str) -> Response:
+    """`remove(name)` in the store (404 when there was none), audited as `what_removed`."""
+    if not await _made(c, remove, name):
+        raise HTTPException(404, f"no {what} named {name!r}")
+    c.access.audit(who, f"{what}_removed", name)
+    return Response(status_code=204)
+
+
 @router.delete("/people/{name}", status_code=204)
 async def remove_person(name: Name, c: Parts, who: Who) -> Response:
-    if not await _made(c, c.access.store.remove_person, name):
-        raise HTTPException(404, f"no person named {name!r}")
-    c.access.audit(who, "person_removed", name)
-    return Response(status_code=204)
+    return await _removed(c, who, c.access.store.remove_person, name, "person")
 
 
 @router.post("/people/{name}/reset")
@@ -92,10 +97,7 @@ async def add_key(body: NewBody, c: Parts, who: Who) -> dict[str, Any]:
 
 @router.delete("/keys/{name}", status_code=204)
 async def remove_key(name: Name, c: Parts, who: Who) -> Response:
-    if not await _made(c, c.access.store.remove_key, name):
-        raise HTTPException(404, f"no key named {name!r}")
-    c.access.audit(who, "key_removed", name)
-    return Response(status_code=204)
+    return await _removed(c, who, c.access.store.remove_key, name, "key")
 
 
 @router.get("/audit")
