@@ -49,7 +49,7 @@ def test_discovery_configs_are_valid_and_complete(ha_bridge):
     assert configs["plotter1_progress"]["unit_of_measurement"] == "%"
     assert configs["plotter1_time_left"]["device_class"] == "duration"
     assert configs["plotter1_pen_change"]["event_types"] == ["pen_change"]
-    assert listener.latest[status] == b"online"
+    listener.wait(lambda lst: lst.latest.get(status) == b"online", 20, "the bridge online")
     server.wait_machine(lambda m: m["connected"], 30)
     now = listener.wait(lambda lst: (s := state(lst, configs["plotter1_machine_state"]))
                         and s["connected"] and s, 10, "the plotter's state")
